@@ -1,0 +1,115 @@
+//! The output formats of `loupe check`. Every format carries the same
+//! diagnostics in `CheckReport::diagnostics()` order, so a CI system sees
+//! exactly what a person at a terminal sees.
+
+mod github;
+mod human;
+mod json;
+mod junit;
+mod sarif;
+
+use std::io;
+
+use super::report::CheckReport;
+use crate::diag::SourceFiles;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// Annotated source excerpts and a summary line, for people.
+    Human,
+    /// One JSON object per diagnostic per line (JSON Lines).
+    Json,
+    /// GitHub Actions workflow commands, shown as annotations on the diff.
+    Github,
+    /// A SARIF 2.1.0 log, for code-scanning upload.
+    Sarif,
+    /// JUnit XML, one test case per checked file.
+    Junit,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Options {
+    /// ANSI colours (human only).
+    pub color: bool,
+    /// Print durations (human, junit). Off, the output is byte-for-byte
+    /// reproducible, which golden tests rely on.
+    pub timings: bool,
+}
+
+pub fn write(
+    format: Format,
+    report: &CheckReport,
+    files: &SourceFiles,
+    opts: &Options,
+    out: &mut dyn io::Write,
+) -> io::Result<()> {
+    match format {
+        Format::Human => human::write(report, files, opts, out),
+        Format::Json => json::write(report, out),
+        Format::Github => github::write(report, out),
+        Format::Sarif => sarif::write(report, out),
+        Format::Junit => junit::write(report, opts, out),
+    }
+}
+
+/// A shared report for the formats' tests: one clean module, and one whose
+/// error points into an imported file, with a secondary label back in the
+/// importer, a note, and a warning.
+#[cfg(test)]
+mod fixture {
+    use std::time::Duration;
+
+    use super::super::report::{CheckReport, ModuleKind, ModuleResult};
+    use crate::diag::{Code, Diagnostic, Location, SourceFiles};
+
+    pub const MAIN: &str = "shaders/main.wgsl";
+    pub const UTIL: &str = "shaders/lib/util.wgsl";
+    pub const ERROR_MESSAGE: &str = "cannot add \"f32\" & \"vec3<f32>\"";
+
+    pub fn loc(file: &str, line: u32, column: u32, end_line: u32, end_column: u32) -> Location {
+        Location {
+            file: file.to_owned(),
+            line,
+            column,
+            end_line,
+            end_column,
+        }
+    }
+
+    pub fn files() -> SourceFiles {
+        let mut files = SourceFiles::default();
+        files.insert(
+            MAIN,
+            "#import lib::util\n\n@group(0) @binding(0) var<uniform> u: f32;\n".into(),
+        );
+        files.insert("shaders/clean.wgsl", "fn ok() {}\n".into());
+        files.insert(UTIL, "#define_import_path lib::util\n\nfn g() -> f32 {\n  let v = vec3(1.0);\n  let bad = 1.0 + v;\n  return bad;\n}\n".into());
+        files
+    }
+
+    pub fn report() -> CheckReport {
+        let error = Diagnostic::error(Code::Validation, ERROR_MESSAGE)
+            .with_label(loc(UTIL, 5, 7, 5, 10), "this expression", true)
+            .with_label(loc(MAIN, 1, 1, 1, 18), "imported here", false)
+            .with_note("both operands must have the same type");
+        let warning = Diagnostic::warning(Code::BindingMismatch, "binding 0 is never used")
+            .with_label(loc(MAIN, 3, 1, 3, 22), "declared here", true);
+        let module = |file: &str, diagnostics| ModuleResult {
+            file: file.to_owned(),
+            kind: ModuleKind::Entry,
+            permutations: vec![String::new()],
+            pipelines: 1,
+            diagnostics,
+            duration: Duration::from_millis(12),
+        };
+        CheckReport {
+            modules: vec![
+                module("shaders/clean.wgsl", vec![]),
+                module(MAIN, vec![error, warning]),
+            ],
+            general: vec![],
+            adapter: Some("llvmpipe".to_owned()),
+            duration: Duration::from_millis(40),
+        }
+    }
+}

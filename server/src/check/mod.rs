@@ -1,0 +1,330 @@
+//! `loupe check`: the CI shader gate. Reads every WGSL file, composes and
+//! validates each entry shader under every shader-def permutation the
+//! renderer uses, and, with a device, creates every pipeline exactly as the
+//! renderer does.
+
+pub mod format;
+mod report;
+
+pub use report::{CheckReport, ModuleKind, ModuleResult};
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::panic::AssertUnwindSafe;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::diag::{Code, Diagnostic, Location, Severity, SourceFiles};
+use crate::gpu::{self, Gpu, pipeline::{self, PipelineSpec}};
+use crate::shader::{Compose, Composed, Library, NagaOil, ShaderDefs, SourceFile, defs_key, library};
+
+/// naga's parser and validator recurse on nested expressions; a worker stack
+/// this large turns a 10,000-deep expression into work, not a crash.
+const WORKER_STACK: usize = 512 << 20;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DeviceMode {
+    /// Create pipelines when an adapter exists; say so when none does.
+    Auto,
+    /// Never open a device.
+    Off,
+    /// Fail (exit 3) when no adapter exists.
+    Required,
+}
+
+pub struct CheckOptions {
+    pub paths: Vec<PathBuf>,
+    /// The project's shader root: its files are always loaded so imports
+    /// resolve, and pipeline specs name shaders relative to it.
+    pub shader_root: PathBuf,
+    pub device: DeviceMode,
+}
+
+/// A failure of the run itself rather than of a checked file.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckError {
+    #[error("{0}")]
+    BadPath(String),
+    #[error(transparent)]
+    NoDevice(gpu::OpenError),
+}
+
+/// Runs the check; the report holds every diagnostic and the source texts
+/// they point into.
+pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError> {
+    let start = Instant::now();
+    let targets = library::discover(&opts.paths).map_err(CheckError::BadPath)?;
+    let root_files = if opts.shader_root.is_dir() {
+        library::discover(std::slice::from_ref(&opts.shader_root)).map_err(CheckError::BadPath)?
+    } else {
+        Vec::new()
+    };
+    let canon = |p: &Path| p.canonicalize().unwrap_or_else(|_| p.to_owned());
+    let all: BTreeMap<PathBuf, PathBuf> =
+        targets.iter().chain(root_files.iter()).map(|p| (canon(p), p.clone())).collect();
+    let target_set: BTreeSet<PathBuf> = targets.iter().map(|p| canon(p)).collect();
+
+    let pool = rayon::ThreadPoolBuilder::new()
+        .stack_size(WORKER_STACK)
+        .build()
+        .expect("a thread pool with default thread count");
+    let _quiet = QuietPanics::install();
+
+    let read: Vec<(PathBuf, Result<SourceFile, Diagnostic>)> = pool.install(|| {
+        all.par_iter()
+            .map(|(canon, shown)| (canon.clone(), SourceFile::read(shown, library::display_path(shown))))
+            .collect()
+    });
+    let mut files = SourceFiles::default();
+    let mut unreadable: BTreeMap<String, Diagnostic> = BTreeMap::new();
+    let mut sources = Vec::new();
+    let mut target_displays = Vec::new();
+    for (canon, r) in read {
+        let is_target = target_set.contains(&canon);
+        match r {
+            Ok(f) => {
+                files.insert(f.display.clone(), f.text.clone());
+                if is_target {
+                    target_displays.push(f.display.clone());
+                }
+                sources.push(f);
+            }
+            Err(d) if is_target => {
+                let shown = d.file().unwrap_or_default().to_owned();
+                target_displays.push(shown.clone());
+                unreadable.insert(shown, d);
+            }
+            Err(_) => {}
+        }
+    }
+    let lib = Library::new(sources);
+    let shader_root = canon(&opts.shader_root);
+    let specs_by_file = specs_by_display(&lib, &shader_root);
+    // Sources are judged against everything loupe can request; the device
+    // pass then reports what this adapter lacks.
+    let caps = gpu::capabilities_without_device();
+
+    // Compose every target under each of its permutations, in parallel.
+    let checked: Vec<Checked> = pool.install(|| {
+        target_displays
+            .par_iter()
+            .map(|display| match unreadable.get(display) {
+                Some(d) => Checked::failed(display, d.clone()),
+                None => check_file(&lib, &lib.get(display).expect("read above").clone(), &specs_by_file, caps),
+            })
+            .collect()
+    });
+
+    let mut report = CheckReport::default();
+    let mut seen = BTreeSet::new();
+    let mut modules: BTreeMap<String, ModuleResult> = BTreeMap::new();
+    for c in &checked {
+        modules.insert(
+            c.display.clone(),
+            ModuleResult {
+                file: c.display.clone(),
+                kind: c.kind,
+                permutations: c.permutations.iter().map(defs_key).collect(),
+                pipelines: 0,
+                diagnostics: Vec::new(),
+                duration: c.duration,
+            },
+        );
+    }
+    let mut place = |owner: &str, d: Diagnostic, modules: &mut BTreeMap<String, ModuleResult>| {
+        if !seen.insert(d.to_string()) {
+            return; // the same error reached through another importer
+        }
+        let home = d.file().filter(|f| modules.contains_key(*f)).unwrap_or(owner).to_owned();
+        if let Some(m) = modules.get_mut(&home) {
+            m.diagnostics.push(d);
+        }
+    };
+    for d in lib.diagnostics.iter().cloned() {
+        let owner = d.file().unwrap_or_default().to_owned();
+        place(&owner, d, &mut modules);
+    }
+    for c in &checked {
+        for d in c.diagnostics.iter().cloned() {
+            place(&c.display, d, &mut modules);
+        }
+    }
+    // A shader tree that holds some of the renderer's shaders must hold all
+    // of them; a tree with none is someone else's WGSL, checked as sources.
+    let renderer_tree = !specs_by_file.is_empty() && opts.paths.iter().any(|p| canon(p) == shader_root);
+    for spec in pipeline::SPECS {
+        if renderer_tree && !specs_by_file.values().flatten().any(|s| s.name == spec.name) {
+            let wanted = opts.shader_root.join(spec.shader);
+            report.general.push(
+                Diagnostic::error(Code::Io, format!("pipeline `{}` needs `{}`, which does not exist", spec.name, library::display_path(&wanted)))
+                    .with_note("the renderer builds this pipeline from that file"),
+            );
+        }
+    }
+
+    // Create every pipeline on the device, on this thread.
+    if opts.device != DeviceMode::Off {
+        match gpu::open() {
+            Ok(gpu) => {
+                report.adapter = Some(gpu.adapter_name());
+                for c in &checked {
+                    for (spec, defs, composed) in &c.composed {
+                        let result = std::panic::catch_unwind(AssertUnwindSafe(|| {
+                            create_checked(&gpu, spec, composed, &lib, &c.display)
+                        }))
+                        .unwrap_or_else(|p| Err(vec![panic_diagnostic(&c.display, p, "wgpu")]));
+                        match result {
+                            Ok(()) => modules.get_mut(&c.display).expect("inserted").pipelines += 1,
+                            Err(ds) => {
+                                for d in ds {
+                                    let d = d.with_note(format!("permutation: [{}]", defs_key(defs)));
+                                    place(&c.display, d, &mut modules);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            Err(e) if opts.device == DeviceMode::Required => return Err(CheckError::NoDevice(e)),
+            Err(e) => report.general.push(Diagnostic {
+                severity: Severity::Note,
+                ..Diagnostic::error(Code::DeviceMissing, format!("pipelines were not created: {e}"))
+            }),
+        }
+    }
+
+    report.modules = modules.into_values().collect();
+    report.duration = start.elapsed();
+    Ok((report, files))
+}
+
+fn create_checked(gpu: &Gpu, spec: &PipelineSpec, composed: &Composed, lib: &Library, display: &str) -> Result<(), Vec<Diagnostic>> {
+    pipeline::create(&gpu.device, spec, composed, lib, display).map(|_| ())
+}
+
+/// Pipeline specs by the display path of the shader file they build from.
+fn specs_by_display(lib: &Library, shader_root: &Path) -> BTreeMap<String, Vec<&'static PipelineSpec>> {
+    let mut out: BTreeMap<String, Vec<&'static PipelineSpec>> = BTreeMap::new();
+    for f in lib.files() {
+        let canon = f.path.canonicalize().unwrap_or_else(|_| f.path.clone());
+        let Ok(rel) = canon.strip_prefix(shader_root) else { continue };
+        let rel = rel.to_string_lossy().replace('\\', "/");
+        for spec in pipeline::SPECS.iter().filter(|s| s.shader == rel) {
+            out.entry(f.display.clone()).or_default().push(spec);
+        }
+    }
+    out
+}
+
+/// What checking one file produced.
+struct Checked {
+    display: String,
+    kind: ModuleKind,
+    permutations: Vec<ShaderDefs>,
+    diagnostics: Vec<Diagnostic>,
+    /// Modules that composed, with the spec they are for, for the device pass.
+    composed: Vec<(&'static PipelineSpec, ShaderDefs, Composed)>,
+    duration: std::time::Duration,
+}
+
+impl Checked {
+    fn failed(display: &str, d: Diagnostic) -> Self {
+        Checked {
+            display: display.to_owned(),
+            kind: ModuleKind::Entry,
+            permutations: Vec::new(),
+            diagnostics: vec![d],
+            composed: Vec::new(),
+            duration: Default::default(),
+        }
+    }
+}
+
+fn check_file(
+    lib: &Library,
+    file: &Arc<SourceFile>,
+    specs: &BTreeMap<String, Vec<&'static PipelineSpec>>,
+    caps: naga::valid::Capabilities,
+) -> Checked {
+    let start = Instant::now();
+    let own_specs = specs.get(&file.display).cloned().unwrap_or_default();
+    let kind = if file.import_path.is_some() { ModuleKind::Library } else { ModuleKind::Entry };
+    let mut permutations: Vec<ShaderDefs> = own_specs.iter().flat_map(|s| s.permutations()).collect();
+    permutations.sort();
+    permutations.dedup();
+    if permutations.is_empty() {
+        permutations.push(ShaderDefs::new());
+    }
+    let mut diagnostics: Vec<Diagnostic> = Vec::new();
+    let mut composed = Vec::new();
+    for defs in &permutations {
+        let result = match kind {
+            ModuleKind::Library => guarded(&file.display, || crate::shader::compose::check_library(lib, file, defs, caps).map(|_| None)),
+            ModuleKind::Entry => guarded(&file.display, || NagaOil.compose(lib, file, defs, caps).map(Some)),
+        };
+        match result {
+            Ok(Some(c)) if c.module.entry_points.is_empty() && !diagnostics.iter().any(|d| d.code == Code::UnusedModule) => {
+                diagnostics.push(
+                    Diagnostic::warning(Code::UnusedModule, "no entry point and no `#define_import_path`: nothing can use this file")
+                        .at(Location::file_start(&file.display))
+                        .with_note("add `#define_import_path some::name` to make it importable, or an @vertex/@fragment/@compute entry point"),
+                );
+            }
+            Ok(Some(c)) => {
+                for spec in own_specs.iter().filter(|s| s.permutations().contains(defs)) {
+                    composed.push((*spec, defs.clone(), c.clone()));
+                }
+            }
+            Ok(None) => {}
+            Err(ds) => {
+                for d in ds {
+                    let d = if permutations.len() > 1 { d.with_note(format!("permutation: [{}]", defs_key(defs))) } else { d };
+                    if !diagnostics.iter().any(|x| x.to_string() == d.to_string()) {
+                        diagnostics.push(d);
+                    }
+                }
+            }
+        }
+    }
+    Checked { display: file.display.clone(), kind, permutations, diagnostics, composed, duration: start.elapsed() }
+}
+
+/// Runs one compile step, turning a panic inside naga or naga_oil into a
+/// diagnostic so the other files are still checked.
+fn guarded<T>(display: &str, f: impl FnOnce() -> Result<T, Vec<Diagnostic>>) -> Result<T, Vec<Diagnostic>> {
+    std::panic::catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|p| Err(vec![panic_diagnostic(display, p, "the WGSL compiler")]))
+}
+
+fn panic_diagnostic(display: &str, payload: Box<dyn std::any::Any + Send>, who: &str) -> Diagnostic {
+    let msg = payload
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| payload.downcast_ref::<&str>().map(|s| (*s).to_owned()))
+        .unwrap_or_else(|| "unknown panic".to_owned());
+    Diagnostic::error(Code::CompilerPanic, format!("{who} crashed on this file"))
+        .at(Location::file_start(display))
+        .with_note(format!("panic: {msg}"))
+        .with_note("this is a bug in the compiler, not necessarily in your shader; the other files were still checked")
+}
+
+/// Silences the default panic message while compile steps run: a panic
+/// there is reported as a diagnostic, not as a backtrace on stderr.
+struct QuietPanics(Option<Box<dyn Fn(&std::panic::PanicHookInfo<'_>) + Sync + Send + 'static>>);
+
+impl QuietPanics {
+    fn install() -> Self {
+        let prev = std::panic::take_hook();
+        std::panic::set_hook(Box::new(|_| {}));
+        QuietPanics(Some(prev))
+    }
+}
+
+impl Drop for QuietPanics {
+    fn drop(&mut self) {
+        if let Some(prev) = self.0.take() {
+            std::panic::set_hook(prev);
+        }
+    }
+}

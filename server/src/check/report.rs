@@ -1,0 +1,74 @@
+//! The result of a `loupe check` run, independent of how it is printed.
+
+use std::time::Duration;
+
+use crate::diag::{Diagnostic, Severity};
+
+/// What one checked WGSL file is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModuleKind {
+    /// Declares `#define_import_path`: checked as part of every shader that
+    /// imports it, and on its own.
+    Library,
+    /// A shader with entry points, composed with its imports.
+    Entry,
+}
+
+#[derive(Debug, Clone)]
+pub struct ModuleResult {
+    /// Display path of the file, as diagnostics name it.
+    pub file: String,
+    pub kind: ModuleKind,
+    /// Every shader-def permutation the file was checked with, each as a
+    /// sorted comma-separated list of defs (empty string: no defs).
+    pub permutations: Vec<String>,
+    /// Pipelines the renderer builds from this file that were created on the
+    /// device (zero with `--no-device`).
+    pub pipelines: usize,
+    /// Diagnostics whose primary location is in this file, or that came from
+    /// checking it.
+    pub diagnostics: Vec<Diagnostic>,
+    pub duration: Duration,
+}
+
+impl ModuleResult {
+    pub fn errors(&self) -> usize {
+        self.diagnostics.iter().filter(|d| d.severity == Severity::Error).count()
+    }
+
+    pub fn warnings(&self) -> usize {
+        self.diagnostics.iter().filter(|d| d.severity == Severity::Warning).count()
+    }
+}
+
+#[derive(Debug, Clone, Default)]
+pub struct CheckReport {
+    /// One per file, sorted by path.
+    pub modules: Vec<ModuleResult>,
+    /// Diagnostics that belong to no single file (no device).
+    pub general: Vec<Diagnostic>,
+    /// The adapter pipelines were created on, if any.
+    pub adapter: Option<String>,
+    pub duration: Duration,
+}
+
+impl CheckReport {
+    pub fn diagnostics(&self) -> impl Iterator<Item = &Diagnostic> {
+        self.modules.iter().flat_map(|m| m.diagnostics.iter()).chain(self.general.iter())
+    }
+
+    pub fn count(&self, severity: Severity) -> usize {
+        self.diagnostics().filter(|d| d.severity == severity).count()
+    }
+
+    pub fn pipelines(&self) -> usize {
+        self.modules.iter().map(|m| m.pipelines).sum()
+    }
+
+    /// The process exit code: 0 clean, 1 any error (or warning when denied).
+    pub fn exit_code(&self, deny_warnings: bool) -> i32 {
+        let errors = self.count(Severity::Error);
+        let warnings = self.count(Severity::Warning);
+        if errors > 0 || (deny_warnings && warnings > 0) { 1 } else { 0 }
+    }
+}

@@ -1,0 +1,16 @@
+//! loupe: a shader hot-reload server and frame debugger for WGSL on wgpu.
+//!
+//! Data flow: sources (`shader::library`) → compose + validate
+//! (`shader::compose`) → pipelines (`gpu::pipeline`, `render::pipelines`) →
+//! render graph (`render::graph`) → captures (`render::capture`) → stream
+//! (`serve::http`) → UI (`client/`). `check` is the same chain stopped after
+//! pipeline creation, printed for CI. See ARCHITECTURE.md.
+
+pub mod check;
+pub mod diag;
+pub mod gpu;
+pub mod protocol;
+pub mod render;
+pub mod scene;
+pub mod serve;
+pub mod shader;

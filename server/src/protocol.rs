@@ -1,0 +1,135 @@
+//! Protocol data: what the daemon tells clients, as plain types. The http
+//! module turns them into JSON; nothing else encodes them. PROTOCOL.md at
+//! the repository root documents every shape; bump `VERSION` on any
+//! incompatible change.
+
+use serde::{Deserialize, Serialize};
+
+use crate::diag::Diagnostic;
+
+pub const VERSION: u32 = 1;
+
+/// `GET /api/status`
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct Status {
+    pub protocol: u32,
+    pub version: String,
+    pub adapter: String,
+    /// True on a CPU adapter (lavapipe): timings are only comparable as ratios.
+    pub cpu_adapter: bool,
+    pub features: Vec<String>,
+    /// What degrades because the adapter lacks a feature.
+    pub degraded: Vec<String>,
+    pub scene: String,
+    pub frame: u64,
+    pub pipelines_ok: usize,
+    pub pipelines_stale: usize,
+    pub pipelines_failed: usize,
+    /// How many times the device was lost and recreated.
+    pub device_resets: u32,
+    pub errors: usize,
+    pub warnings: usize,
+    /// `continuous` or `on-change`.
+    pub render_mode: String,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PassStatus {
+    /// Rendering with its current pipelines.
+    Ok,
+    /// Its newest source failed; the last good pipeline still renders.
+    Stale,
+    /// It has never built (no last good pipeline): it does not render.
+    Failed,
+    /// Not needed by this frame.
+    Culled,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct OutputInfo {
+    pub name: String,
+    pub format: String,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// One node of the render graph, `GET /api/passes`.
+#[derive(Debug, Clone, Serialize)]
+pub struct PassInfo {
+    pub name: String,
+    pub status: PassStatus,
+    /// Why it is culled or failed.
+    pub reason: Option<String>,
+    pub pipelines: Vec<String>,
+    pub reads: Vec<String>,
+    pub writes: Vec<OutputInfo>,
+    /// Milliseconds of the last frame; `timing` says how it was measured.
+    pub time_ms: Option<f64>,
+    /// `gpu` (timestamp queries) or `cpu` (wall clock around submit+wait).
+    pub timing: String,
+    pub diagnostics: usize,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct PipelineInfo {
+    pub name: String,
+    pub shader: String,
+    pub defs: String,
+    pub status: PassStatus,
+    /// Increases each time a new version is swapped in.
+    pub generation: u64,
+    pub files: Vec<String>,
+}
+
+/// `GET /api/diagnostics`
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct DiagnosticsReport {
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+/// Time spent between a save and the frame that shows it.
+#[derive(Debug, Clone, Copy, Serialize, Default)]
+pub struct ReloadTimings {
+    /// From the first file event to the debounced, content-checked change.
+    pub watch_ms: f64,
+    pub compose_ms: f64,
+    pub pipeline_ms: f64,
+    pub render_ms: f64,
+}
+
+/// WebSocket text messages, server → client.
+#[derive(Debug, Clone, Serialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum ServerEvent {
+    Hello { protocol: u32, status: Status },
+    ReloadStarted { id: u64, files: Vec<String>, pipelines: Vec<String> },
+    ReloadSucceeded { id: u64, files: Vec<String>, pipelines: Vec<String>, timings: ReloadTimings },
+    ReloadFailed { id: u64, files: Vec<String>, pipelines: Vec<String>, diagnostics: Vec<Diagnostic> },
+    Frame { frame: u64, passes: Vec<PassTiming>, total_ms: f64, timing: String, reload: Option<u64> },
+    Passes { passes: Vec<PassInfo> },
+    Diagnostics { diagnostics: Vec<Diagnostic> },
+    DeviceLost { message: String, recovered: bool },
+    /// Messages this client missed because it read too slowly.
+    Dropped { count: u64 },
+    /// The server could not use a message this client sent (bad JSON, an
+    /// unknown `type`, a binary message); the connection stays open.
+    Error { message: String },
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct PassTiming {
+    pub name: String,
+    pub time_ms: f64,
+}
+
+/// WebSocket text messages, client → server.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum ClientMessage {
+    /// Which pass output the client wants streamed as images.
+    Subscribe { pass: String, output: String },
+    /// Rebuild every pipeline from the current sources (`POST /api/reload`
+    /// sends this too).
+    Rebuild {},
+}

@@ -1,0 +1,272 @@
+//! Captured pass outputs: texels read back from the GPU, converted to RGBA
+//! f32 so every format is inspected the same way, with the statistics the
+//! NaN report and the inspector need.
+
+use serde::Serialize;
+
+/// One pass output of one frame, exactly as the pass wrote it.
+#[derive(Debug, Clone)]
+pub struct CapturedImage {
+    pub pass: String,
+    pub output: String,
+    pub frame: u64,
+    pub width: u32,
+    pub height: u32,
+    /// The texture format's name, e.g. `Rgba16Float`.
+    pub format: String,
+    /// RGBA, row-major, top row first: `width * height * 4` values. Formats
+    /// with fewer channels fill the rest with 0 (alpha with 1).
+    pub data: Vec<f32>,
+    pub stats: ImageStats,
+}
+
+#[derive(Debug, Clone, Default, Serialize, PartialEq)]
+pub struct ImageStats {
+    pub nan: u64,
+    pub inf: u64,
+    pub negative: u64,
+    /// Per channel, over finite values only.
+    pub min: [f32; 4],
+    pub max: [f32; 4],
+    /// The first pixel (x, y) in row order holding a NaN or Inf.
+    pub first_nan: Option<[u32; 2]>,
+}
+
+impl ImageStats {
+    pub fn of(data: &[f32], width: u32) -> Self {
+        let mut s = ImageStats { min: [f32::INFINITY; 4], max: [f32::NEG_INFINITY; 4], ..Default::default() };
+        for (i, px) in data.chunks_exact(4).enumerate() {
+            let mut bad = false;
+            for (c, &v) in px.iter().enumerate() {
+                if v.is_nan() {
+                    s.nan += 1;
+                    bad = true;
+                } else if v.is_infinite() {
+                    s.inf += 1;
+                    bad = true;
+                } else {
+                    if v < 0.0 {
+                        s.negative += 1;
+                    }
+                    s.min[c] = s.min[c].min(v);
+                    s.max[c] = s.max[c].max(v);
+                }
+            }
+            if bad && s.first_nan.is_none() {
+                s.first_nan = Some([i as u32 % width, i as u32 / width]);
+            }
+        }
+        for c in 0..4 {
+            if s.min[c] > s.max[c] {
+                (s.min[c], s.max[c]) = (0.0, 0.0); // no finite value at all
+            }
+        }
+        s
+    }
+
+    /// Whether any value is NaN or infinite.
+    pub fn has_non_finite(&self) -> bool {
+        self.nan + self.inf > 0
+    }
+}
+
+/// How a texture format's texels become RGBA f32.
+#[derive(Debug, Clone, Copy)]
+pub struct Layout {
+    pub channels: usize,
+    pub bytes_per_channel: usize,
+    kind: Kind,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Kind {
+    F16,
+    F32,
+    Unorm8,
+    /// 8-bit sRGB-encoded values: reported as stored (encoded), since that
+    /// is what the pass wrote and what a PNG shows.
+    Srgb8,
+    Bgra8Unorm,
+}
+
+impl Layout {
+    /// `None` for formats loupe cannot read back (compressed, packed).
+    pub fn of(format: wgpu::TextureFormat) -> Option<Layout> {
+        use wgpu::TextureFormat as F;
+        let (channels, bytes_per_channel, kind) = match format {
+            F::R16Float => (1, 2, Kind::F16),
+            F::Rg16Float => (2, 2, Kind::F16),
+            F::Rgba16Float => (4, 2, Kind::F16),
+            F::R32Float | F::Depth32Float => (1, 4, Kind::F32),
+            F::Rg32Float => (2, 4, Kind::F32),
+            F::Rgba32Float => (4, 4, Kind::F32),
+            F::R8Unorm => (1, 1, Kind::Unorm8),
+            F::Rg8Unorm => (2, 1, Kind::Unorm8),
+            F::Rgba8Unorm => (4, 1, Kind::Unorm8),
+            F::Rgba8UnormSrgb => (4, 1, Kind::Srgb8),
+            F::Bgra8Unorm | F::Bgra8UnormSrgb => (4, 1, Kind::Bgra8Unorm),
+            _ => return None,
+        };
+        Some(Layout { channels, bytes_per_channel, kind })
+    }
+
+    pub fn bytes_per_texel(&self) -> usize {
+        self.channels * self.bytes_per_channel
+    }
+
+    /// Converts tightly packed rows (no padding) to RGBA f32.
+    pub fn to_rgba_f32(&self, bytes: &[u8]) -> Vec<f32> {
+        let texels = bytes.len() / self.bytes_per_texel();
+        let mut out = Vec::with_capacity(texels * 4);
+        for t in bytes.chunks_exact(self.bytes_per_texel()) {
+            let mut px = [0.0, 0.0, 0.0, 1.0];
+            for (c, v) in px.iter_mut().enumerate().take(self.channels) {
+                let b = &t[c * self.bytes_per_channel..(c + 1) * self.bytes_per_channel];
+                *v = match self.kind {
+                    Kind::F16 => half::f16::from_le_bytes([b[0], b[1]]).to_f32(),
+                    Kind::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+                    Kind::Unorm8 | Kind::Srgb8 | Kind::Bgra8Unorm => f32::from(b[0]) / 255.0,
+                };
+            }
+            if matches!(self.kind, Kind::Bgra8Unorm) {
+                px.swap(0, 2);
+            }
+            out.extend_from_slice(&px);
+        }
+        out
+    }
+
+    pub fn is_display_encoded(&self) -> bool {
+        matches!(self.kind, Kind::Srgb8)
+    }
+}
+
+impl CapturedImage {
+    pub fn new(pass: &str, output: &str, frame: u64, width: u32, height: u32, format: wgpu::TextureFormat, data: Vec<f32>) -> Self {
+        let stats = ImageStats::of(&data, width);
+        CapturedImage {
+            pass: pass.to_owned(),
+            output: output.to_owned(),
+            frame,
+            width,
+            height,
+            format: format!("{format:?}"),
+            data,
+            stats,
+        }
+    }
+
+    /// `pass/output`, the key captures are listed and fetched by.
+    pub fn key(&self) -> String {
+        format!("{}/{}", self.pass, self.output)
+    }
+
+    fn display_encoded(&self) -> bool {
+        self.format.ends_with("Srgb")
+    }
+
+    /// An 8-bit sRGB PNG for display: linear values are clamped to [0, 1]
+    /// and encoded; NaN shows as magenta so it is never mistaken for black.
+    pub fn to_png(&self) -> Vec<u8> {
+        let encoded = self.display_encoded();
+        let mut rgba = Vec::with_capacity(self.data.len());
+        for px in self.data.chunks_exact(4) {
+            if px.iter().any(|v| !v.is_finite()) {
+                rgba.extend_from_slice(&[255, 0, 255, 255]);
+                continue;
+            }
+            for (c, &v) in px.iter().enumerate() {
+                let v = v.clamp(0.0, 1.0);
+                let v = if encoded || c == 3 { v } else { linear_to_srgb(v) };
+                rgba.push((v * 255.0 + 0.5) as u8);
+            }
+        }
+        let mut out = Vec::new();
+        let encoder = image::codecs::png::PngEncoder::new_with_quality(
+            &mut out,
+            image::codecs::png::CompressionType::Fast,
+            image::codecs::png::FilterType::Sub,
+        );
+        image::ImageEncoder::write_image(encoder, &rgba, self.width, self.height, image::ExtendedColorType::Rgba8)
+            .expect("an in-memory PNG of matching size cannot fail");
+        out
+    }
+
+    /// OpenEXR, 32-bit float RGBA: the exact values.
+    pub fn to_exr(&self) -> Result<Vec<u8>, String> {
+        use exr::prelude::*;
+        let (w, h) = (self.width as usize, self.height as usize);
+        let data = &self.data;
+        let image = Image::from_channels(
+            (w, h),
+            SpecificChannels::rgba(|Vec2(x, y): Vec2<usize>| {
+                let i = (y * w + x) * 4;
+                (data[i], data[i + 1], data[i + 2], data[i + 3])
+            }),
+        );
+        let mut out = std::io::Cursor::new(Vec::new());
+        image.write().to_buffered(&mut out).map_err(|e| e.to_string())?;
+        Ok(out.into_inner())
+    }
+
+    /// Raw little-endian RGBA f32, top row first.
+    pub fn raw_f32(&self) -> Vec<u8> {
+        self.data.iter().flat_map(|v| v.to_le_bytes()).collect()
+    }
+
+    /// Raw little-endian RGBA f16, top row first.
+    pub fn raw_f16(&self) -> Vec<u8> {
+        self.data.iter().flat_map(|v| half::f16::from_f32(*v).to_le_bytes()).collect()
+    }
+
+    /// RGBA at pixel (x, y).
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
+        let i = ((y * self.width + x) * 4) as usize;
+        [self.data[i], self.data[i + 1], self.data[i + 2], self.data[i + 3]]
+    }
+}
+
+pub fn linear_to_srgb(v: f32) -> f32 {
+    if v <= 0.003_130_8 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stats_count_nan_inf_negative_and_find_the_first_bad_pixel() {
+        let data = vec![
+            0.5, 0.0, -1.0, 1.0, // (0,0): one negative
+            f32::NAN, 0.0, 0.0, 1.0, // (1,0): NaN
+            f32::INFINITY, 2.0, 0.0, 1.0, // (0,1): Inf
+            0.25, 0.0, 0.0, 1.0,
+        ];
+        let s = ImageStats::of(&data, 2);
+        assert_eq!((s.nan, s.inf, s.negative), (1, 1, 1));
+        assert_eq!(s.first_nan, Some([1, 0]));
+        assert_eq!(s.min[0], 0.25);
+        assert_eq!(s.max[1], 2.0);
+    }
+
+    #[test]
+    fn half_floats_convert_exactly() {
+        let l = Layout::of(wgpu::TextureFormat::Rgba16Float).unwrap();
+        let bytes: Vec<u8> = [1.5f32, -2.0, 65504.0, 0.0]
+            .iter()
+            .flat_map(|v| half::f16::from_f32(*v).to_le_bytes())
+            .collect();
+        assert_eq!(l.to_rgba_f32(&bytes), [1.5, -2.0, 65504.0, 0.0]);
+    }
+
+    #[test]
+    fn encodings_round_trip() {
+        let img = CapturedImage::new("p", "o", 1, 2, 1, wgpu::TextureFormat::Rgba16Float, vec![0.5, 1.0, 2.0, 1.0, f32::NAN, 0.0, 0.0, 1.0]);
+        let png = image::load_from_memory(&img.to_png()).unwrap().to_rgba8();
+        assert_eq!(png.get_pixel(1, 0).0, [255, 0, 255, 255], "NaN shows magenta");
+        let raw = img.raw_f32();
+        assert_eq!(f32::from_le_bytes(raw[8..12].try_into().unwrap()), 2.0);
+        let exr = img.to_exr().unwrap();
+        assert_eq!(&exr[..4], &[0x76, 0x2f, 0x31, 0x01], "EXR magic");
+    }
+}

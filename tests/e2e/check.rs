@@ -1,0 +1,190 @@
+//! `loupe check`: formats, exit codes, bad input.
+
+use loupe_tests::{Project, loupe, repo};
+
+/// A project whose error sits inside an imported module, at util.wgsl:5:16.
+fn import_error_project() -> Project {
+    let p = Project::empty("import-error");
+    p.write(
+        "shaders/lib/util.wgsl",
+        "#define_import_path demo::util\n\nfn scale(x: f32) -> f32 {\n    let k = 2u;\n    return x * k;\n}\n",
+    );
+    p.write(
+        "shaders/main.wgsl",
+        "#import demo::util::scale\n\n@fragment\nfn fs_main() -> @location(0) vec4<f32> {\n    return vec4(scale(0.5));\n}\n",
+    );
+    p
+}
+
+const UTIL: &str = "shaders/lib/util.wgsl";
+
+#[test]
+fn project_shaders_are_clean_with_pipelines_created() {
+    let run = loupe(&repo(), &["check", "--no-timings"]);
+    run.code(0).stdout_has("0 errors");
+    // With a device (lavapipe here), every pipeline spec is created.
+    run.check(run.stdout.contains("pipelines on"), "expected pipelines to be created on an adapter");
+}
+
+#[test]
+fn human_reports_error_in_imported_module_at_its_line() {
+    let p = import_error_project();
+    let run = p.run(&["check", "--no-device", "--color", "never"]);
+    run.code(1).stdout_has(&format!("{UTIL}:5:")).stdout_has("return x * k;").stdout_has("1 error");
+}
+
+#[test]
+fn json_lines_carry_every_field() {
+    let p = import_error_project();
+    let run = p.run(&["check", "--no-device", "--format", "json"]);
+    run.code(1);
+    let diags: Vec<serde_json::Value> = run.stdout.lines().map(|l| serde_json::from_str(l).expect("each line is JSON")).collect();
+    let d = diags.iter().find(|d| d["file"] == UTIL).unwrap_or_else(|| panic!("no diagnostic in {UTIL}: {}", run.stdout));
+    assert_eq!(d["line"], 5);
+    assert!(d["column"].as_u64().unwrap() >= 12);
+    for field in ["end_line", "end_column", "severity", "code", "message", "labels", "notes"] {
+        assert!(d.get(field).is_some(), "missing {field}: {d}");
+    }
+    assert_eq!(d["severity"], "error");
+    assert_eq!(d["code"], "validation");
+}
+
+#[test]
+fn github_annotations_point_at_the_module() {
+    let p = import_error_project();
+    let run = p.run(&["check", "--no-device", "--format", "github"]);
+    run.code(1);
+    let line = run.stdout.lines().find(|l| l.starts_with("::error ")).unwrap_or_else(|| panic!("{}", run.stdout));
+    run.check(line.contains(&format!("file={UTIL},line=5,col=")), "annotation names util.wgsl line 5");
+}
+
+#[test]
+fn sarif_has_required_fields_and_locations() {
+    let p = import_error_project();
+    let run = p.run(&["check", "--no-device", "--format", "sarif"]);
+    run.code(1);
+    let v: serde_json::Value = serde_json::from_str(&run.stdout).expect("SARIF is JSON");
+    assert_eq!(v["version"], "2.1.0");
+    assert!(v["$schema"].as_str().unwrap().contains("sarif"));
+    let run0 = &v["runs"][0];
+    assert_eq!(run0["tool"]["driver"]["name"], "loupe");
+    let rules = run0["tool"]["driver"]["rules"].as_array().unwrap();
+    let result = &run0["results"][0];
+    let rule_index = result["ruleIndex"].as_u64().unwrap() as usize;
+    assert_eq!(rules[rule_index]["id"], result["ruleId"]);
+    assert_eq!(result["level"], "error");
+    assert!(result["message"]["text"].as_str().is_some_and(|t| !t.is_empty()));
+    let loc = &result["locations"][0]["physicalLocation"];
+    assert_eq!(loc["artifactLocation"]["uri"], UTIL);
+    assert_eq!(loc["region"]["startLine"], 5);
+    assert!(loc["region"]["startColumn"].as_u64().is_some());
+}
+
+#[test]
+fn junit_has_one_testcase_per_module_and_a_failure() {
+    let p = import_error_project();
+    let run = p.run(&["check", "--no-device", "--format", "junit"]);
+    run.code(1);
+    let xml = &run.stdout;
+    run.check(xml.starts_with("<?xml"), "XML declaration first");
+    assert_eq!(xml.matches("<testcase ").count(), 2, "{xml}");
+    run.check(xml.contains(&format!("name=\"{UTIL}\"")), "a testcase for util.wgsl");
+    run.check(xml.contains("<failure "), "a failure element");
+    run.check(xml.contains(&format!("{UTIL}:5:")), "failure text names util.wgsl:5");
+    // Balanced tags: every opened testcase/testsuite closes.
+    for tag in ["testsuites", "testsuite"] {
+        assert_eq!(xml.matches(&format!("<{tag} ")).count(), xml.matches(&format!("</{tag}>")).count(), "{tag} balanced");
+    }
+}
+
+#[test]
+fn bad_inputs_become_diagnostics_and_other_files_are_still_checked() {
+    let p = Project::empty("bad-inputs");
+    p.write("shaders/empty.wgsl", "");
+    p.write("shaders/latin1.wgsl", b"fn f() -> f32 { return 1.0; } // caf\xe9\n".as_slice());
+    p.write("shaders/huge.wgsl", vec![b' '; 10 << 20].iter().chain(b"fn f() {}\n").copied().collect::<Vec<u8>>());
+    p.write("shaders/a.wgsl", "#define_import_path cyc::a\n#import cyc::b\nfn fa() {}\n");
+    p.write("shaders/b.wgsl", "#define_import_path cyc::b\n#import cyc::a\nfn fb() {}\n");
+    p.write("shaders/missing.wgsl", "#import no::such::module\n@fragment fn fs() -> @location(0) vec4<f32> { return vec4(1.0); }\n");
+    let depth = 10_000;
+    p.write("shaders/deep.wgsl", format!("fn f() -> f32 {{ return {}1.0{}; }}\n", "(".repeat(depth), ")".repeat(depth)));
+    std::os::unix::fs::symlink("/nonexistent/target.wgsl", p.path("shaders/dangling.wgsl")).unwrap();
+    p.write("shaders/good.wgsl", "@fragment\nfn fs_main() -> @location(0) vec4<f32> { return vec4(1.0); }\n");
+    let run = p.run(&["check", "--no-device", "--format", "json"]);
+    run.code(1);
+    let diags: Vec<serde_json::Value> = run.stdout.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let code_of = |file: &str| -> Vec<String> {
+        diags.iter().filter(|d| d["file"] == format!("shaders/{file}")).map(|d| d["code"].as_str().unwrap().to_owned()).collect()
+    };
+    assert_eq!(code_of("empty.wgsl"), ["empty-file"], "{}", run.stdout);
+    assert_eq!(code_of("latin1.wgsl"), ["encoding"]);
+    assert_eq!(code_of("huge.wgsl"), ["file-too-large"]);
+    assert_eq!(code_of("dangling.wgsl"), ["io"]);
+    assert!(code_of("missing.wgsl").contains(&"import-missing".to_owned()));
+    assert!(code_of("a.wgsl").contains(&"import-cycle".to_owned()) || code_of("b.wgsl").contains(&"import-cycle".to_owned()));
+    assert!(code_of("good.wgsl").is_empty(), "the valid file is clean");
+    // The deep file finished one way or the other without killing the run.
+    let junit = p.run(&["check", "--no-device", "--format", "junit"]);
+    junit.check(junit.stdout.contains("name=\"shaders/good.wgsl\""), "good.wgsl was checked");
+    junit.check(junit.stdout.contains("name=\"shaders/deep.wgsl\""), "deep.wgsl was checked");
+}
+
+#[test]
+fn latin1_error_is_located_at_the_bad_byte() {
+    let p = Project::empty("latin1");
+    p.write("shaders/x.wgsl", b"fn f() -> f32 {\n  return 1.0; // caf\xe9\n}\n".as_slice());
+    let run = p.run(&["check", "--no-device", "--format", "json"]);
+    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+    assert_eq!((d["line"].as_u64(), d["column"].as_u64()), (Some(2), Some(20)), "{d}");
+}
+
+#[test]
+fn exit_codes() {
+    let p = Project::empty("exit-codes");
+    p.run(&["check", "does/not/exist"]).code(2).stderr_has("does/not/exist");
+    p.run(&["check", "--no-such-flag"]).code(2);
+    p.write("shaders/orphan.wgsl", "fn helper() -> f32 { return 1.0; }\n");
+    p.run(&["check", "--no-device"]).code(0).stdout_has("1 warning");
+    p.run(&["check", "--no-device", "--deny-warnings"]).code(1);
+    loupe(&repo(), &["--version"]).code(0).stdout_has("loupe ");
+    for sub in ["check", "serve"] {
+        loupe(&repo(), &[sub, "--help"]).code(0).stdout_has("Usage:");
+    }
+}
+
+#[test]
+fn no_adapter_means_exit_3_when_a_device_is_required() {
+    let p = Project::empty("no-adapter");
+    p.write("shaders/ok.wgsl", "@fragment\nfn fs_main() -> @location(0) vec4<f32> { return vec4(1.0); }\n");
+    // Point the Vulkan loader at no driver at all: a machine with no GPU
+    // and no lavapipe.
+    let out = std::process::Command::new(loupe_tests::loupe_bin())
+        .args(["check", "--device"])
+        .current_dir(&p.root)
+        .env("VK_ICD_FILENAMES", "/nonexistent.json")
+        .env("VK_DRIVER_FILES", "/nonexistent.json")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "stderr: {stderr}");
+    assert!(stderr.contains("mesa-vulkan-drivers"), "says what to install: {stderr}");
+}
+
+#[test]
+fn binding_that_the_renderer_does_not_bind_is_located() {
+    let p = Project::copy_of_repo("binding");
+    let path = "shaders/post/tonemap.wgsl";
+    let src = p.read(path).replace("@group(0) @binding(1) var hdr", "@group(0) @binding(5) var hdr");
+    p.write(path, src);
+    let run = p.run(&["check", "--format", "json"]);
+    run.code(1);
+    let d: serde_json::Value = run
+        .stdout
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .find(|d| d["code"] == "binding-mismatch")
+        .unwrap_or_else(|| panic!("no binding-mismatch: {}", run.stdout));
+    assert_eq!(d["file"], path);
+    let line = p.read(path).lines().position(|l| l.contains("@binding(5)")).unwrap() + 1;
+    assert_eq!(d["line"].as_u64(), Some(line as u64));
+}

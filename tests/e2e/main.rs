@@ -1,0 +1,6 @@
+//! End-to-end tests of the built `loupe` binary. One test binary, one
+//! harness (`loupe_tests`), a module per subcommand.
+
+mod check;
+mod golden;
+mod serve;

@@ -1,0 +1,4 @@
+#define_import_path demo::a
+#import demo::b
+
+fn fa() -> f32 { return 1.0; }

@@ -1,0 +1,4 @@
+#define_import_path demo::b
+#import demo::a
+
+fn fb() -> f32 { return 2.0; }

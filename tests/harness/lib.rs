@@ -1,0 +1,247 @@
+//! Harness for end-to-end tests of the built `loupe` binary: runs it as a
+//! user would and, on any failed expectation, prints the command line, exit
+//! code, stdout and stderr.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::{Duration, Instant};
+
+/// The repository root.
+pub fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("tests/ is inside the repo").to_owned()
+}
+
+/// The built binary: `LOUPE_BIN`, else the workspace's debug build.
+pub fn loupe_bin() -> PathBuf {
+    if let Some(p) = std::env::var_os("LOUPE_BIN") {
+        return p.into();
+    }
+    let p = repo().join("target/debug/loupe");
+    assert!(p.exists(), "{} does not exist: run `cargo build --bins` first (tests/run does)", p.display());
+    p
+}
+
+/// The result of one run, with everything needed to explain a failure.
+#[derive(Debug)]
+pub struct Run {
+    pub cmd: String,
+    pub code: i32,
+    pub stdout: String,
+    pub stderr: String,
+}
+
+impl Run {
+    fn context(&self) -> String {
+        format!(
+            "\n--- command ---\n{}\n--- exit code: {} ---\n--- stdout ---\n{}\n--- stderr ---\n{}\n",
+            self.cmd, self.code, self.stdout, self.stderr
+        )
+    }
+
+    #[track_caller]
+    pub fn code(&self, expected: i32) -> &Self {
+        assert_eq!(self.code, expected, "unexpected exit code{}", self.context());
+        self
+    }
+
+    #[track_caller]
+    pub fn stdout_has(&self, needle: &str) -> &Self {
+        assert!(self.stdout.contains(needle), "stdout lacks {needle:?}{}", self.context());
+        self
+    }
+
+    #[track_caller]
+    pub fn stderr_has(&self, needle: &str) -> &Self {
+        assert!(self.stderr.contains(needle), "stderr lacks {needle:?}{}", self.context());
+        self
+    }
+
+    /// Panics with the full context when `ok` is false.
+    #[track_caller]
+    pub fn check(&self, ok: bool, what: &str) -> &Self {
+        assert!(ok, "{what}{}", self.context());
+        self
+    }
+}
+
+/// Runs `loupe args...` in `dir` to completion.
+pub fn loupe(dir: &Path, args: &[&str]) -> Run {
+    let out = Command::new(loupe_bin())
+        .args(args)
+        .current_dir(dir)
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("the loupe binary starts");
+    Run {
+        cmd: format!("(cd {} && loupe {})", dir.display(), args.join(" ")),
+        code: out.status.code().unwrap_or(-1),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+/// A throwaway project directory, removed on drop.
+pub struct Project {
+    pub root: PathBuf,
+}
+
+impl Project {
+    /// An empty project.
+    pub fn empty(name: &str) -> Self {
+        static N: AtomicU32 = AtomicU32::new(0);
+        let root = std::env::temp_dir().join(format!("loupe-e2e-{name}-{}-{}", std::process::id(), N.fetch_add(1, Ordering::Relaxed)));
+        let _ = std::fs::remove_dir_all(&root);
+        std::fs::create_dir_all(&root).expect("temp dir");
+        Project { root }
+    }
+
+    /// A copy of the repository's shaders/ and scenes/.
+    pub fn copy_of_repo(name: &str) -> Self {
+        let p = Self::empty(name);
+        for dir in ["shaders", "scenes"] {
+            copy_dir(&repo().join(dir), &p.root.join(dir));
+        }
+        p
+    }
+
+    pub fn path(&self, rel: &str) -> PathBuf {
+        self.root.join(rel)
+    }
+
+    /// Writes a file the way most editors do: whole content, in place.
+    pub fn write(&self, rel: &str, content: impl AsRef<[u8]>) {
+        let p = self.path(rel);
+        std::fs::create_dir_all(p.parent().expect("has parent")).expect("mkdir");
+        std::fs::write(&p, content).expect("write");
+    }
+
+    /// Saves like vim / VS Code / JetBrains: write a temp file, rename over.
+    pub fn save_by_rename(&self, rel: &str, content: impl AsRef<[u8]>) {
+        let p = self.path(rel);
+        let tmp = p.with_extension("wgsl.tmp~");
+        std::fs::write(&tmp, content).expect("write temp");
+        std::fs::rename(&tmp, &p).expect("rename over");
+    }
+
+    pub fn read(&self, rel: &str) -> String {
+        std::fs::read_to_string(self.path(rel)).expect("read")
+    }
+
+    pub fn run(&self, args: &[&str]) -> Run {
+        loupe(&self.root, args)
+    }
+}
+
+impl Drop for Project {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.root);
+    }
+}
+
+pub fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).expect("mkdir");
+    for e in std::fs::read_dir(from).expect("read dir").flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            copy_dir(&p, &to.join(e.file_name()));
+        } else {
+            std::fs::copy(&p, to.join(e.file_name())).expect("copy");
+        }
+    }
+}
+
+/// A running `loupe serve`, killed on drop. Its stderr is kept for failure
+/// messages.
+pub struct Server {
+    child: Child,
+    pub addr: String,
+    log: std::sync::Arc<std::sync::Mutex<String>>,
+}
+
+impl Server {
+    /// Starts `loupe serve --port 0 ...extra` in `dir` and waits for the
+    /// `listening on http://ADDR` line.
+    pub fn start(dir: &Path, extra: &[&str]) -> Server {
+        let mut child = Command::new(loupe_bin())
+            .args(["serve", "--port", "0"])
+            .args(extra)
+            .current_dir(dir)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("loupe serve starts");
+        let log = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
+        let err = child.stderr.take().expect("piped");
+        let sink = log.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(err).lines().map_while(Result::ok) {
+                sink.lock().expect("log").push_str(&(line + "\n"));
+            }
+        });
+        let out = child.stdout.take().expect("piped");
+        let (tx, rx) = std::sync::mpsc::channel();
+        let sink = log.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(out).lines().map_while(Result::ok) {
+                if let Some(addr) = line.split("listening on http://").nth(1) {
+                    let _ = tx.send(addr.trim().to_owned());
+                }
+                sink.lock().expect("log").push_str(&(line + "\n"));
+            }
+        });
+        let addr = match rx.recv_timeout(Duration::from_secs(120)) {
+            Ok(a) => a,
+            Err(_) => {
+                let _ = child.kill();
+                panic!("loupe serve did not start; its output:\n{}", log.lock().expect("log"));
+            }
+        };
+        Server { child, addr, log }
+    }
+
+    pub fn url(&self, path: &str) -> String {
+        format!("http://{}{}", self.addr, path)
+    }
+
+    pub fn log(&self) -> String {
+        self.log.lock().expect("log").clone()
+    }
+
+    /// GET a path; returns status and body.
+    pub fn get(&self, path: &str) -> (u16, Vec<u8>) {
+        let agent = ureq::Agent::config_builder().http_status_as_error(false).build().new_agent();
+        let mut resp = agent.get(&self.url(path)).call().unwrap_or_else(|e| panic!("GET {path}: {e}\n{}", self.log()));
+        let status = resp.status().as_u16();
+        let body = resp.body_mut().read_to_vec().expect("body");
+        (status, body)
+    }
+
+    pub fn get_json(&self, path: &str) -> serde_json::Value {
+        let (status, body) = self.get(path);
+        assert_eq!(status, 200, "GET {path}: {}\n{}", String::from_utf8_lossy(&body), self.log());
+        serde_json::from_slice(&body).unwrap_or_else(|e| panic!("GET {path}: not JSON: {e}"))
+    }
+
+    /// Polls `f` until it returns Some, up to `limit`; panics with the log.
+    pub fn wait_for<T>(&self, what: &str, limit: Duration, mut f: impl FnMut() -> Option<T>) -> T {
+        let start = Instant::now();
+        loop {
+            if let Some(v) = f() {
+                return v;
+            }
+            if start.elapsed() > limit {
+                panic!("timed out waiting for {what}\n--- server log ---\n{}", self.log());
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
