@@ -135,7 +135,7 @@ fn latin1_error_is_located_at_the_bad_byte() {
     p.write("shaders/x.wgsl", b"fn f() -> f32 {\n  return 1.0; // caf\xe9\n}\n".as_slice());
     let run = p.run(&["check", "--no-device", "--format", "json"]);
     let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
-    assert_eq!((d["line"].as_u64(), d["column"].as_u64()), (Some(2), Some(20)), "{d}");
+    assert_eq!((d["line"].as_u64(), d["column"].as_u64()), (Some(2), Some(21)), "{d}");
 }
 
 #[test]

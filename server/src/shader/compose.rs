@@ -357,7 +357,7 @@ mod tests {
         ]);
         let errs = compose(&lib, "main.wgsl", &[]).unwrap_err();
         let loc = errs[0].location.as_ref().unwrap();
-        assert_eq!((loc.file.as_str(), loc.line, loc.column), ("lib/util.wgsl", 4, 16), "{errs:?}");
+        assert_eq!((loc.file.as_str(), loc.line, loc.column), ("lib/util.wgsl", 4, 15), "{errs:?}");
         assert_eq!(errs[0].code, Code::Parse);
     }
 
