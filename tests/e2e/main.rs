@@ -1,6 +1,7 @@
 //! End-to-end tests of the built `loupe` binary. One test binary, one
 //! harness (`loupe_tests`), a module per subcommand.
 
+mod browser;
 mod check;
 mod golden;
 mod serve;

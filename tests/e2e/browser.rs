@@ -1,0 +1,108 @@
+//! The browser inspector in a real headless chromium, driven over WebDriver:
+//! open the page, break a shader on disk, see the error with file:line while
+//! the old frame stays, fix it, see it clear.
+
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use fantoccini::{Client, ClientBuilder, Locator};
+use loupe_tests::{Project, Server};
+
+const LIMIT: Duration = Duration::from_secs(60);
+const TONEMAP: &str = "shaders/post/tonemap.wgsl";
+
+struct Driver(Child);
+
+impl Drop for Driver {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+async fn browser() -> (Driver, Client) {
+    let port = free_port();
+    let driver = Driver(
+        Command::new("chromedriver")
+            .arg(format!("--port={port}"))
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("chromedriver is installed (tests/run installs chromium-driver)"),
+    );
+    let caps: serde_json::Map<String, serde_json::Value> = serde_json::from_value(serde_json::json!({
+        "goog:chromeOptions": {
+            "binary": "/usr/bin/chromium",
+            "args": ["--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                     "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                     "--no-first-run", "--window-size=1280,800"]
+        }
+    }))
+    .unwrap();
+    let start = Instant::now();
+    loop {
+        match ClientBuilder::new(hyper_util::client::legacy::connect::HttpConnector::new()).capabilities(caps.clone()).connect(&format!("http://127.0.0.1:{port}")).await {
+            Ok(c) => return (driver, c),
+            Err(e) if start.elapsed() > LIMIT => panic!("cannot start chromium through chromedriver: {e}"),
+            Err(_) => tokio::time::sleep(Duration::from_millis(200)).await,
+        }
+    }
+}
+
+/// Polls a JS expression until it is truthy; returns its value.
+async fn until(c: &Client, server: &Server, what: &str, js: &str) -> serde_json::Value {
+    let start = Instant::now();
+    loop {
+        if let Ok(v) = c.execute(&format!("return ({js});"), vec![]).await {
+            if !(v.is_null() || v == false || v == "" || v == 0) {
+                return v;
+            }
+        }
+        if start.elapsed() > LIMIT {
+            let html = c.source().await.unwrap_or_default();
+            panic!("timed out waiting for {what}\n--- page ---\n{}\n--- server ---\n{}", &html[..html.len().min(4000)], server.log());
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn page_shows_frame_and_errors_at_their_line_and_clears_them() {
+    let p = Project::copy_of_repo("browser");
+    let s = Server::start(&p.root, &["--render", "on-change"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+
+    until(&c, &s, "connected", "document.querySelector('#connection').textContent === 'connected'").await;
+    let first = until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    assert!(first.as_u64().unwrap() >= 1);
+    until(&c, &s, "the tonemap pass listed ok", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"ok\"]')").await;
+    let src_before = c.find(Locator::Css("#frame")).await.unwrap().attr("src").await.unwrap();
+
+    // Break the shader as vim saves it.
+    let good = p.read(TONEMAP);
+    let broken = good.replace("let c = max(", "let c = mux(");
+    let line = broken.lines().position(|l| l.contains("mux(")).unwrap() + 1;
+    p.save_by_rename(TONEMAP, &broken);
+    let sel = format!(".diagnostic[data-file=\"{TONEMAP}\"][data-line=\"{line}\"]");
+    until(&c, &s, "the error at its line", &format!("document.querySelector('#diagnostics {sel}')")).await;
+    let text = c.find(Locator::Css(&format!("#diagnostics {sel}"))).await.unwrap().text().await.unwrap();
+    assert!(text.contains(&format!("{TONEMAP}:{line}:")), "diagnostic text names file:line: {text}");
+    let hl = c.find(Locator::Css(&format!("#diagnostics {sel} .hl"))).await.unwrap().text().await.unwrap();
+    assert!(hl.contains("mux("), "the highlighted excerpt line is the broken one: {hl}");
+    until(&c, &s, "the pass marked stale", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"stale\"]')").await;
+    // The old image stays on screen.
+    let src_broken = c.find(Locator::Css("#frame")).await.unwrap().attr("src").await.unwrap();
+    assert!(src_broken.is_some(), "an image is still shown");
+    let _ = src_before;
+
+    // Fix it: the error clears and the pass is ok again.
+    p.write(TONEMAP, &good);
+    until(&c, &s, "the error to clear", &format!("!document.querySelector('#diagnostics {sel}')")).await;
+    until(&c, &s, "the pass ok again", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"ok\"]')").await;
+    c.close().await.unwrap();
+}
