@@ -106,7 +106,11 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     // pass then reports what this adapter lacks.
     let caps = gpu::capabilities_without_device();
 
-    // Compose every target under each of its permutations, in parallel.
+    // Compose every target under each of its permutations, in parallel,
+    // largest files first: a big file started last would leave the other
+    // cores idle at the end.
+    let size = |d: &String| lib.get(d).map_or(0, |f| f.text.len());
+    target_displays.sort_by_key(|d| std::cmp::Reverse(size(d)));
     let checked: Vec<Checked> = pool.install(|| {
         target_displays
             .par_iter()
