@@ -107,13 +107,15 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     let caps = gpu::capabilities_without_device();
 
     // Compose every target under each of its permutations, in parallel,
-    // largest files first: a big file started last would leave the other
-    // cores idle at the end.
+    // one file per task and largest first: rayon otherwise hands each thread
+    // a contiguous chunk up front, and the chunk holding the big files keeps
+    // one core busy while the other idles.
     let size = |d: &String| lib.get(d).map_or(0, |f| f.text.len());
     target_displays.sort_by_key(|d| std::cmp::Reverse(size(d)));
     let checked: Vec<Checked> = pool.install(|| {
         target_displays
             .par_iter()
+            .with_max_len(1)
             .map(|display| match unreadable.get(display) {
                 Some(d) => Checked::failed(display, d.clone()),
                 None => check_file(&lib, &lib.get(display).expect("read above").clone(), &specs_by_file, caps),
