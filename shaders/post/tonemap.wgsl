@@ -3,10 +3,13 @@
 #import loupe::fullscreen::{FullscreenOut, fullscreen}
 #import loupe::color::{tonemap_aces, tonemap_reinhard}
 
+// 16 bytes, as the renderer binds it. (A vec3 pad would align to 16 and
+// make the struct 32 bytes.)
 struct Post {
     // Linear multiplier, 2^EV.
     exposure: f32,
-    _pad: vec3<f32>,
+    _pad0: f32,
+    _pad1: vec2<f32>,
 }
 
 @group(0) @binding(0) var<uniform> post: Post;

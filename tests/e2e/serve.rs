@@ -95,6 +95,13 @@ fn api_shapes() {
     assert_eq!(code, 200);
     let w = st["frame"].as_u64().map(|_| 960usize).unwrap();
     assert_eq!(raw.len(), w * 540 * 4 * 4, "RGBA f32 of the scene's size");
+    // Real pixels: the test pattern's colour bars reach the final image
+    // opaque (an invalid frame would read back as all zeros).
+    let px = |i: usize| f32::from_le_bytes(raw[i * 4..i * 4 + 4].try_into().unwrap());
+    let row = 270 * 960 * 4; // middle row: colour bars
+    let last_bar = row + 959 * 4; // white bar, 0.75 before tonemapping
+    assert_eq!(px(row + 3), 1.0, "alpha of the final image");
+    assert!(px(last_bar) > 0.3 && px(last_bar + 1) > 0.3 && px(last_bar + 2) > 0.3, "white bar is lit: {:?}", (px(last_bar), px(last_bar + 1)));
     let (code, _) = s.get("/api/captures/nope/color.png");
     assert_eq!(code, 404);
 }

@@ -344,6 +344,12 @@ impl Daemon {
         let live = self.cache.live();
         let pending = frame::submit(&self.gpu.device, &self.gpu.queue, self.gpu.features, &graph, &mut self.pool, &live, Some(&capture), self.frame);
         self.in_flight.push_back((pending, std::mem::take(&mut self.finished_reloads)));
+        // Errors no scope caught (invalid frame commands) must not vanish:
+        // such a frame renders nothing.
+        let errors: Vec<String> = std::mem::take(&mut *self.gpu.uncaptured.lock().unwrap_or_else(|e| e.into_inner()));
+        for e in errors {
+            log::error!("frame {}: {e}", self.frame);
+        }
     }
 
     fn pool_for_graph(&mut self) {
