@@ -9,6 +9,7 @@
 pub mod check;
 pub mod diag;
 pub mod gpu;
+pub mod mesh;
 pub mod protocol;
 pub mod render;
 pub mod scene;
