@@ -10,6 +10,7 @@ pub mod check;
 pub mod diag;
 pub mod gpu;
 pub mod mesh;
+pub mod offline;
 pub mod protocol;
 pub mod render;
 pub mod scene;

@@ -8,6 +8,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand, ValueEnum};
 
 use loupe::check::{self, CheckOptions, DeviceMode, format};
+use loupe::offline;
 use loupe::serve::{self, ServeError, ServeOptions, daemon::RenderMode};
 
 /// Exit codes, the same for every subcommand.
@@ -42,12 +43,98 @@ enum Command {
     ///
     /// Exit codes: 0 after Ctrl-C; 2 bad usage; 3 no GPU adapter.
     Serve(ServeArgs),
+    /// Render one frame without a server: every pass output as PNG and
+    /// OpenEXR, plus `report.json` (passes, culled passes with reasons,
+    /// timings, NaN report, statistics).
+    ///
+    /// Exit codes: 0 rendered, clean; 1 the scene or a shader has errors, or
+    /// the frame holds NaN/Inf; 2 bad usage or unwritable output; 3 no GPU.
+    Render(RenderArgs),
+    /// Time each pass of a scene and the cost of captures (median over
+    /// frames, captures none / final / all measured interleaved).
+    Bench(BenchArgs),
+}
+
+#[derive(clap::Args)]
+struct SceneArgs {
+    /// The scene to render.
+    #[arg(long, default_value = "scenes/showcase.toml")]
+    scene: PathBuf,
+    /// Output size, replacing the scene's: WIDTHxHEIGHT.
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// Override a scene value, as the browser's live controls do:
+    /// `--set post.exposure_ev=1.5 --set lights[0].intensity=3`.
+    #[arg(long = "set", value_parser = parse_override)]
+    set: Vec<(String, loupe::scene::overrides::Value)>,
+    /// Project root: where shaders/ is.
+    #[arg(long, default_value = ".")]
+    root: PathBuf,
+}
+
+impl SceneArgs {
+    fn job(&self) -> offline::Job {
+        offline::Job {
+            scene: self.scene.clone(),
+            shader_root: self.root.join("shaders"),
+            size: self.size,
+            overrides: self.set.iter().cloned().collect(),
+        }
+    }
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Directory for the images and report.json (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// Scenes to measure; default: every scene in scenes/.
+    scenes: Vec<PathBuf>,
+    /// Output size for every scene: WIDTHxHEIGHT.
+    #[arg(long, value_parser = parse_size, default_value = "1280x720")]
+    size: (u32, u32),
+    /// Frames per capture setting.
+    #[arg(long, default_value_t = 20)]
+    frames: u32,
+    /// Project root: where shaders/ and scenes/ are.
+    #[arg(long, default_value = ".")]
+    root: PathBuf,
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once('x').ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT"))?;
+    let side = |v: &str| -> Result<u32, String> {
+        let n: u32 = v.trim().parse().map_err(|_| format!("`{v}` is not a number"))?;
+        if (1..=loupe::scene::MAX_SIDE).contains(&n) { Ok(n) } else { Err(format!("{n} is outside 1..={}", loupe::scene::MAX_SIDE)) }
+    };
+    Ok((side(w)?, side(h)?))
+}
+
+fn parse_override(s: &str) -> Result<(String, loupe::scene::overrides::Value), String> {
+    use loupe::scene::overrides::Value;
+    let (path, v) = s.split_once('=').ok_or_else(|| format!("`{s}` is not PATH=VALUE"))?;
+    let value = if let Ok(b) = v.parse::<bool>() {
+        Value::Bool(b)
+    } else if let Ok(i) = v.parse::<i64>() {
+        Value::Int(i)
+    } else if let Ok(f) = v.parse::<f64>() {
+        Value::Float(f)
+    } else {
+        Value::Text(v.to_owned())
+    };
+    Ok((path.trim().to_owned(), value))
 }
 
 #[derive(clap::Args)]
 struct ServeArgs {
     /// The scene to render.
-    #[arg(long, default_value = "scenes/default.toml")]
+    #[arg(long, default_value = "scenes/showcase.toml")]
     scene: PathBuf,
     /// Address to listen on. Anything but loopback is reachable from other
     /// machines, and loupe has no authentication.
@@ -107,7 +194,92 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Check(args) => run_check(args),
         Command::Serve(args) => run_serve(args),
+        Command::Render(args) => run_render(args),
+        Command::Bench(args) => run_bench(args),
     }
+}
+
+/// Prints input errors the way `loupe check` does and picks the exit code.
+fn offline_failed(cmd: &str, e: offline::OfflineError) -> ExitCode {
+    match e {
+        offline::OfflineError::NoDevice(e) => {
+            eprintln!("loupe {cmd}: {e}");
+            ExitCode::from(exit::NO_DEVICE)
+        }
+        offline::OfflineError::Input(diags) => {
+            let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
+            let _ = format::human::write_diagnostics(&diags, color, &mut std::io::stderr().lock());
+            ExitCode::from(exit::ERRORS)
+        }
+        offline::OfflineError::Io(e) => {
+            eprintln!("loupe {cmd}: {e}");
+            ExitCode::from(exit::USAGE)
+        }
+    }
+}
+
+fn run_render(args: RenderArgs) -> ExitCode {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    let report = match offline::render(&args.scene.job(), &args.out) {
+        Ok(r) => r,
+        Err(e) => return offline_failed("render", e),
+    };
+    let json = serde_json::to_string_pretty(&report).expect("the report is plain data");
+    if let Err(e) = std::fs::write(args.out.join("report.json"), json + "\n") {
+        eprintln!("loupe render: cannot write report.json: {e}");
+        return ExitCode::from(exit::USAGE);
+    }
+    let outputs: usize = report.passes.iter().map(|p| p.outputs.len()).sum();
+    println!("{}: {} passes ({} culled), {outputs} outputs written to {} [{}]", report.scene, report.passes.len(), report.culled.len(), args.out.display(), report.adapter);
+    for e in &report.gpu_errors {
+        eprintln!("loupe render: GPU error: {e}");
+    }
+    match &report.nan {
+        Some(n) => {
+            eprintln!(
+                "loupe render: NaN/Inf first made by pass `{}` ({}/{}) at pixel ({}, {}): {:?}",
+                n.pass, n.pass, n.output, n.pixel[0], n.pixel[1], n.value
+            );
+            ExitCode::from(exit::ERRORS)
+        }
+        None if !report.gpu_errors.is_empty() => ExitCode::from(exit::ERRORS),
+        None => ExitCode::from(exit::OK),
+    }
+}
+
+fn run_bench(args: BenchArgs) -> ExitCode {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    let scenes = if args.scenes.is_empty() {
+        let mut v: Vec<PathBuf> = std::fs::read_dir(args.root.join("scenes"))
+            .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect())
+            .unwrap_or_default();
+        v.sort();
+        v
+    } else {
+        args.scenes.clone()
+    };
+    for scene in scenes {
+        let job = offline::Job { scene, shader_root: args.root.join("shaders"), size: Some(args.size), overrides: Default::default() };
+        let r = match offline::bench(&job, args.frames) {
+            Ok(r) => r,
+            Err(e) => return offline_failed("bench", e),
+        };
+        println!("## {} at {}x{}, {} frames, {} timing, {}", r.scene, r.width, r.height, r.frames, r.timing, r.adapter);
+        let total: f64 = r.passes.iter().map(|(_, t)| t).sum();
+        for (name, t) in &r.passes {
+            println!("  {name:<14} {t:>9.3} ms  {:>5.1} %", if total > 0.0 { t / total * 100.0 } else { 0.0 });
+        }
+        let over = |x: f64| (x / r.frame_ms_no_capture - 1.0) * 100.0;
+        println!(
+            "  frame (submit to readback): no capture {:.2} ms; final only {:.2} ms ({:+.1} %); every output {:.2} ms ({:+.1} %)",
+            r.frame_ms_no_capture,
+            r.frame_ms_final_capture,
+            over(r.frame_ms_final_capture),
+            r.frame_ms_all_captures,
+            over(r.frame_ms_all_captures)
+        );
+    }
+    ExitCode::from(exit::OK)
 }
 
 fn run_serve(args: ServeArgs) -> ExitCode {

@@ -1,19 +1,9 @@
-// Exposure and tonemapping: HDR in, display-referred out (the target is an
-// sRGB format, so the hardware applies the transfer function on write).
+// Tonemapping: exposed HDR in, display-referred out (the target is an sRGB
+// format, so the hardware applies the transfer function on write).
 #import loupe::fullscreen::{FullscreenOut, fullscreen}
 #import loupe::color::{tonemap_aces, tonemap_reinhard}
 
-// 16 bytes, as the renderer binds it. (A vec3 pad would align to 16 and
-// make the struct 32 bytes.)
-struct Post {
-    // Linear multiplier, 2^EV.
-    exposure: f32,
-    _pad0: f32,
-    _pad1: vec2<f32>,
-}
-
-@group(0) @binding(0) var<uniform> post: Post;
-@group(0) @binding(1) var hdr: texture_2d<f32>;
+@group(0) @binding(0) var hdr: texture_2d<f32>;
 
 @vertex
 fn vs_fullscreen(@builtin(vertex_index) vertex_index: u32) -> FullscreenOut {
@@ -23,7 +13,7 @@ fn vs_fullscreen(@builtin(vertex_index) vertex_index: u32) -> FullscreenOut {
 @fragment
 fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
     let texel = textureLoad(hdr, vec2<i32>(in.position.xy), 0);
-    let c = max(texel.rgb * post.exposure, vec3(0.0));
+    let c = max(texel.rgb, vec3(0.0));
 #ifdef TONEMAP_REINHARD
     return vec4(tonemap_reinhard(c), texel.a);
 #else

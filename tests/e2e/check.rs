@@ -173,7 +173,7 @@ fn no_adapter_means_exit_3_when_a_device_is_required() {
 #[test]
 fn binding_that_the_renderer_does_not_bind_is_located() {
     let p = Project::copy_of_repo("binding");
-    let path = "shaders/post/tonemap.wgsl";
+    let path = "shaders/post/exposure.wgsl";
     let src = p.read(path).replace("@group(0) @binding(1) var hdr", "@group(0) @binding(5) var hdr");
     p.write(path, src);
     let run = p.run(&["check", "--format", "json"]);
@@ -187,4 +187,28 @@ fn binding_that_the_renderer_does_not_bind_is_located() {
     assert_eq!(d["file"], path);
     let line = p.read(path).lines().position(|l| l.contains("@binding(5)")).unwrap() + 1;
     assert_eq!(d["line"].as_u64(), Some(line as u64));
+}
+
+#[test]
+fn uniform_struct_of_the_wrong_size_is_located() {
+    // The bug that once blanked every frame: a vec3 pad aligns to 16 and
+    // makes a 16-byte uniform struct 32 bytes.
+    let p = Project::copy_of_repo("uniform-size");
+    let path = "shaders/post/exposure.wgsl";
+    let src = p.read(path).replace("    _pad0: f32,\n    _pad1: vec2<f32>,", "    _pad: vec3<f32>,");
+    assert!(src.contains("_pad: vec3<f32>"), "the edit applies");
+    p.write(path, src);
+    let run = p.run(&["check", "--format", "json"]);
+    run.code(1);
+    let d: serde_json::Value = run
+        .stdout
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .find(|d| d["code"] == "binding-mismatch")
+        .unwrap_or_else(|| panic!("no binding-mismatch: {}", run.stdout));
+    assert_eq!(d["file"], path);
+    let line = p.read(path).lines().position(|l| l.contains("var<uniform> exposure")).unwrap() + 1;
+    assert_eq!(d["line"].as_u64(), Some(line as u64));
+    let text = d.to_string();
+    assert!(text.contains("32 bytes") && text.contains("16 bytes"), "{text}");
 }

@@ -4,4 +4,5 @@
 mod browser;
 mod check;
 mod golden;
+mod render;
 mod serve;

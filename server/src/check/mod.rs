@@ -178,7 +178,7 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
                 for c in &checked {
                     for (spec, defs, composed) in &c.composed {
                         let result = std::panic::catch_unwind(AssertUnwindSafe(|| {
-                            create_checked(&gpu, spec, composed, &lib, &c.display)
+                            create_checked(&gpu, spec, defs, composed, &lib, &c.display)
                         }))
                         .unwrap_or_else(|p| Err(vec![panic_diagnostic(&c.display, p, "wgpu")]));
                         match result {
@@ -206,8 +206,8 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     Ok((report, files))
 }
 
-fn create_checked(gpu: &Gpu, spec: &PipelineSpec, composed: &Composed, lib: &Library, display: &str) -> Result<(), Vec<Diagnostic>> {
-    pipeline::create(&gpu.device, spec, composed, lib, display).map(|_| ())
+fn create_checked(gpu: &Gpu, spec: &PipelineSpec, defs: &ShaderDefs, composed: &Composed, lib: &Library, display: &str) -> Result<(), Vec<Diagnostic>> {
+    pipeline::create(&gpu.device, spec, defs, composed, lib, display).map(|_| ())
 }
 
 /// Pipeline specs by the display path of the shader file they build from.

@@ -19,7 +19,66 @@ pub const LDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 pub enum Stages {
     /// A fullscreen pass: vertices come from the vertex index, no buffers.
     Fullscreen { fragment: &'static str, targets: &'static [wgpu::TextureFormat] },
+    /// Scene geometry: `Vertex` buffers (position, normal), one draw per
+    /// object with the object's index as the instance index.
+    Mesh { vertex: &'static str, fragment: Option<&'static str>, targets: &'static [wgpu::TextureFormat], depth: Depth },
     Compute { entry: &'static str },
+}
+
+/// How a mesh pipeline uses its depth attachment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Depth {
+    /// Test and write (the prepass).
+    Write,
+    /// Test against a filled buffer, write nothing (shading passes after a
+    /// prepass shade each pixel once).
+    Equal,
+    /// Test and write with a slope-scaled bias (shadow maps).
+    Biased,
+}
+
+/// The depth format of the prepass and shadow maps.
+pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Vertex layout of every mesh: position then normal, f32x3 each.
+pub const VERTEX_STRIDE: u64 = 24;
+
+/// When a bind group is part of the pipeline's layout.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum When {
+    Always,
+    /// Only in permutations with this def: a feature's resources exist only
+    /// when the scene uses the feature.
+    Def(&'static str),
+    /// Only in permutations without this def.
+    NotDef(&'static str),
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct Group {
+    /// The `@group(N)` it binds to. Two groups may share an index when
+    /// their conditions exclude each other.
+    pub index: u32,
+    pub when: When,
+    pub entries: &'static [wgpu::BindGroupLayoutEntry],
+}
+
+impl Group {
+    pub fn active(&self, defs: &ShaderDefs) -> bool {
+        match self.when {
+            When::Always => true,
+            When::Def(d) => defs.contains(d),
+            When::NotDef(d) => !defs.contains(d),
+        }
+    }
+}
+
+const fn always(index: u32, entries: &'static [wgpu::BindGroupLayoutEntry]) -> Group {
+    Group { index, when: When::Always, entries }
+}
+
+const fn when(index: u32, def: &'static str, entries: &'static [wgpu::BindGroupLayoutEntry]) -> Group {
+    Group { index, when: When::Def(def), entries }
 }
 
 /// Everything needed to build one pipeline, independent of any scene.
@@ -30,8 +89,9 @@ pub struct PipelineSpec {
     /// Shader path relative to the shader root, forward slashes.
     pub shader: &'static str,
     pub stages: Stages,
-    /// Bind group layouts, group by group: what the renderer binds.
-    pub groups: &'static [&'static [wgpu::BindGroupLayoutEntry]],
+    /// Bind groups: what the renderer binds. A group whose `when` does not
+    /// hold for a permutation is left out of its layout.
+    pub groups: &'static [Group],
     /// Defs the renderer may switch on; it uses any subset of them.
     pub defs: &'static [&'static str],
 }
@@ -44,15 +104,51 @@ impl PipelineSpec {
             .map(|mask| (0..n).filter(|i| mask & (1 << i) != 0).map(|i| self.defs[i].to_owned()).collect())
             .collect()
     }
+
+    /// The bind group layout entries of each group index for `defs`; `None`
+    /// where the permutation binds nothing.
+    pub fn layout(&self, defs: &ShaderDefs) -> Vec<Option<&'static [wgpu::BindGroupLayoutEntry]>> {
+        let active: Vec<&Group> = self.groups.iter().filter(|g| g.active(defs)).collect();
+        let count = active.iter().map(|g| g.index + 1).max().unwrap_or(0);
+        (0..count).map(|i| active.iter().find(|g| g.index == i).map(|g| g.entries)).collect()
+    }
+
+    /// The entry point wgpu errors are reported at.
+    fn main_entry(&self) -> &'static str {
+        match self.stages {
+            Stages::Fullscreen { fragment, .. } => fragment,
+            Stages::Mesh { fragment, vertex, .. } => fragment.unwrap_or(vertex),
+            Stages::Compute { entry } => entry,
+        }
+    }
 }
 
 const FRAG: wgpu::ShaderStages = wgpu::ShaderStages::FRAGMENT;
+const VERT: wgpu::ShaderStages = wgpu::ShaderStages::VERTEX;
+const ALL: wgpu::ShaderStages = wgpu::ShaderStages::VERTEX_FRAGMENT.union(wgpu::ShaderStages::COMPUTE);
 
-pub const fn uniform(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+/// A uniform buffer of exactly `size` bytes. The size is part of the
+/// layout, so a shader struct of another size is an error naming the
+/// binding (wgpu would otherwise only fail the frame that binds it).
+pub const fn uniform(binding: u32, visibility: wgpu::ShaderStages, size: u64) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility,
-        ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: std::num::NonZeroU64::new(size),
+        },
+        count: None,
+    }
+}
+
+/// A read-only storage buffer (arrays of objects, lights, media).
+pub const fn storage(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: true }, has_dynamic_offset: false, min_binding_size: None },
         count: None,
     }
 }
@@ -60,33 +156,113 @@ pub const fn uniform(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::Bind
 /// An unfilterable f32 texture read with `textureLoad`: exact values, any
 /// float format, no sampler.
 pub const fn texture(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    image(binding, wgpu::TextureSampleType::Float { filterable: false }, wgpu::TextureViewDimension::D2)
+}
+
+/// A depth texture read with `textureLoad`.
+pub const fn depth_texture(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    image(binding, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2)
+}
+
+const fn image(binding: u32, sample_type: wgpu::TextureSampleType, view_dimension: wgpu::TextureViewDimension) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: FRAG.union(wgpu::ShaderStages::COMPUTE),
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
+        ty: wgpu::BindingType::Texture { sample_type, view_dimension, multisampled: false },
         count: None,
     }
 }
+
+/// Uniform sizes, in bytes, as the renderer writes them.
+pub mod sizes {
+    pub const VIEW: u64 = 176;
+    pub const MAT4: u64 = 64;
+    pub const VEC4: u64 = 16;
+}
+
+const VIEW: wgpu::BindGroupLayoutEntry = uniform(0, ALL, sizes::VIEW);
+const SHADOWS: Group = when(
+    1,
+    "SHADOWS",
+    &[image(0, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2Array), storage(1, FRAG)],
+);
+const MEDIA: &[wgpu::BindGroupLayoutEntry] = &[storage(0, FRAG)];
+const HDR1: &[wgpu::TextureFormat] = &[HDR];
+const LDR1: &[wgpu::TextureFormat] = &[LDR];
 
 /// Every pipeline the renderer can build.
 pub const SPECS: &[PipelineSpec] = &[
     PipelineSpec {
         name: "debug.test_pattern",
         shader: "passes/test_pattern.wgsl",
-        stages: Stages::Fullscreen { fragment: "fs_main", targets: &[HDR] },
-        groups: &[&[uniform(0, FRAG)]],
+        stages: Stages::Fullscreen { fragment: "fs_main", targets: HDR1 },
+        groups: &[always(0, &[uniform(0, FRAG, sizes::VEC4)])],
+        defs: &["TWO_TRIANGLES"],
+    },
+    PipelineSpec {
+        name: "geometry.shadow",
+        shader: "geometry/shadow.wgsl",
+        stages: Stages::Mesh { vertex: "vs_main", fragment: None, targets: &[], depth: Depth::Biased },
+        groups: &[always(0, &[uniform(0, VERT, sizes::MAT4), storage(1, VERT)])],
+        defs: &[],
+    },
+    PipelineSpec {
+        name: "geometry.depth",
+        shader: "geometry/depth.wgsl",
+        stages: Stages::Mesh { vertex: "vs_main", fragment: None, targets: &[], depth: Depth::Write },
+        groups: &[always(0, &[VIEW, storage(1, VERT)])],
+        defs: &[],
+    },
+    PipelineSpec {
+        name: "geometry.gbuffer",
+        shader: "geometry/gbuffer.wgsl",
+        stages: Stages::Mesh { vertex: "vs_main", fragment: Some("fs_main"), targets: &[HDR, HDR, HDR], depth: Depth::Equal },
+        groups: &[always(0, &[VIEW, storage(1, ALL), storage(2, FRAG)])],
+        defs: &[],
+    },
+    PipelineSpec {
+        name: "lighting.deferred",
+        shader: "passes/lighting.wgsl",
+        stages: Stages::Fullscreen { fragment: "fs_main", targets: HDR1 },
+        groups: &[
+            always(0, &[VIEW, storage(1, FRAG), texture(2), texture(3), texture(4), depth_texture(5)]),
+            SHADOWS,
+            when(2, "LIGHT_RECT", &[texture(0), texture(1)]),
+            when(3, "MEDIA_SHADOWS", MEDIA),
+        ],
+        defs: &["TWO_TRIANGLES", "SHADOWS", "LIGHT_RECT", "MEDIA_SHADOWS"],
+    },
+    PipelineSpec {
+        name: "volumes.raymarch",
+        shader: "passes/volumes.wgsl",
+        stages: Stages::Fullscreen { fragment: "fs_main", targets: &[HDR, HDR] },
+        groups: &[always(0, &[VIEW, storage(1, FRAG), texture(2), depth_texture(3)]), SHADOWS, always(3, MEDIA)],
+        defs: &["TWO_TRIANGLES", "SHADOWS", "VOLUME_ANALYTIC"],
+    },
+    PipelineSpec {
+        name: "post.exposure",
+        shader: "post/exposure.wgsl",
+        stages: Stages::Fullscreen { fragment: "fs_main", targets: HDR1 },
+        groups: &[always(0, &[uniform(0, FRAG, sizes::VEC4), texture(1)])],
         defs: &["TWO_TRIANGLES"],
     },
     PipelineSpec {
         name: "post.tonemap",
         shader: "post/tonemap.wgsl",
-        stages: Stages::Fullscreen { fragment: "fs_main", targets: &[LDR] },
-        groups: &[&[uniform(0, FRAG), texture(1)]],
+        stages: Stages::Fullscreen { fragment: "fs_main", targets: LDR1 },
+        groups: &[always(0, &[texture(0)])],
         defs: &["TWO_TRIANGLES", "TONEMAP_REINHARD"],
+    },
+    PipelineSpec {
+        name: "post.debug_view",
+        shader: "post/debug_view.wgsl",
+        stages: Stages::Fullscreen { fragment: "fs_main", targets: LDR1 },
+        groups: &[
+            always(0, &[uniform(0, FRAG, sizes::VEC4)]),
+            Group { index: 1, when: When::NotDef("DEBUG_DEPTH"), entries: &[texture(0)] },
+            when(1, "DEBUG_DEPTH", &[depth_texture(0)]),
+        ],
+        defs: &["TWO_TRIANGLES", "DEBUG_DEPTH"],
     },
 ];
 
@@ -108,11 +284,12 @@ pub enum Pipeline {
 pub fn create(
     device: &wgpu::Device,
     spec: &PipelineSpec,
+    defs: &ShaderDefs,
     composed: &Composed,
     lib: &Library,
     shader_display: &str,
-) -> Result<(Pipeline, Vec<wgpu::BindGroupLayout>), Vec<Diagnostic>> {
-    let mismatches = check_bindings(spec, composed, lib);
+) -> Result<Pipeline, Vec<Diagnostic>> {
+    let mismatches = check_bindings(spec, defs, composed, lib);
     if !mismatches.is_empty() {
         return Err(mismatches);
     }
@@ -122,53 +299,77 @@ pub fn create(
         label: Some(spec.name),
         source: wgpu::ShaderSource::Naga(Cow::Owned(composed.module.clone())),
     });
-    let layouts: Vec<wgpu::BindGroupLayout> = spec
-        .groups
-        .iter()
-        .map(|entries| device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(spec.name), entries }))
+    let layouts: Vec<Option<wgpu::BindGroupLayout>> = spec
+        .layout(defs)
+        .into_iter()
+        .map(|entries| entries.map(|entries| device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(spec.name), entries })))
         .collect();
-    let layout_refs: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(Some).collect();
+    let layout_refs: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(Option::as_ref).collect();
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(spec.name),
         bind_group_layouts: &layout_refs,
         immediate_size: 0,
     });
+    let color_targets = |targets: &[wgpu::TextureFormat]| -> Vec<Option<wgpu::ColorTargetState>> {
+        targets.iter().map(|&format| Some(format.into())).collect()
+    };
     let pipeline = match spec.stages {
-        Stages::Fullscreen { fragment, targets } => {
-            let targets: Vec<Option<wgpu::ColorTargetState>> =
-                targets.iter().map(|&format| Some(format.into())).collect();
+        Stages::Fullscreen { fragment, targets } => Pipeline::Render(Arc::new(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(spec.name),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_fullscreen"), compilation_options: Default::default(), buffers: &[] },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some(fragment),
+                compilation_options: Default::default(),
+                targets: &color_targets(targets),
+            }),
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            multiview_mask: None,
+            cache: None,
+        }))),
+        Stages::Mesh { vertex, fragment, targets, depth } => {
+            let targets = color_targets(targets);
+            let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
             Pipeline::Render(Arc::new(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(spec.name),
                 layout: Some(&layout),
                 vertex: wgpu::VertexState {
                     module: &module,
-                    entry_point: Some("vs_fullscreen"),
+                    entry_point: Some(vertex),
                     compilation_options: Default::default(),
-                    buffers: &[],
+                    buffers: &[Some(wgpu::VertexBufferLayout { array_stride: VERTEX_STRIDE, step_mode: wgpu::VertexStepMode::Vertex, attributes: &attributes })],
                 },
-                fragment: Some(wgpu::FragmentState {
+                fragment: fragment.map(|entry| wgpu::FragmentState {
                     module: &module,
-                    entry_point: Some(fragment),
+                    entry_point: Some(entry),
                     compilation_options: Default::default(),
                     targets: &targets,
                 }),
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
+                // Planes and open meshes are visible from both sides.
+                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH,
+                    depth_write_enabled: Some(depth != Depth::Equal),
+                    depth_compare: Some(if depth == Depth::Equal { wgpu::CompareFunction::LessEqual } else { wgpu::CompareFunction::Less }),
+                    stencil: Default::default(),
+                    bias: if depth == Depth::Biased { wgpu::DepthBiasState { constant: 2, slope_scale: 2.0, clamp: 0.0 } } else { Default::default() },
+                }),
                 multisample: wgpu::MultisampleState::default(),
                 multiview_mask: None,
                 cache: None,
             })))
         }
-        Stages::Compute { entry } => Pipeline::Compute(Arc::new(device.create_compute_pipeline(
-            &wgpu::ComputePipelineDescriptor {
-                label: Some(spec.name),
-                layout: Some(&layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            },
-        ))),
+        Stages::Compute { entry } => Pipeline::Compute(Arc::new(device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(spec.name),
+            layout: Some(&layout),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        }))),
     };
     let errors: Vec<String> = [pollster::block_on(oom.pop()), pollster::block_on(scope.pop())]
         .into_iter()
@@ -176,13 +377,9 @@ pub fn create(
         .map(|e| e.to_string())
         .collect();
     if errors.is_empty() {
-        return Ok((pipeline, layouts));
+        return Ok(pipeline);
     }
-    let entry = match spec.stages {
-        Stages::Fullscreen { fragment, .. } => fragment,
-        Stages::Compute { entry } => entry,
-    };
-    let at = entry_location(composed, lib, shader_display, entry);
+    let at = entry_location(composed, lib, shader_display, spec.main_entry());
     Err(errors
         .into_iter()
         .map(|e| {
@@ -217,8 +414,9 @@ fn find_in_files(composed: &Composed, lib: &Library, pred: impl Fn(&str) -> bool
 /// Every resource the shader declares must exist in the layout the renderer
 /// binds, with a compatible type. wgpu would reject a mismatch too, but only
 /// with the composed module's names; this names the declaration's line.
-fn check_bindings(spec: &PipelineSpec, composed: &Composed, lib: &Library) -> Vec<Diagnostic> {
+fn check_bindings(spec: &PipelineSpec, defs: &ShaderDefs, composed: &Composed, lib: &Library) -> Vec<Diagnostic> {
     let module = &composed.module;
+    let layout = spec.layout(defs);
     let mut out = Vec::new();
     for (handle, var) in module.global_variables.iter() {
         let Some(rb) = &var.binding else { continue };
@@ -227,9 +425,10 @@ fn check_bindings(spec: &PipelineSpec, composed: &Composed, lib: &Library) -> Ve
             continue; // declared but unused by every entry point: wgpu ignores it too
         }
         let name = var.name.clone().unwrap_or_default();
-        let expected = spec
-            .groups
+        let expected = layout
             .get(rb.group as usize)
+            .copied()
+            .flatten()
             .and_then(|g| g.iter().find(|e| e.binding == rb.binding));
         let problem = match expected {
             None => Some(format!("the renderer binds nothing at @group({}) @binding({})", rb.group, rb.binding)),
@@ -243,7 +442,7 @@ fn check_bindings(spec: &PipelineSpec, composed: &Composed, lib: &Library) -> Ve
             out.push(
                 Diagnostic::error(Code::BindingMismatch, format!("binding `{}` does not match pipeline `{}`", crate::shader::compose::undecorate(&name), spec.name))
                     .with_label(at, problem, true)
-                    .with_note(format!("pipeline `{}` binds: {}", spec.name, describe_layout(spec))),
+                    .with_note(format!("pipeline `{}` binds: {}", spec.name, describe_layout(&layout))),
             );
         }
     }
@@ -252,14 +451,25 @@ fn check_bindings(spec: &PipelineSpec, composed: &Composed, lib: &Library) -> Ve
 
 fn incompatibility(module: &naga::Module, var: &naga::GlobalVariable, ty: &wgpu::BindingType) -> Option<String> {
     let inner = &module.types[var.ty].inner;
+    if let (wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, min_binding_size: Some(bound), .. }, AddressSpace::Uniform) = (ty, var.space) {
+        let size = u64::from(inner.size(module.to_ctx()));
+        if size != bound.get() {
+            return Some(format!("a uniform struct of {size} bytes, but the renderer binds {bound} bytes"));
+        }
+    }
     let ok = match (ty, var.space, inner) {
         (wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, .. }, AddressSpace::Uniform, _) => true,
         (wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only }, .. }, AddressSpace::Storage { access }, _) => {
             !*read_only || !access.contains(naga::StorageAccess::STORE)
         }
         (wgpu::BindingType::Sampler(_), AddressSpace::Handle, TypeInner::Sampler { .. }) => true,
-        (wgpu::BindingType::Texture { sample_type, multisampled, .. }, AddressSpace::Handle, TypeInner::Image { class, .. }) => {
-            match (sample_type, class) {
+        (wgpu::BindingType::Texture { sample_type, multisampled, view_dimension }, AddressSpace::Handle, TypeInner::Image { class, dim, arrayed }) => {
+            let dims_match = match view_dimension {
+                wgpu::TextureViewDimension::D2 => *dim == naga::ImageDimension::D2 && !arrayed,
+                wgpu::TextureViewDimension::D2Array => *dim == naga::ImageDimension::D2 && *arrayed,
+                _ => true,
+            };
+            dims_match && match (sample_type, class) {
                 (wgpu::TextureSampleType::Float { .. }, ImageClass::Sampled { kind: naga::ScalarKind::Float, multi }) => multi == multisampled,
                 (wgpu::TextureSampleType::Depth, ImageClass::Depth { multi }) => multi == multisampled,
                 (wgpu::TextureSampleType::Uint, ImageClass::Sampled { kind: naga::ScalarKind::Uint, multi }) => multi == multisampled,
@@ -279,6 +489,7 @@ fn describe_var(var: &naga::GlobalVariable, inner: &TypeInner) -> String {
         (AddressSpace::Storage { .. }, _) => "a storage buffer".into(),
         (_, TypeInner::Sampler { .. }) => "a sampler".into(),
         (_, TypeInner::Image { class: ImageClass::Storage { .. }, .. }) => "a storage texture".into(),
+        (_, TypeInner::Image { class: ImageClass::Depth { .. }, arrayed: true, .. }) => "a depth texture array".into(),
         (_, TypeInner::Image { class: ImageClass::Depth { .. }, .. }) => "a depth texture".into(),
         (_, TypeInner::Image { class: ImageClass::Sampled { kind, .. }, .. }) => format!("a {kind:?} texture").to_lowercase(),
         _ => "a resource".into(),
@@ -290,6 +501,7 @@ fn describe_binding(ty: &wgpu::BindingType) -> String {
         wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, .. } => "a uniform buffer".into(),
         wgpu::BindingType::Buffer { .. } => "a storage buffer".into(),
         wgpu::BindingType::Sampler(_) => "a sampler".into(),
+        wgpu::BindingType::Texture { sample_type: wgpu::TextureSampleType::Depth, view_dimension: wgpu::TextureViewDimension::D2Array, .. } => "a depth texture array".into(),
         wgpu::BindingType::Texture { sample_type: wgpu::TextureSampleType::Depth, .. } => "a depth texture".into(),
         wgpu::BindingType::Texture { sample_type, .. } => match sample_type {
             wgpu::TextureSampleType::Uint => "a uint texture".into(),
@@ -301,10 +513,10 @@ fn describe_binding(ty: &wgpu::BindingType) -> String {
     }
 }
 
-fn describe_layout(spec: &PipelineSpec) -> String {
+fn describe_layout(layout: &[Option<&[wgpu::BindGroupLayoutEntry]>]) -> String {
     let mut parts = Vec::new();
-    for (g, entries) in spec.groups.iter().enumerate() {
-        for e in entries.iter() {
+    for (g, entries) in layout.iter().enumerate() {
+        for e in entries.iter().copied().flatten() {
             parts.push(format!("@group({g}) @binding({}) {}", e.binding, describe_binding(&e.ty)));
         }
     }

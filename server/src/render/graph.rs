@@ -15,13 +15,38 @@ use crate::shader::ShaderDefs;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct Handle(pub(crate) usize);
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub struct TextureDesc {
     /// `pass/output`, the name captures and the UI use.
     pub name: String,
     pub format: wgpu::TextureFormat,
     pub width: u32,
     pub height: u32,
+    /// Array layers (shadow maps hold one or six per light).
+    pub layers: u32,
+    /// Viewed as an array texture even with one layer.
+    pub array: bool,
+}
+
+/// An output a pass declares: its name within the pass, format and size.
+pub struct Target {
+    pub output: &'static str,
+    pub format: wgpu::TextureFormat,
+    pub width: u32,
+    pub height: u32,
+    pub layers: u32,
+    pub array: bool,
+}
+
+impl Target {
+    pub fn new(output: &'static str, format: wgpu::TextureFormat, width: u32, height: u32) -> Self {
+        Target { output, format, width, height, layers: 1, array: false }
+    }
+
+    /// An array texture of `layers` layers.
+    pub fn layers(self, layers: u32) -> Self {
+        Target { layers, array: true, ..self }
+    }
 }
 
 /// Which pipeline a pass uses, with the defs this frame needs.
@@ -82,13 +107,13 @@ impl GraphBuilder {
         name: &str,
         pipelines: Vec<PipelineKey>,
         reads: &[Handle],
-        writes: Vec<(&str, wgpu::TextureFormat, u32, u32)>,
+        writes: Vec<Target>,
         execute: Execute,
     ) -> Vec<Handle> {
         let handles: Vec<Handle> = writes
             .into_iter()
-            .map(|(output, format, width, height)| {
-                self.textures.push(TextureDesc { name: format!("{name}/{output}"), format, width, height });
+            .map(|t| {
+                self.textures.push(TextureDesc { name: format!("{name}/{}", t.output), format: t.format, width: t.width, height: t.height, layers: t.layers, array: t.array });
                 Handle(self.textures.len() - 1)
             })
             .collect();
@@ -171,9 +196,9 @@ mod tests {
     fn passes_whose_outputs_nobody_needs_are_culled_with_a_reason() {
         let mut g = GraphBuilder::new();
         let f = wgpu::TextureFormat::Rgba16Float;
-        let a = g.add_pass("a", vec![], &[], vec![("out", f, 4, 4)], noop());
-        let _unused = g.add_pass("debug", vec![], &[a[0]], vec![("out", f, 4, 4)], noop());
-        let b = g.add_pass("b", vec![], &[a[0]], vec![("out", f, 4, 4)], noop());
+        let a = g.add_pass("a", vec![], &[], vec![Target::new("out", f, 4, 4)], noop());
+        let _unused = g.add_pass("debug", vec![], &[a[0]], vec![Target::new("out", f, 4, 4)], noop());
+        let b = g.add_pass("b", vec![], &[a[0]], vec![Target::new("out", f, 4, 4)], noop());
         g.cull("volumes", "the scene has no participating media");
         g.output(b[0]);
         let graph = g.build();

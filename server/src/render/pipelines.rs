@@ -67,7 +67,7 @@ impl PipelineCache {
         let spec = pipeline::spec(key.spec).expect("keys come from specs");
         let created = result.and_then(|composed| {
             entry.files = composed.files.clone();
-            pipeline::create(device, spec, &composed, lib, shader_display).map(|(p, _)| (p, composed))
+            pipeline::create(device, spec, &key.defs, &composed, lib, shader_display).map(|p| (p, composed))
         });
         match created {
             Ok((p, composed)) => {
@@ -92,8 +92,8 @@ impl PipelineCache {
             let Some(composed) = &entry.last_good else { continue };
             let spec = pipeline::spec(key.spec).expect("keys come from specs");
             let display = entry.files.last().cloned().unwrap_or_default();
-            match pipeline::create(device, spec, composed, lib, &display) {
-                Ok((p, _)) => entry.current = Some(p),
+            match pipeline::create(device, spec, &key.defs, composed, lib, &display) {
+                Ok(p) => entry.current = Some(p),
                 Err(d) => problems.extend(d),
             }
         }

@@ -16,7 +16,7 @@ use super::shared::{self, FramePng, Shared};
 use crate::diag::{Diagnostic, Severity};
 use crate::gpu::{self, Gpu, pipeline};
 use crate::protocol::{self, ClientMessage, PassInfo, PassStatus, PassTiming, ReloadTimings, ServerEvent, Status};
-use crate::render::{self, frame, graph::PipelineKey, pipelines::{Installed, PipelineCache}};
+use crate::render::{self, frame, graph::PipelineKey, pipelines::{Installed, PipelineCache}, scene_gpu::SceneGpu};
 use crate::scene::{self, Scene};
 use crate::shader::{Compose, Library, NagaOil, SourceFile, library};
 
@@ -54,6 +54,12 @@ pub struct Daemon {
     /// stays in `lib` meanwhile.
     file_errors: BTreeMap<String, Diagnostic>,
     scene: Scene,
+    /// The scene file and the meshes it references: a change to any
+    /// reloads the scene.
+    scene_files: Vec<PathBuf>,
+    scene_gpu: SceneGpu,
+    /// Kept to rebuild `scene_gpu` on a new device.
+    meshes: BTreeMap<String, Arc<crate::mesh::MeshData>>,
     scene_error: Option<Diagnostic>,
     cache: PipelineCache,
     pool: frame::TexturePool,
@@ -79,14 +85,14 @@ impl Daemon {
             .iter()
             .filter_map(|p| SourceFile::read(p, library::display_path(p)).ok())
             .collect();
-        let scene_display = library::display_path(&config.scene_path);
-        let (scene, scene_error) = match std::fs::read_to_string(&config.scene_path)
-            .map_err(|e| Diagnostic::error(crate::diag::Code::Io, format!("cannot read scene: {e}")).at(crate::diag::Location::file_start(&scene_display)))
-            .and_then(|t| scene::parse(&scene_display, &t))
-        {
-            Ok(s) => (s, None),
-            Err(d) => (scene::parse("", "").expect("the empty scene is valid"), Some(d)),
+        let (loaded, scene_error) = match scene::load(&config.scene_path) {
+            Ok(l) => (l, None),
+            Err(d) => {
+                let empty = scene::parse("", "").expect("the empty scene is valid");
+                (scene::Loaded { scene: empty, meshes: Default::default(), files: vec![config.scene_path.clone()] }, Some(d))
+            }
         };
+        let scene_gpu = SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes);
         let workers = rayon::ThreadPoolBuilder::new()
             .num_threads(2)
             .stack_size(256 << 20)
@@ -98,7 +104,10 @@ impl Daemon {
             config,
             lib: Arc::new(Library::new(files)),
             file_errors: BTreeMap::new(),
-            scene,
+            scene: loaded.scene,
+            scene_files: loaded.files,
+            meshes: loaded.meshes,
+            scene_gpu,
             scene_error,
             cache: PipelineCache::default(),
             pool: Default::default(),
@@ -188,7 +197,7 @@ impl Daemon {
         for change in &batch.changes {
             let path = change.path();
             let display = library::display_path(path);
-            if same_file(path, &self.config.scene_path) {
+            if self.scene_files.iter().any(|f| same_file(path, f)) {
                 scene_changed = true;
                 touched.insert(display);
                 continue;
@@ -237,13 +246,12 @@ impl Daemon {
     }
 
     fn reload_scene(&mut self) {
-        let display = library::display_path(&self.config.scene_path);
-        let parsed = std::fs::read_to_string(&self.config.scene_path)
-            .map_err(|e| Diagnostic::error(crate::diag::Code::Io, format!("cannot read scene: {e}")).at(crate::diag::Location::file_start(&display)))
-            .and_then(|t| scene::parse(&display, &t));
-        match parsed {
-            Ok(s) => {
-                self.scene = s;
+        match scene::load(&self.config.scene_path) {
+            Ok(l) => {
+                self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &l.scene, &l.meshes);
+                self.scene = l.scene;
+                self.scene_files = l.files;
+                self.meshes = l.meshes;
                 self.scene_error = None;
             }
             // The last good scene keeps rendering.
@@ -342,7 +350,7 @@ impl Daemon {
             capture.insert(frame::capture_name(&graph, h));
         }
         let live = self.cache.live();
-        let pending = frame::submit(&self.gpu.device, &self.gpu.queue, self.gpu.features, &graph, &mut self.pool, &live, Some(&capture), self.frame);
+        let pending = frame::submit(&self.gpu.device, &self.gpu.queue, self.gpu.features, &self.scene_gpu, &graph, &mut self.pool, &live, Some(&capture), self.frame);
         self.in_flight.push_back((pending, std::mem::take(&mut self.finished_reloads)));
         // Errors no scope caught (invalid frame commands) must not vanish:
         // such a frame renders nothing.
@@ -495,6 +503,7 @@ impl Daemon {
                 self.gpu = g;
                 self.device_resets += 1;
                 self.pool = Default::default();
+                self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &self.scene, &self.meshes);
                 self.in_flight.clear();
                 let problems = self.cache.recreate_all(&self.gpu.device, &self.lib);
                 self.install_lost_callback();

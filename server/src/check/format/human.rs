@@ -27,26 +27,41 @@ pub fn write(
     }
 }
 
+/// Diagnostics outside a check report (from `loupe render`), with excerpts
+/// read from the files they name.
+pub fn write_diagnostics(diags: &[Diagnostic], color: bool, out: &mut dyn io::Write) -> io::Result<()> {
+    let mut files = SourceFiles::default();
+    for d in diags {
+        for l in d.location.iter().chain(d.labels.iter().map(|l| &l.location)) {
+            if files.get(&l.file).is_none() {
+                if let Ok(text) = std::fs::read_to_string(&l.file) {
+                    files.insert(l.file.clone(), text.into());
+                }
+            }
+        }
+    }
+    if color { emit(diags, &files, &mut Ansi::new(out)) } else { emit(diags, &files, &mut NoColor::new(out)) }
+}
+
+fn emit<W: WriteStyle>(diags: &[Diagnostic], files: &SourceFiles, w: &mut W) -> io::Result<()> {
+    let mut db = Database { files, db: SimpleFiles::new(), ids: HashMap::new() };
+    for d in diags {
+        match to_codespan(d, &mut db) {
+            Some(diagnostic) => term::emit_to_write_style(w, &Config::default(), &db.db, &diagnostic).map_err(io_error)?,
+            None => one_liner(d, w)?,
+        }
+    }
+    Ok(())
+}
+
 fn render<W: WriteStyle>(
     report: &CheckReport,
     files: &SourceFiles,
     opts: &Options,
     w: &mut W,
 ) -> io::Result<()> {
-    let config = Config::default();
-    let mut db = Database {
-        files,
-        db: SimpleFiles::new(),
-        ids: HashMap::new(),
-    };
-    for d in report.diagnostics() {
-        match to_codespan(d, &mut db) {
-            Some(diagnostic) => {
-                term::emit_to_write_style(w, &config, &db.db, &diagnostic).map_err(io_error)?
-            }
-            None => one_liner(d, w)?,
-        }
-    }
+    let diags: Vec<Diagnostic> = report.diagnostics().cloned().collect();
+    emit(&diags, files, w)?;
     writeln!(w, "{}", summary(report, opts.timings))
 }
 

@@ -3,7 +3,7 @@
 //! exactly what a person at a terminal sees.
 
 mod github;
-mod human;
+pub mod human;
 mod json;
 mod junit;
 mod sarif;

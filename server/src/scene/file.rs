@@ -1,0 +1,279 @@
+//! The scene file's shape as serde reads it: every table denies unknown
+//! fields, so a typo is an error at its line, never a silently ignored key.
+//! Values are checked afterwards (`super::validate`), where each problem is
+//! located by its path in the document.
+
+use serde::Deserialize;
+
+pub type Vec3 = [f32; 3];
+
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct File {
+    #[serde(default)]
+    pub output: Output,
+    #[serde(default)]
+    pub camera: Camera,
+    #[serde(default)]
+    pub materials: Vec<Material>,
+    #[serde(default)]
+    pub objects: Vec<Object>,
+    #[serde(default)]
+    pub lights: Vec<Light>,
+    #[serde(default)]
+    pub media: Vec<Medium>,
+    #[serde(default)]
+    pub post: Post,
+    #[serde(default)]
+    pub quality: Quality,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    pub width: i64,
+    pub height: i64,
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Output { width: 1280, height: 720 }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Camera {
+    pub position: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    /// Vertical field of view in degrees.
+    pub fov_deg: f32,
+    pub near: f32,
+    pub far: f32,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Camera { position: [0.0, 1.5, 5.0], target: [0.0, 0.5, 0.0], up: [0.0, 1.0, 0.0], fov_deg: 45.0, near: 0.05, far: 200.0 }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    pub name: String,
+    #[serde(default = "grey")]
+    pub base_color: Vec3,
+    #[serde(default)]
+    pub metallic: f32,
+    #[serde(default = "half")]
+    pub roughness: f32,
+}
+
+fn grey() -> Vec3 {
+    [0.8; 3]
+}
+
+fn half() -> f32 {
+    0.5
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+fn white() -> Vec3 {
+    [1.0; 3]
+}
+
+fn yes() -> bool {
+    true
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Object {
+    #[serde(default)]
+    pub name: Option<String>,
+    /// A built-in shape: `sphere`, `cube`, `plane`. Exactly one of `shape`
+    /// and `mesh`.
+    #[serde(default)]
+    pub shape: Option<String>,
+    /// A glTF 2.0 file (.gltf or .glb), relative to the scene file.
+    #[serde(default)]
+    pub mesh: Option<String>,
+    pub material: String,
+    #[serde(default)]
+    pub position: Vec3,
+    /// Euler angles in degrees, applied in Y, X, Z order (yaw, pitch, roll).
+    #[serde(default)]
+    pub rotation_deg: Vec3,
+    #[serde(default = "unit_scale")]
+    pub scale: Scale,
+}
+
+fn unit_scale() -> Scale {
+    Scale::Uniform(1.0)
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(untagged)]
+pub enum Scale {
+    Uniform(f32),
+    Axes(Vec3),
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Light {
+    #[serde(rename = "type")]
+    pub kind: LightType,
+    #[serde(default = "white")]
+    pub color: Vec3,
+    #[serde(default = "one")]
+    pub intensity: f32,
+    #[serde(default)]
+    pub position: Option<Vec3>,
+    #[serde(default)]
+    pub direction: Option<Vec3>,
+    /// Spot cone: full intensity inside `inner_deg`, none outside `outer_deg`
+    /// (half-angles).
+    #[serde(default)]
+    pub inner_deg: Option<f32>,
+    #[serde(default)]
+    pub outer_deg: Option<f32>,
+    /// Rect light: width and height in scene units.
+    #[serde(default)]
+    pub size: Option<[f32; 2]>,
+    #[serde(default)]
+    pub two_sided: bool,
+    #[serde(default = "yes")]
+    pub shadows: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LightType {
+    Directional,
+    Point,
+    Spot,
+    Rect,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Medium {
+    #[serde(default)]
+    pub name: Option<String>,
+    pub shapes: Vec<SdfShape>,
+    /// Smooth-union radius between the shapes; 0 is a hard union.
+    #[serde(default)]
+    pub blend: f32,
+    /// Width of the soft edge, in scene units, over which density fades in
+    /// from the SDF surface inward.
+    #[serde(default = "edge")]
+    pub edge: f32,
+    /// Per-unit-length coefficients, per RGB channel.
+    pub absorption: Vec3,
+    pub scattering: Vec3,
+    #[serde(default)]
+    pub emission: Vec3,
+    #[serde(default)]
+    pub noise: Option<Noise>,
+}
+
+fn edge() -> f32 {
+    0.1
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, tag = "type", rename_all = "lowercase")]
+pub enum SdfShape {
+    Sphere { center: Vec3, radius: f32 },
+    Box { center: Vec3, half_extents: Vec3 },
+    /// The half-space below the plane `dot(p, normal) = offset`.
+    Plane { normal: Vec3, offset: f32 },
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Noise {
+    #[serde(default = "octaves")]
+    pub octaves: i64,
+    #[serde(default = "one")]
+    pub frequency: f32,
+    /// How much of the density the noise may remove, 0..=1.
+    #[serde(default = "half")]
+    pub amplitude: f32,
+}
+
+fn octaves() -> i64 {
+    4
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Post {
+    /// Exposure in stops: the HDR image is multiplied by 2^EV.
+    pub exposure_ev: f32,
+    pub tonemap: Tonemap,
+    /// Draw fullscreen passes as two triangles instead of one, to compare.
+    pub two_triangles: bool,
+    pub debug_view: DebugView,
+}
+
+impl Default for Post {
+    fn default() -> Self {
+        Post { exposure_ev: 0.0, tonemap: Tonemap::Aces, two_triangles: false, debug_view: DebugView::None }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Tonemap {
+    Aces,
+    Reinhard,
+}
+
+/// What the debug-view pass shows instead of the lit frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DebugView {
+    None,
+    Normal,
+    Albedo,
+    Roughness,
+    Metallic,
+    Depth,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Quality {
+    pub shadows: bool,
+    pub shadow_map_size: i64,
+    /// Ray-march steps per pixel through the media.
+    pub volume_steps: i64,
+    /// Steps of the march toward each light (self-shadowing).
+    pub volume_shadow_steps: i64,
+    pub volume_estimator: Estimator,
+}
+
+impl Default for Quality {
+    fn default() -> Self {
+        Quality { shadows: true, shadow_map_size: 1024, volume_steps: 48, volume_shadow_steps: 6, volume_estimator: Estimator::Analytic }
+    }
+}
+
+/// How each ray-march step integrates in-scattered light.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Estimator {
+    /// Scattered light × step length × transmittance at the step start:
+    /// biased, brightens as steps grow.
+    Constant,
+    /// The exact integral of in-scattering times transmittance over the
+    /// step for constant coefficients: energy-conserving at any step count.
+    Analytic,
+}

@@ -1,0 +1,197 @@
+//! Scenes: human-edited TOML, read with serde; every error is a diagnostic
+//! at file:line:col. The renderer only ever sees a validated `Scene`.
+//!
+//! Reading is two steps: `parse` turns text into a `Scene` (pure, no file
+//! system), and `load` reads the file and the meshes it references.
+
+mod file;
+pub mod overrides;
+mod validate;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+pub use file::{Camera, DebugView, Estimator, Material, Noise, Post, SdfShape, Tonemap, Vec3};
+
+use crate::diag::{Code, Diagnostic, LineIndex, Location};
+use crate::mesh::MeshData;
+
+/// The largest output side loupe renders; larger requests are an error, not
+/// an out-of-memory.
+pub const MAX_SIDE: u32 = 8192;
+/// Sizes the shaders' fixed loops and the GPU buffers are built for.
+pub const MAX_LIGHTS: usize = 64;
+pub const MAX_MEDIA: usize = 8;
+pub const MAX_SHAPES: usize = 16;
+pub const MAX_OBJECTS: usize = 4096;
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    pub width: u32,
+    pub height: u32,
+    pub camera: Camera,
+    pub materials: Vec<Material>,
+    pub objects: Vec<Object>,
+    pub lights: Vec<Light>,
+    pub media: Vec<Medium>,
+    pub post: Post,
+    pub quality: Quality,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Object {
+    pub name: String,
+    pub geometry: Geometry,
+    /// Index into `Scene::materials`.
+    pub material: usize,
+    pub position: Vec3,
+    pub rotation_deg: Vec3,
+    pub scale: Vec3,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Geometry {
+    Shape(String),
+    /// A glTF file as written in the scene, relative to the scene file, and
+    /// where it was written (for diagnostics about the mesh).
+    Mesh { file: String, at: Location },
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Light {
+    pub kind: LightKind,
+    pub color: Vec3,
+    pub intensity: f32,
+    pub shadows: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LightKind {
+    /// `direction` points from the light into the scene, normalized.
+    Directional { direction: Vec3 },
+    Point { position: Vec3 },
+    Spot { position: Vec3, direction: Vec3, inner_deg: f32, outer_deg: f32 },
+    /// Emits from the side its `direction` points to (both with two_sided).
+    Rect { position: Vec3, direction: Vec3, size: [f32; 2], two_sided: bool },
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Medium {
+    pub name: String,
+    pub shapes: Vec<SdfShape>,
+    pub blend: f32,
+    pub edge: f32,
+    pub absorption: Vec3,
+    pub scattering: Vec3,
+    pub emission: Vec3,
+    pub noise: Option<Noise>,
+}
+
+impl Medium {
+    /// Single-scattering albedo per channel, σs / (σa + σs).
+    pub fn albedo(&self) -> Vec3 {
+        std::array::from_fn(|i| {
+            let t = self.absorption[i] + self.scattering[i];
+            if t > 0.0 { self.scattering[i] / t } else { 0.0 }
+        })
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Quality {
+    pub shadows: bool,
+    pub shadow_map_size: u32,
+    pub volume_steps: u32,
+    pub volume_shadow_steps: u32,
+    pub volume_estimator: Estimator,
+}
+
+impl Scene {
+    pub fn has_rect_lights(&self) -> bool {
+        self.lights.iter().any(|l| matches!(l.kind, LightKind::Rect { .. }))
+    }
+
+    /// Lights that get a shadow map this frame.
+    pub fn shadow_casters(&self) -> impl Iterator<Item = (usize, &Light)> {
+        let on = self.quality.shadows && !self.objects.is_empty();
+        self.lights.iter().enumerate().filter(move |(_, l)| on && l.shadows)
+    }
+
+    /// True for a scene with nothing to draw: it shows the test pattern.
+    pub fn is_empty(&self) -> bool {
+        self.objects.is_empty() && self.media.is_empty() && self.lights.is_empty()
+    }
+
+    /// Mesh files the scene references, as written, deduplicated.
+    pub fn mesh_files(&self) -> Vec<(&str, &Location)> {
+        let mut seen = BTreeMap::new();
+        for o in &self.objects {
+            if let Geometry::Mesh { file, at } = &o.geometry {
+                seen.entry(file.as_str()).or_insert(at);
+            }
+        }
+        seen.into_iter().collect()
+    }
+}
+
+/// Parses and validates a scene; `display` names the file in diagnostics.
+pub fn parse(display: &str, text: &str) -> Result<Scene, Diagnostic> {
+    let lines = LineIndex::new(text);
+    let file: file::File = toml::from_str(text).map_err(|e| {
+        let d = Diagnostic::error(Code::Scene, e.message().trim().to_owned());
+        match e.span() {
+            Some(span) => d.with_label(lines.location(display, text, span), "here", true),
+            None => d.at(Location::file_start(display)),
+        }
+    })?;
+    validate::scene(display, text, file)
+}
+
+/// A scene and the meshes it references, read from disk.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    pub scene: Scene,
+    /// Mesh data by the file name as written in the scene.
+    pub meshes: BTreeMap<String, Arc<MeshData>>,
+    /// Every file this scene was read from (itself and its meshes), for the
+    /// watcher's dependency graph.
+    pub files: Vec<PathBuf>,
+}
+
+/// Reads a scene file and every mesh it references. A mesh that fails to
+/// load is an error located in the mesh file, with the scene line that
+/// references it as a second label.
+pub fn load(path: &Path) -> Result<Loaded, Diagnostic> {
+    load_with(path, &overrides::Overrides::new())
+}
+
+/// `load` with live overrides applied on top of the file's text.
+pub fn load_with(path: &Path, overrides: &overrides::Overrides) -> Result<Loaded, Diagnostic> {
+    let display = crate::shader::library::display_path(path);
+    let mut text = std::fs::read_to_string(path)
+        .map_err(|e| Diagnostic::error(Code::Io, format!("cannot read scene: {e}")).at(Location::file_start(&display)))?;
+    if !overrides.is_empty() {
+        text = overrides::apply(&text, overrides)
+            .map_err(|e| Diagnostic::error(Code::Scene, format!("cannot apply override: {e}")).at(Location::file_start(&display)))?;
+    }
+    let scene = parse(&display, &text)?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut meshes = BTreeMap::new();
+    let mut files = vec![path.to_owned()];
+    for (name, at) in scene.mesh_files() {
+        let mesh_path = dir.join(name);
+        let mesh_display = crate::shader::library::display_path(&mesh_path);
+        files.push(mesh_path.clone());
+        if !mesh_path.exists() {
+            return Err(Diagnostic::error(Code::Scene, format!("mesh file `{mesh_display}` does not exist"))
+                .with_label(at.clone(), "referenced here", true));
+        }
+        let mesh = crate::mesh::load_gltf(&mesh_path, &mesh_display).map_err(|d| d.with_label(at.clone(), "referenced here", false))?;
+        meshes.insert(name.to_owned(), Arc::new(mesh));
+    }
+    Ok(Loaded { scene, meshes, files })
+}
+
+#[cfg(test)]
+mod tests;

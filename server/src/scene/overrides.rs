@@ -1,0 +1,219 @@
+//! Live overrides: values set from the browser on top of the scene file.
+//! They are applied by editing the file's text with toml_edit, so the
+//! rendered scene and a saved file are the same document, and saving keeps
+//! every comment, blank line and key order the user wrote.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+use toml_edit::{DocumentMut, Item, Table, Value as TomlValue};
+
+use super::{LightKind, Scene};
+
+/// A value a control can set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Value {
+    Bool(bool),
+    Int(i64),
+    Float(f64),
+    Text(String),
+}
+
+/// Overrides by path, e.g. `post.exposure_ev`, `lights[1].intensity`.
+pub type Overrides = BTreeMap<String, Value>;
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Seg {
+    Key(String),
+    Index(usize),
+}
+
+fn parse_path(path: &str) -> Result<Vec<Seg>, String> {
+    let bad = || format!("`{path}` is not a scene path (expected e.g. `post.exposure_ev` or `lights[0].intensity`)");
+    let mut segs = Vec::new();
+    for part in path.split('.') {
+        let (key, mut rest) = part.split_once('[').map_or((part, ""), |(k, r)| (k, r));
+        if key.is_empty() || !key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+            return Err(bad());
+        }
+        segs.push(Seg::Key(key.to_owned()));
+        while !rest.is_empty() {
+            let (n, after) = rest.split_once(']').ok_or_else(bad)?;
+            segs.push(Seg::Index(n.parse().map_err(|_| bad())?));
+            rest = after.strip_prefix('[').unwrap_or(after);
+            if !after.is_empty() && !after.starts_with('[') {
+                return Err(bad());
+            }
+        }
+    }
+    Ok(segs)
+}
+
+fn toml_value(v: &Value) -> TomlValue {
+    match v {
+        Value::Bool(b) => (*b).into(),
+        Value::Int(i) => (*i).into(),
+        Value::Float(f) => (*f).into(),
+        Value::Text(s) => s.as_str().into(),
+    }
+}
+
+/// Applies `overrides` to the scene text, keeping its layout. The result is
+/// what renders and what "save" writes.
+pub fn apply(text: &str, overrides: &Overrides) -> Result<String, String> {
+    let mut doc: DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| e.message().to_owned())?;
+    for (path, value) in overrides {
+        set(doc.as_table_mut(), &parse_path(path)?, value).map_err(|e| format!("{path}: {e}"))?;
+    }
+    Ok(doc.to_string())
+}
+
+fn set(table: &mut Table, path: &[Seg], value: &Value) -> Result<(), String> {
+    let Some((Seg::Key(key), rest)) = path.split_first() else { return Err("a path starts with a key".into()) };
+    if rest.is_empty() {
+        let mut new = toml_value(value);
+        match table.get_mut(key) {
+            Some(Item::Value(old)) => {
+                // Keep the comment after the value and the spacing around it.
+                *new.decor_mut() = old.decor().clone();
+                *old = new;
+            }
+            Some(_) => return Err(format!("`{key}` is a table, not a value")),
+            None => {
+                table.insert(key, Item::Value(new));
+            }
+        }
+        return Ok(());
+    }
+    match (rest.first(), table.get_mut(key)) {
+        (Some(Seg::Index(i)), Some(Item::ArrayOfTables(a))) => {
+            let t = a.get_mut(*i).ok_or_else(|| format!("`{key}` has no entry {i}"))?;
+            set(t, &rest[1..], value)
+        }
+        (Some(Seg::Index(i)), Some(Item::Value(TomlValue::Array(a)))) if rest.len() == 1 => {
+            let slot = a.get_mut(*i).ok_or_else(|| format!("`{key}` has no element {i}"))?;
+            let mut new = toml_value(value);
+            *new.decor_mut() = slot.decor().clone();
+            *slot = new;
+            Ok(())
+        }
+        (Some(Seg::Key(_)), Some(Item::Table(t))) => set(t, rest, value),
+        (Some(Seg::Key(_)), None) => {
+            let mut t = Table::new();
+            t.set_implicit(false);
+            table.insert(key, Item::Table(t));
+            let Some(Item::Table(t)) = table.get_mut(key) else { unreachable!("inserted above") };
+            set(t, rest, value)
+        }
+        _ => Err(format!("`{key}` does not have that shape")),
+    }
+}
+
+/// One live control the browser shows for the current scene.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Control {
+    pub path: String,
+    pub label: String,
+    #[serde(flatten)]
+    pub kind: ControlKind,
+    pub value: Value,
+}
+
+#[derive(Debug, Clone, Serialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum ControlKind {
+    Slider { min: f64, max: f64, step: f64 },
+    Toggle,
+    Choice { options: Vec<String> },
+}
+
+fn slider(path: String, label: String, v: f64, min: f64, max: f64, step: f64) -> Control {
+    let value = if step.fract() == 0.0 && min.fract() == 0.0 { Value::Int(v as i64) } else { Value::Float(v) };
+    Control { path, label, kind: ControlKind::Slider { min, max, step }, value }
+}
+
+fn choice(path: &str, label: &str, v: &str, options: &[&str]) -> Control {
+    Control {
+        path: path.into(),
+        label: label.into(),
+        kind: ControlKind::Choice { options: options.iter().map(|s| (*s).to_owned()).collect() },
+        value: Value::Text(v.to_owned()),
+    }
+}
+
+fn toggle(path: &str, label: &str, v: bool) -> Control {
+    Control { path: path.into(), label: label.into(), kind: ControlKind::Toggle, value: Value::Bool(v) }
+}
+
+fn lower(v: impl std::fmt::Debug) -> String {
+    format!("{v:?}").to_lowercase()
+}
+
+/// The controls for `scene`: post, quality, and each light's intensity.
+pub fn controls(scene: &Scene) -> Vec<Control> {
+    let p = &scene.post;
+    let q = &scene.quality;
+    let mut out = vec![
+        slider("post.exposure_ev".into(), "Exposure (EV)".into(), f64::from(p.exposure_ev), -8.0, 8.0, 0.1),
+        choice("post.tonemap", "Tonemap", &lower(p.tonemap), &["aces", "reinhard"]),
+        choice("post.debug_view", "Debug view", &lower(p.debug_view), &["none", "normal", "albedo", "roughness", "metallic", "depth"]),
+        toggle("post.two_triangles", "Fullscreen as two triangles", p.two_triangles),
+        toggle("quality.shadows", "Shadows", q.shadows),
+        slider("quality.shadow_map_size".into(), "Shadow map size".into(), f64::from(q.shadow_map_size), 64.0, 4096.0, 64.0),
+    ];
+    if !scene.media.is_empty() {
+        out.push(slider("quality.volume_steps".into(), "Volume steps".into(), f64::from(q.volume_steps), 1.0, 256.0, 1.0));
+        out.push(slider("quality.volume_shadow_steps".into(), "Volume shadow steps".into(), f64::from(q.volume_shadow_steps), 1.0, 32.0, 1.0));
+        out.push(choice("quality.volume_estimator", "In-scattering estimator", &lower(q.volume_estimator), &["constant", "analytic"]));
+    }
+    for (i, l) in scene.lights.iter().enumerate() {
+        let kind = match l.kind {
+            LightKind::Directional { .. } => "directional",
+            LightKind::Point { .. } => "point",
+            LightKind::Spot { .. } => "spot",
+            LightKind::Rect { .. } => "rect",
+        };
+        out.push(slider(format!("lights[{i}].intensity"), format!("Light {i} ({kind}) intensity"), f64::from(l.intensity), 0.0, 100.0, 0.1));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TEXT: &str = "# My scene\n[post]\nexposure_ev = 0.0 # stops\ntonemap = \"aces\"\n\n[[lights]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = 5.0\n";
+
+    #[test]
+    fn apply_keeps_comments_and_layout() {
+        let mut o = Overrides::new();
+        o.insert("post.exposure_ev".into(), Value::Float(1.5));
+        o.insert("lights[0].intensity".into(), Value::Float(2.0));
+        o.insert("quality.volume_steps".into(), Value::Int(12));
+        let out = apply(TEXT, &o).unwrap();
+        assert!(out.starts_with("# My scene\n[post]\nexposure_ev = 1.5 # stops\ntonemap = \"aces\"\n\n[[lights]]\n"), "{out}");
+        assert!(out.contains("intensity = 2.0\n"), "{out}");
+        assert!(out.contains("[quality]\nvolume_steps = 12\n"), "{out}");
+        let s = crate::scene::parse("s.toml", &out).unwrap();
+        assert_eq!(s.post.exposure_ev, 1.5);
+        assert_eq!(s.quality.volume_steps, 12);
+    }
+
+    #[test]
+    fn bad_paths_and_shapes_are_refused() {
+        for path in ["", "post..x", "lights[x].intensity", "lights[5].intensity", "post.exposure_ev[0]", "lights.intensity"] {
+            let mut o = Overrides::new();
+            o.insert(path.into(), Value::Float(1.0));
+            assert!(apply(TEXT, &o).is_err(), "{path}");
+        }
+    }
+
+    #[test]
+    fn controls_follow_the_scene() {
+        let s = crate::scene::parse("s.toml", TEXT).unwrap();
+        let c = controls(&s);
+        assert!(c.iter().any(|c| c.path == "lights[0].intensity" && c.value == Value::Float(5.0)));
+        assert!(!c.iter().any(|c| c.path == "quality.volume_steps"), "no media, no volume controls");
+    }
+}

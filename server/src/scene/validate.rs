@@ -1,0 +1,359 @@
+//! Value checks after serde: ranges, NaN, references between tables, fields
+//! that do not apply to a light's type. Each problem names a path in the
+//! document (`lights[2].intensity`) and is located there through the spans
+//! toml_edit keeps, so the user sees the exact value at fault.
+
+use std::collections::BTreeSet;
+
+use super::file::{self, LightType, Scale, Vec3};
+use super::*;
+
+/// One step of a path into the TOML document.
+#[derive(Debug, Clone)]
+pub enum Seg {
+    Key(&'static str),
+    Index(usize),
+}
+
+struct Checker<'a> {
+    display: &'a str,
+    text: &'a str,
+    doc: Option<toml_edit::Document<&'a str>>,
+}
+
+type Checked<T> = Result<T, Diagnostic>;
+
+impl Checker<'_> {
+    fn error(&self, path: &[Seg], message: impl Into<String>) -> Diagnostic {
+        let message = message.into();
+        let span = self.doc.as_ref().and_then(|d| span_of(d.as_item(), path));
+        let lines = LineIndex::new(self.text);
+        let d = Diagnostic::error(Code::Scene, format!("{}: {message}", path_string(path)));
+        match span {
+            Some(s) => d.with_label(lines.location(self.display, self.text, s), "here", true),
+            None => d.at(Location::file_start(self.display)),
+        }
+    }
+
+    fn finite(&self, path: &[Seg], v: f32) -> Checked<f32> {
+        if v.is_finite() { Ok(v) } else { Err(self.error(path, format!("must be a finite number, not {v}"))) }
+    }
+
+    fn range(&self, path: &[Seg], v: f32, lo: f32, hi: f32) -> Checked<f32> {
+        self.finite(path, v)?;
+        if (lo..=hi).contains(&v) { Ok(v) } else { Err(self.error(path, format!("must be between {lo} and {hi}, not {v}"))) }
+    }
+
+    fn positive(&self, path: &[Seg], v: f32) -> Checked<f32> {
+        self.finite(path, v)?;
+        if v > 0.0 { Ok(v) } else { Err(self.error(path, format!("must be greater than 0, not {v}"))) }
+    }
+
+    fn int(&self, path: &[Seg], v: i64, lo: i64, hi: i64) -> Checked<u32> {
+        if (lo..=hi).contains(&v) { Ok(v as u32) } else { Err(self.error(path, format!("must be between {lo} and {hi}, not {v}"))) }
+    }
+
+    fn vec3(&self, path: &[Seg], v: Vec3) -> Checked<Vec3> {
+        for (i, c) in v.iter().enumerate() {
+            self.finite(&with(path, Seg::Index(i)), *c)?;
+        }
+        Ok(v)
+    }
+
+    fn non_negative3(&self, path: &[Seg], v: Vec3) -> Checked<Vec3> {
+        for (i, c) in v.iter().enumerate() {
+            let p = with(path, Seg::Index(i));
+            self.finite(&p, *c)?;
+            if *c < 0.0 {
+                return Err(self.error(&p, format!("must not be negative, not {c}")));
+            }
+        }
+        Ok(v)
+    }
+
+    fn unit01(&self, path: &[Seg], v: Vec3) -> Checked<Vec3> {
+        for (i, c) in v.iter().enumerate() {
+            self.range(&with(path, Seg::Index(i)), *c, 0.0, 1.0)?;
+        }
+        Ok(v)
+    }
+
+    fn direction(&self, path: &[Seg], v: Vec3) -> Checked<Vec3> {
+        self.vec3(path, v)?;
+        let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        if len > 1e-6 { Ok(v.map(|c| c / len)) } else { Err(self.error(path, "must not be the zero vector")) }
+    }
+
+    fn required<T>(&self, path: &[Seg], v: Option<T>, why: &str) -> Checked<T> {
+        v.ok_or_else(|| self.error(path, format!("is required {why}")))
+    }
+}
+
+fn with(path: &[Seg], seg: Seg) -> Vec<Seg> {
+    let mut p = path.to_vec();
+    p.push(seg);
+    p
+}
+
+fn path_string(path: &[Seg]) -> String {
+    let mut s = String::new();
+    for seg in path {
+        match seg {
+            Seg::Key(k) if s.is_empty() => s.push_str(k),
+            Seg::Key(k) => {
+                s.push('.');
+                s.push_str(k);
+            }
+            Seg::Index(i) => s.push_str(&format!("[{i}]")),
+        }
+    }
+    s
+}
+
+/// The byte range of the value at `path`; for a missing key, the table it
+/// belongs in (its first key), so "is required" points somewhere useful.
+fn span_of(item: &toml_edit::Item, path: &[Seg]) -> Option<std::ops::Range<usize>> {
+    use toml_edit::{Item, Value};
+    let Some((first, rest)) = path.split_first() else {
+        return match item {
+            Item::Value(v) => v.span(),
+            Item::ArrayOfTables(a) => a.span(),
+            Item::Table(t) => t.iter().next().and_then(|(k, _)| t.key(k)).and_then(|k| k.span()),
+            Item::None => None,
+        };
+    };
+    let next: Option<Item> = match (item, first) {
+        (Item::Table(t), Seg::Key(k)) => match t.get(k) {
+            Some(v) => Some(v.clone()),
+            None => return span_of(item, &[]),
+        },
+        (Item::ArrayOfTables(a), Seg::Index(i)) => a.get(*i).map(|t| Item::Table(t.clone())),
+        (Item::Value(Value::Array(a)), Seg::Index(i)) => a.get(*i).map(|v| Item::Value(v.clone())),
+        (Item::Value(Value::InlineTable(t)), Seg::Key(k)) => match t.get(k) {
+            Some(v) => Some(Item::Value(v.clone())),
+            None => return t.span(),
+        },
+        _ => None,
+    };
+    match next {
+        Some(n) => span_of(&n, rest).or_else(|| span_of(item, &[])),
+        None => span_of(item, &[]),
+    }
+}
+
+pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnostic> {
+    let c = Checker { display, text, doc: toml_edit::Document::parse(text).ok() };
+    use Seg::{Index as I, Key as K};
+
+    let width = c.int(&[K("output"), K("width")], f.output.width, 1, i64::from(MAX_SIDE))?;
+    let height = c.int(&[K("output"), K("height")], f.output.height, 1, i64::from(MAX_SIDE))?;
+
+    let cam = &f.camera;
+    let cp = |k| [K("camera"), K(k)];
+    c.vec3(&cp("position"), cam.position)?;
+    c.vec3(&cp("target"), cam.target)?;
+    c.direction(&cp("up"), cam.up)?;
+    c.range(&cp("fov_deg"), cam.fov_deg, 1.0, 179.0)?;
+    c.positive(&cp("near"), cam.near)?;
+    c.positive(&cp("far"), cam.far)?;
+    if cam.far <= cam.near {
+        return Err(c.error(&cp("far"), format!("must be greater than camera.near ({})", cam.near)));
+    }
+    if cam.position == cam.target {
+        return Err(c.error(&cp("target"), "must differ from camera.position"));
+    }
+
+    let mut names = BTreeSet::new();
+    for (i, m) in f.materials.iter().enumerate() {
+        let p = |k| [K("materials"), I(i), K(k)];
+        if !names.insert(m.name.as_str()) {
+            return Err(c.error(&p("name"), format!("a material named `{}` is already defined", m.name)));
+        }
+        c.unit01(&p("base_color"), m.base_color)?;
+        c.range(&p("metallic"), m.metallic, 0.0, 1.0)?;
+        c.range(&p("roughness"), m.roughness, 0.0, 1.0)?;
+    }
+
+    if f.objects.len() > MAX_OBJECTS {
+        return Err(c.error(&[K("objects"), I(MAX_OBJECTS)], format!("at most {MAX_OBJECTS} objects")));
+    }
+    let mut objects = Vec::new();
+    for (i, o) in f.objects.iter().enumerate() {
+        let p = |k| [K("objects"), I(i), K(k)];
+        let geometry = match (&o.shape, &o.mesh) {
+            (Some(s), None) => {
+                if crate::mesh::shape(s).is_none() {
+                    return Err(c.error(&p("shape"), format!("unknown shape `{s}`; expected one of: {}", crate::mesh::SHAPES.join(", "))));
+                }
+                Geometry::Shape(s.clone())
+            }
+            (None, Some(m)) => {
+                let span = c.doc.as_ref().and_then(|d| span_of(d.as_item(), &p("mesh")));
+                let at = match span {
+                    Some(s) => LineIndex::new(text).location(display, text, s),
+                    None => Location::file_start(display),
+                };
+                Geometry::Mesh { file: m.clone(), at }
+            }
+            (Some(_), Some(_)) => return Err(c.error(&p("mesh"), "give either `shape` or `mesh`, not both")),
+            (None, None) => return Err(c.error(&[K("objects"), I(i)], "needs a `shape` (sphere, cube, plane) or a `mesh` (a glTF file)")),
+        };
+        let Some(material) = f.materials.iter().position(|m| m.name == o.material) else {
+            let known: Vec<&str> = f.materials.iter().map(|m| m.name.as_str()).collect();
+            return Err(c.error(&p("material"), format!("no material named `{}` (defined: {})", o.material, if known.is_empty() { "none".into() } else { known.join(", ") })));
+        };
+        let scale = match o.scale {
+            Scale::Uniform(s) => [s; 3],
+            Scale::Axes(a) => a,
+        };
+        for (k, s) in scale.iter().enumerate() {
+            let sp = if matches!(o.scale, Scale::Axes(_)) { with(&p("scale"), I(k)) } else { p("scale").to_vec() };
+            c.finite(&sp, *s)?;
+            if *s == 0.0 {
+                return Err(c.error(&sp, "must not be zero"));
+            }
+        }
+        objects.push(Object {
+            name: o.name.clone().unwrap_or_else(|| format!("object{i}")),
+            geometry,
+            material,
+            position: c.vec3(&p("position"), o.position)?,
+            rotation_deg: c.vec3(&p("rotation_deg"), o.rotation_deg)?,
+            scale,
+        });
+    }
+
+    if f.lights.len() > MAX_LIGHTS {
+        return Err(c.error(&[K("lights"), I(MAX_LIGHTS)], format!("at most {MAX_LIGHTS} lights")));
+    }
+    let mut lights = Vec::new();
+    for (i, l) in f.lights.iter().enumerate() {
+        let p = |k| [K("lights"), I(i), K(k)];
+        let kind_name = format!("for a {} light", format!("{:?}", l.kind).to_lowercase());
+        let not_for = |k: &'static str, present: bool| -> Checked<()> {
+            if present { Err(c.error(&p(k), format!("does not apply {kind_name}"))) } else { Ok(()) }
+        };
+        c.non_negative3(&p("color"), l.color)?;
+        c.finite(&p("intensity"), l.intensity)?;
+        if l.intensity < 0.0 {
+            return Err(c.error(&p("intensity"), format!("must not be negative, not {}", l.intensity)));
+        }
+        let position = |c: &Checker| -> Checked<Vec3> { c.vec3(&p("position"), c.required(&p("position"), l.position, &kind_name)?) };
+        let direction = |c: &Checker| -> Checked<Vec3> { c.direction(&p("direction"), c.required(&p("direction"), l.direction, &kind_name)?) };
+        if l.kind != LightType::Spot {
+            not_for("inner_deg", l.inner_deg.is_some())?;
+            not_for("outer_deg", l.outer_deg.is_some())?;
+        }
+        if l.kind != LightType::Rect {
+            not_for("size", l.size.is_some())?;
+            not_for("two_sided", l.two_sided)?;
+        }
+        let kind = match l.kind {
+            LightType::Directional => {
+                not_for("position", l.position.is_some())?;
+                LightKind::Directional { direction: direction(&c)? }
+            }
+            LightType::Point => {
+                not_for("direction", l.direction.is_some())?;
+                LightKind::Point { position: position(&c)? }
+            }
+            LightType::Spot => {
+                let outer = c.range(&p("outer_deg"), l.outer_deg.unwrap_or(30.0), 0.1, 89.0)?;
+                let inner = c.range(&p("inner_deg"), l.inner_deg.unwrap_or(outer * 0.8), 0.0, 89.0)?;
+                if inner > outer {
+                    return Err(c.error(&p("inner_deg"), format!("must not exceed outer_deg ({outer})")));
+                }
+                LightKind::Spot { position: position(&c)?, direction: direction(&c)?, inner_deg: inner, outer_deg: outer }
+            }
+            LightType::Rect => {
+                let size = c.required(&p("size"), l.size, &kind_name)?;
+                for (k, s) in size.iter().enumerate() {
+                    c.positive(&with(&p("size"), I(k)), *s)?;
+                }
+                LightKind::Rect { position: position(&c)?, direction: direction(&c)?, size, two_sided: l.two_sided }
+            }
+        };
+        lights.push(Light { kind, color: l.color, intensity: l.intensity, shadows: l.shadows });
+    }
+
+    if f.media.len() > MAX_MEDIA {
+        return Err(c.error(&[K("media"), I(MAX_MEDIA)], format!("at most {MAX_MEDIA} media")));
+    }
+    let mut media = Vec::new();
+    for (i, m) in f.media.iter().enumerate() {
+        let p = |k| [K("media"), I(i), K(k)];
+        if m.shapes.is_empty() {
+            return Err(c.error(&p("shapes"), "needs at least one shape"));
+        }
+        if m.shapes.len() > MAX_SHAPES {
+            return Err(c.error(&with(&p("shapes"), I(MAX_SHAPES)), format!("at most {MAX_SHAPES} shapes per medium")));
+        }
+        for (k, s) in m.shapes.iter().enumerate() {
+            let sp = |key| [K("media"), I(i), K("shapes"), I(k), K(key)];
+            match s {
+                SdfShape::Sphere { center, radius } => {
+                    c.vec3(&sp("center"), *center)?;
+                    c.positive(&sp("radius"), *radius)?;
+                }
+                SdfShape::Box { center, half_extents } => {
+                    c.vec3(&sp("center"), *center)?;
+                    for (j, h) in half_extents.iter().enumerate() {
+                        c.positive(&with(&sp("half_extents"), I(j)), *h)?;
+                    }
+                }
+                SdfShape::Plane { normal, offset } => {
+                    c.direction(&sp("normal"), *normal)?;
+                    c.finite(&sp("offset"), *offset)?;
+                }
+            }
+        }
+        c.finite(&p("blend"), m.blend)?;
+        if m.blend < 0.0 {
+            return Err(c.error(&p("blend"), format!("must not be negative, not {}", m.blend)));
+        }
+        c.positive(&p("edge"), m.edge)?;
+        c.non_negative3(&p("absorption"), m.absorption)?;
+        c.non_negative3(&p("scattering"), m.scattering)?;
+        c.non_negative3(&p("emission"), m.emission)?;
+        if let Some(n) = &m.noise {
+            let np = |k| [K("media"), I(i), K("noise"), K(k)];
+            c.int(&np("octaves"), n.octaves, 1, 8)?;
+            c.positive(&np("frequency"), n.frequency)?;
+            c.range(&np("amplitude"), n.amplitude, 0.0, 1.0)?;
+        }
+        let shapes = m
+            .shapes
+            .iter()
+            .map(|s| match *s {
+                SdfShape::Plane { normal, offset } => {
+                    let len = (normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]).sqrt();
+                    SdfShape::Plane { normal: normal.map(|x| x / len), offset }
+                }
+                ref other => other.clone(),
+            })
+            .collect();
+        media.push(Medium {
+            name: m.name.clone().unwrap_or_else(|| format!("medium{i}")),
+            shapes,
+            blend: m.blend,
+            edge: m.edge,
+            absorption: m.absorption,
+            scattering: m.scattering,
+            emission: m.emission,
+            noise: m.noise.clone(),
+        });
+    }
+
+    c.range(&[K("post"), K("exposure_ev"), ], f.post.exposure_ev, -24.0, 24.0)?;
+    let q = &f.quality;
+    let qp = |k| [K("quality"), K(k)];
+    let quality = Quality {
+        shadows: q.shadows,
+        shadow_map_size: c.int(&qp("shadow_map_size"), q.shadow_map_size, 64, 4096)?,
+        volume_steps: c.int(&qp("volume_steps"), q.volume_steps, 1, 1024)?,
+        volume_shadow_steps: c.int(&qp("volume_shadow_steps"), q.volume_shadow_steps, 1, 64)?,
+        volume_estimator: q.volume_estimator,
+    };
+
+    Ok(Scene { width, height, camera: f.camera, materials: f.materials, objects, lights, media, post: f.post, quality })
+}

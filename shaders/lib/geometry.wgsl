@@ -1,0 +1,34 @@
+// Objects and materials as the renderer uploads them. Each draw is one
+// object: its index arrives as the instance index, so no per-draw binding
+// changes are needed.
+#define_import_path loupe::geometry
+
+struct Object {
+    model: mat4x4<f32>,
+    // Inverse transpose of the model matrix, for normals.
+    normal: mat4x4<f32>,
+    // x: material index.
+    ids: vec4<u32>,
+}
+
+struct Material {
+    // rgb: base colour; a: metallic.
+    base_color: vec4<f32>,
+    // x: roughness.
+    params: vec4<f32>,
+}
+
+struct Vertex {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+}
+
+@group(0) @binding(1) var<storage, read> objects: array<Object>;
+
+fn world_position(v: Vertex, object: u32) -> vec4<f32> {
+    return objects[object].model * vec4(v.position, 1.0);
+}
+
+fn world_normal(v: Vertex, object: u32) -> vec3<f32> {
+    return normalize((objects[object].normal * vec4(v.normal, 0.0)).xyz);
+}

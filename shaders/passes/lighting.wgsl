@@ -1,0 +1,89 @@
+// Deferred lighting: every light on every G-buffer pixel, with shadows,
+// the media's shadows on surfaces, and rect lights integrated with LTC.
+// Pixels without geometry show the sky.
+#import loupe::fullscreen::{FullscreenOut, fullscreen}
+#import loupe::view::{view, world_position}
+#import loupe::lights::{Light, lights, incident, light_type, LIGHT_RECT}
+#import loupe::brdf::{brdf_cos, specular_f0}
+#ifdef SHADOWS
+#import loupe::shadows::shadow
+#endif
+#ifdef MEDIA_SHADOWS
+#import loupe::media::transmittance
+#endif
+#ifdef LIGHT_RECT
+#import loupe::ltc::{ltc_rect}
+@group(2) @binding(0) var ltc_matrix: texture_2d<f32>;
+@group(2) @binding(1) var ltc_amplitude: texture_2d<f32>;
+#endif
+
+@group(0) @binding(2) var gbuffer_normal: texture_2d<f32>;
+@group(0) @binding(3) var gbuffer_albedo: texture_2d<f32>;
+@group(0) @binding(4) var gbuffer_material: texture_2d<f32>;
+@group(0) @binding(5) var depth: texture_depth_2d;
+
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) vertex_index: u32) -> FullscreenOut {
+    return fullscreen(vertex_index);
+}
+
+fn sky(dir: vec3<f32>) -> vec3<f32> {
+    let t = clamp(dir.y * 0.5 + 0.5, 0.0, 1.0);
+    return mix(vec3(0.02, 0.022, 0.025), vec3(0.10, 0.16, 0.28), t);
+}
+
+// How much of a light reaches `p`: occluders' shadow maps times the media's
+// transmittance toward the light.
+fn visibility(light: Light, p: vec3<f32>, n: vec3<f32>, l: vec3<f32>, distance: f32) -> vec3<f32> {
+    var v = vec3(1.0);
+#ifdef SHADOWS
+    v *= shadow(light, p, n);
+#endif
+#ifdef MEDIA_SHADOWS
+    v *= transmittance(p, l, min(distance, view.params.z), max(view.counts.w, 1u));
+#endif
+    return v;
+}
+
+@fragment
+fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let pixel = vec2<i32>(in.position.xy);
+    let z = textureLoad(depth, pixel, 0);
+    if z >= 1.0 {
+        let p = world_position(in.position.xy, 1.0);
+        return vec4(sky(normalize(p - view.position.xyz)), 1.0);
+    }
+    let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
+    let albedo = textureLoad(gbuffer_albedo, pixel, 0);
+    let material = textureLoad(gbuffer_material, pixel, 0);
+    let base_color = albedo.rgb;
+    let metallic = albedo.a;
+    let roughness = material.x;
+    let p = world_position(in.position.xy, z);
+    let v = normalize(view.position.xyz - p);
+
+    // A dim hemisphere ambient so unlit sides read as shapes, not holes.
+    var color = base_color * (1.0 - metallic) * mix(vec3(0.01), vec3(0.03, 0.04, 0.06), n.y * 0.5 + 0.5);
+    for (var i = 0u; i < view.counts.x; i++) {
+        let light = lights[i];
+#ifdef LIGHT_RECT
+        if light_type(light) == LIGHT_RECT {
+            let c = light.position.xyz;
+            let rx = light.right.xyz * light.extra.x;
+            let ry = light.up.xyz * light.extra.y;
+            let corners = array<vec3<f32>, 4>(c - rx - ry, c + rx - ry, c + rx + ry, c - rx + ry);
+            let r = ltc_rect(n, v, p, roughness, corners, light.extra.z > 0.5, ltc_matrix, ltc_amplitude);
+            let f0 = specular_f0(base_color, metallic);
+            let lit = base_color * (1.0 - metallic) * r.diffuse + f0 * r.specular.x + r.specular.y;
+            let to_light = c - p;
+            let seen = visibility(light, p, n, normalize(to_light), length(to_light));
+            color += light.color.rgb * lit * seen;
+            continue;
+        }
+#endif
+        let inc = incident(light, p);
+        let seen = visibility(light, p, n, inc.l, inc.distance);
+        color += inc.radiance * brdf_cos(n, v, inc.l, base_color, metallic, roughness) * seen;
+    }
+    return vec4(color, 1.0);
+}
