@@ -3,6 +3,7 @@
 pub mod capture;
 pub mod frame;
 pub mod graph;
+pub mod ltc;
 pub mod passes;
 pub mod pipelines;
 
