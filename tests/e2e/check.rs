@@ -178,12 +178,7 @@ fn binding_that_the_renderer_does_not_bind_is_located() {
     p.write(path, src);
     let run = p.run(&["check", "--format", "json"]);
     run.code(1);
-    let d: serde_json::Value = run
-        .stdout
-        .lines()
-        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
-        .find(|d| d["code"] == "binding-mismatch")
-        .unwrap_or_else(|| panic!("no binding-mismatch: {}", run.stdout));
+    let d = binding_mismatch(&run.stdout);
     assert_eq!(d["file"], path);
     let line = p.read(path).lines().position(|l| l.contains("@binding(5)")).unwrap() + 1;
     assert_eq!(d["line"].as_u64(), Some(line as u64));
@@ -200,15 +195,19 @@ fn uniform_struct_of_the_wrong_size_is_located() {
     p.write(path, src);
     let run = p.run(&["check", "--format", "json"]);
     run.code(1);
-    let d: serde_json::Value = run
-        .stdout
-        .lines()
-        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
-        .find(|d| d["code"] == "binding-mismatch")
-        .unwrap_or_else(|| panic!("no binding-mismatch: {}", run.stdout));
+    let d = binding_mismatch(&run.stdout);
     assert_eq!(d["file"], path);
     let line = p.read(path).lines().position(|l| l.contains("var<uniform> exposure")).unwrap() + 1;
     assert_eq!(d["line"].as_u64(), Some(line as u64));
     let text = d.to_string();
     assert!(text.contains("32 bytes") && text.contains("16 bytes"), "{text}");
+}
+
+/// The first `binding-mismatch` of a JSON-lines report.
+fn binding_mismatch(stdout: &str) -> serde_json::Value {
+    stdout
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .find(|d| d["code"] == "binding-mismatch")
+        .unwrap_or_else(|| panic!("no binding-mismatch: {stdout}"))
 }
