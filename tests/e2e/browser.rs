@@ -131,6 +131,14 @@ async fn page_shows_frame_and_errors_at_their_line_and_clears_them() {
     p.write(TONEMAP, &good);
     until(&c, &s, "the error to clear", &format!("!document.querySelector('#diagnostics {sel}')")).await;
     until(&c, &s, "the pass ok again", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"ok\"]')").await;
+
+    // An error only the GPU sees (a uniform larger than what is bound) is
+    // shown too, at the shader's file, and clears when fixed.
+    p.save_by_rename(TONEMAP, good.replace("    _pad1: vec2<f32>,\n", "    _pad1: vec2<f32>,\n    extra: vec4<f32>,\n"));
+    let gpu = format!("#diagnostics .diagnostic[data-code=\"gpu\"][data-file=\"{TONEMAP}\"]");
+    until(&c, &s, "the GPU error shown", &format!("document.querySelector('{gpu}')")).await;
+    p.save_by_rename(TONEMAP, &good);
+    until(&c, &s, "the GPU error to clear", &format!("!document.querySelector('{gpu}')")).await;
     c.close().await.unwrap();
 }
 

@@ -168,21 +168,20 @@ fn websocket_streams_subscribed_outputs_per_client_and_announces_passes_only_on_
     ws.send(serde_json::json!({ "type": "unsubscribe", "pass": "test_pattern", "output": "color" }));
     ws.send(serde_json::json!({ "type": "marker" }));
     ws.event("error", LIMIT, |_| true);
-    let mut images = 0;
-    ws.until("three more frame images", LIMIT, |m| {
-        let kind = image_kind(m).map(|k| k.0);
-        assert_ne!(kind.as_deref(), Some("capture"), "a capture after unsubscribing");
-        images += usize::from(kind.as_deref() == Some("frame"));
-        (images == 3).then_some(())
-    });
+    three_frames_and_no_capture(&mut ws, "a capture after unsubscribing");
 
     // The other client never subscribed: only final frames, never captures.
     let mut other = other;
     other.event("hello", LIMIT, |_| true);
+    three_frames_and_no_capture(&mut other, "a capture nobody on this connection asked for");
+}
+
+/// Reads until three `frame` images came, failing on any `capture` image.
+fn three_frames_and_no_capture(ws: &mut loupe_tests::ws::Ws, why: &str) {
     let mut images = 0;
-    other.until("three frame images", LIMIT, |m| {
+    ws.until("three frame images", LIMIT, |m| {
         let kind = image_kind(m).map(|k| k.0);
-        assert_ne!(kind.as_deref(), Some("capture"), "a capture nobody on this connection asked for");
+        assert_ne!(kind.as_deref(), Some("capture"), "{why}");
         images += usize::from(kind.as_deref() == Some("frame"));
         (images == 3).then_some(())
     });

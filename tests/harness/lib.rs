@@ -249,8 +249,13 @@ impl Server {
 
     /// POST a path with an empty body; returns status and body.
     pub fn post(&self, path: &str) -> (u16, Vec<u8>) {
-        let agent = ureq::Agent::config_builder().http_status_as_error(false).build().new_agent();
-        let mut resp = agent.post(&self.url(path)).send_empty().unwrap_or_else(|e| panic!("POST {path}: {e}\n{}", self.log()));
+        self.answer(&format!("POST {path}"), agent().post(&self.url(path)).send_empty())
+    }
+
+    /// Status and body of a request's reply; panics, with the server's
+    /// log, when there was none.
+    fn answer(&self, what: &str, reply: Result<ureq::http::Response<ureq::Body>, ureq::Error>) -> (u16, Vec<u8>) {
+        let mut resp = reply.unwrap_or_else(|e| panic!("{what}: {e}\n{}", self.log()));
         let status = resp.status().as_u16();
         let body = resp.body_mut().read_to_vec().expect("body");
         (status, body)
@@ -259,8 +264,7 @@ impl Server {
     /// The capture `pass/output` as exact RGBA f32 values, with its frame
     /// number; `None` while there is none.
     pub fn capture_f32(&self, key: &str) -> Option<Capture> {
-        let agent = ureq::Agent::config_builder().http_status_as_error(false).build().new_agent();
-        let mut resp = agent.get(&self.url(&format!("/api/captures/{key}.f32"))).call().ok()?;
+        let mut resp = agent().get(&self.url(&format!("/api/captures/{key}.f32"))).call().ok()?;
         if resp.status() != 200 {
             return None;
         }
@@ -277,11 +281,7 @@ impl Server {
 
     /// GET a path; returns status and body.
     pub fn get(&self, path: &str) -> (u16, Vec<u8>) {
-        let agent = ureq::Agent::config_builder().http_status_as_error(false).build().new_agent();
-        let mut resp = agent.get(&self.url(path)).call().unwrap_or_else(|e| panic!("GET {path}: {e}\n{}", self.log()));
-        let status = resp.status().as_u16();
-        let body = resp.body_mut().read_to_vec().expect("body");
-        (status, body)
+        self.answer(&format!("GET {path}"), agent().get(&self.url(path)).call())
     }
 
     pub fn get_json(&self, path: &str) -> serde_json::Value {
@@ -303,6 +303,11 @@ impl Server {
             std::thread::sleep(Duration::from_millis(50));
         }
     }
+}
+
+/// An HTTP client that returns error statuses as replies.
+fn agent() -> ureq::Agent {
+    ureq::Agent::config_builder().http_status_as_error(false).build().new_agent()
 }
 
 /// A capture read back as f32 RGBA.
