@@ -179,6 +179,8 @@ impl Server {
 
     /// Starts `BIN serve --port PORT ...extra` in `dir`.
     pub fn start_with(bin: &Path, dir: &Path, port: u16, extra: &[&str]) -> Server {
+        // Run in `dir`: a relative binary path is relative to here.
+        let bin = std::path::absolute(bin).expect("an absolute path");
         let mut child = Command::new(bin)
             .args(["serve", "--port", &port.to_string()])
             .args(extra)

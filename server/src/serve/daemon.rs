@@ -192,9 +192,11 @@ impl Daemon {
         self.publish_state();
         let interval = Duration::from_secs_f64(1.0 / self.config.max_fps.max(0.1));
         loop {
+            // Frames on their way back are polled for; otherwise only an
+            // event (or the next frame falling due) changes anything.
             let wait = if !self.in_flight.is_empty() {
                 Duration::from_millis(2)
-            } else if self.wants_frame() {
+            } else if self.wants_frame() && self.can_render() {
                 self.until_due(interval)
             } else {
                 Duration::from_millis(250)
@@ -517,6 +519,7 @@ impl Daemon {
         let result = pending.finish();
         let render_ms = started.elapsed().as_secs_f64() * 1e3;
         let total: f64 = result.timings.iter().map(|(_, t)| t).sum();
+        let mut images = None;
         if clean {
             let mut captures = (*shared::read(&self.shared.captures)).clone();
             if !reloads.is_empty() {
@@ -526,7 +529,7 @@ impl Daemon {
             let this_frame: BTreeMap<String, Arc<_>> = result.captures.into_iter().map(|c| (c.key(), Arc::new(c))).collect();
             captures.extend(this_frame.iter().map(|(k, c)| (k.clone(), c.clone())));
             shared::write(&self.shared.captures, Arc::new(captures));
-            self.shared.frames.send_replace(Some(Arc::new(FrameImages::new(result.frame, final_key, this_frame))));
+            images = Some(FrameImages::new(result.frame, final_key, this_frame));
         }
         self.last_timings = result.timings;
         self.last_timing = result.timing.to_owned();
@@ -548,6 +551,11 @@ impl Daemon {
         let mut status = shared::read(&self.shared.status);
         status.frame = result.frame;
         shared::write(&self.shared.status, status);
+        // Images last: encoding and sending them takes a client a while,
+        // and the events say what they show.
+        if let Some(images) = images {
+            self.shared.frames.send_replace(Some(Arc::new(images)));
+        }
     }
 
     /// Writes the pass list snapshot (with the newest times) and announces

@@ -737,25 +737,15 @@ async fn client_loop(st: Arc<AppState>, mut socket: WebSocket) {
     report.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
 
     loop {
+        // Biased: events go before images, so an image being encoded or
+        // sent never holds back the events that say what happened.
         let step: Result<bool, axum::Error> = tokio::select! {
+            biased;
             _ = stop.changed() => {
                 let close = CloseFrame { code: 1001, reason: "server shutting down".into() };
                 let _ = socket.send(Message::Close(Some(close))).await;
                 return;
             }
-            incoming = socket.recv() => match incoming {
-                None | Some(Err(_)) | Some(Ok(Message::Close(_))) => Ok(false),
-                Some(Ok(Message::Text(text))) => match serde_json::from_str::<ClientMessage>(text.as_str()) {
-                    Ok(msg) => {
-                        client_message(&shared, client, &mut subscriptions, msg);
-                        Ok(true)
-                    }
-                    Err(e) => send_error(&mut socket, format!("invalid message: {e}")).await,
-                },
-                Some(Ok(Message::Binary(_))) => send_error(&mut socket, "binary messages are not accepted".into()).await,
-                // Pings are answered by the WebSocket layer itself.
-                Some(Ok(_)) => Ok(true),
-            },
             received = events.recv() => match received {
                 Ok(event) => async {
                     missed.flush(&mut socket).await?;
@@ -769,6 +759,19 @@ async fn client_loop(st: Arc<AppState>, mut socket: WebSocket) {
                     missed.flush(&mut socket).await.map(|()| true)
                 }
                 Err(RecvError::Closed) => Ok(false),
+            },
+            incoming = socket.recv() => match incoming {
+                None | Some(Err(_)) | Some(Ok(Message::Close(_))) => Ok(false),
+                Some(Ok(Message::Text(text))) => match serde_json::from_str::<ClientMessage>(text.as_str()) {
+                    Ok(msg) => {
+                        client_message(&shared, client, &mut subscriptions, msg);
+                        Ok(true)
+                    }
+                    Err(e) => send_error(&mut socket, format!("invalid message: {e}")).await,
+                },
+                Some(Ok(Message::Binary(_))) => send_error(&mut socket, "binary messages are not accepted".into()).await,
+                // Pings are answered by the WebSocket layer itself.
+                Some(Ok(_)) => Ok(true),
             },
             changed = frames.changed(), if frames_open => match changed {
                 Err(_) => {
