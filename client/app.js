@@ -32,12 +32,13 @@ import * as tex from './texture.js';
 import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
 
 /** The protocol version this client speaks (protocol.rs `VERSION`). */
-const PROTOCOL = 1;
+const PROTOCOL = 2;
 /** How long the inspector waits for a newly subscribed output's capture. */
 const CAPTURE_WAIT_MS = 4000;
 
 const state = {
   connection: 'connecting',
+  connections: 0, // WebSocket connections opened so far (reconnects + 1)
   protocol: null,
   status: null,
   frame: null, // newest `frame` event
@@ -51,7 +52,7 @@ const state = {
   captures: [],
   reload: null, // {id, state: 'reloading'|'ok'|'failed', files, timings, frame}
   deviceLost: null,
-  dropped: 0,
+  dropped: { frames: 0, events: 0 }, // totals of the `dropped` events
   problems: [], // client-side problems (malformed messages, script errors)
 };
 
@@ -191,7 +192,8 @@ function showFps() {
   }
   header.fps.title = [
     state.totalMs !== null ? `last frame: ${formatMs(state.totalMs)} ms ${state.timing}` : null,
-    state.dropped ? `${state.dropped} frame(s)/event(s) skipped while this tab was busy` : null,
+    state.dropped.frames ? `${state.dropped.frames} frame(s) skipped while this tab was busy` : null,
+    state.dropped.events ? `${state.dropped.events} event(s) missed while this tab was busy` : null,
   ]
     .filter(Boolean)
     .join('\n');
@@ -240,7 +242,8 @@ let conn = null; // created below; the inspector's hooks reach it lazily
 const inspector = new Inspector({
   fetchCaptures: () => loadCaptures(),
   onTarget: (pass) => passList.select(pass),
-  subscribe: (pass, output) => conn?.subscribe(pass, output),
+  // The inspector streams exact floats of what it shows.
+  subscribeOnly: (wanted) => conn?.subscribeOnly(wanted, 'f32'),
   awaitCapture,
 });
 
@@ -389,7 +392,8 @@ function onEvent(ev) {
       inspector.onFrame();
       break;
     case 'passes':
-      // Sent with every frame; only a new structure can mean new outputs.
+      // Sent when the pass list or a status changed; a new structure can
+      // mean new outputs.
       if (applyPasses(ev.passes)) refetchCapturesSoon();
       break;
     case 'diagnostics':
@@ -406,11 +410,12 @@ function onEvent(ev) {
       resyncAll();
       break;
     case 'dropped':
-      // This tab fell behind: skipped frames (harmless, the newest frame
-      // always arrives) or missed events (then the snapshots are stale).
-      // The count does not say which, so resync, at most once a second.
-      state.dropped += Number(ev.count) || 0;
-      resyncSlowly();
+      // This tab fell behind. Skipped frames are harmless (the newest frame
+      // always arrives); missed events leave the snapshots stale: resync,
+      // at most once a second.
+      state.dropped.frames += Number(ev.frames) || 0;
+      state.dropped.events += Number(ev.events) || 0;
+      if (Number(ev.events) > 0) resyncSlowly();
       break;
     case 'error':
       notify('server', `server: ${ev.message}`, 'error', 20000);
@@ -422,8 +427,10 @@ function onEvent(ev) {
 }
 
 function onBinary(hdr, bytes) {
-  if (hdr.kind !== 'frame') return;
-  live.push(hdr, bytes);
+  // `frame`: the final output, for the live view; `capture`: an output the
+  // inspector subscribed to. Other kinds are for newer pages.
+  if (hdr.kind === 'frame') live.push(hdr, bytes);
+  else if (hdr.kind === 'capture') inspector.onCapture(hdr, bytes);
 }
 
 // Clicking the live frame inspects the final output.
@@ -447,6 +454,7 @@ const wsUrl = `${location.protocol === 'https:' ? 'wss:' : 'ws:'}//${location.ho
 conn = new Connection(wsUrl, {
   onState: setConnection,
   onOpen: () => {
+    state.connections++;
     for (const key of [...notices.keys()]) if (key.startsWith('fetch:')) clearNotice(key);
     resyncAll();
     // A restarted server has none of the old captures in memory.

@@ -3,7 +3,8 @@
 // channel isolation, exposure and range, NaN/Inf/negative overlays, and an
 // A/B compare (split view or absolute difference).
 //
-// Data flow: fetch `.f32` → slot.data (Float32Array) → tonemap into the
+// Data flow: fetch `.f32` (or, when live, the streamed f32 capture of the
+// output the inspector subscribed to) → slot.data (Float32Array) → tonemap into the
 // slot's ImageData on an off-screen canvas (only when data or display
 // options change) → drawImage onto the visible canvas with the view
 // transform (every pan/zoom, cheap).
@@ -32,8 +33,9 @@ export class Inspector {
    * @param {object} hooks
    * @param {() => Promise<object[]>} hooks.fetchCaptures refreshes /api/captures
    * @param {(pass: string, output: string) => void} hooks.onTarget
-   * @param {(pass: string, output: string) => void} hooks.subscribe asks
-   *   the server to capture an output
+   * @param {(wanted: {pass: string, output: string}[]) => void}
+   *   hooks.subscribeOnly asks the server to capture and stream exactly
+   *   these outputs (as f32) to this page
    * @param {(pass: string, output: string) => Promise<boolean>}
    *   hooks.awaitCapture resolves true once the output has been captured
    */
@@ -92,6 +94,11 @@ export class Inspector {
     this.refreshTimer = null;
     this.needsRebuild = false;
     this.frameRequested = false;
+    this.streamed = new Map(); // `pass/output` → newest streamed capture not yet shown
+    this.streamTimer = null;
+    this.lastStreamed = -Infinity; // when a streamed capture last arrived
+    this.lastApplied = -Infinity;
+    this.streamedLoads = 0;
 
     this.syncControls();
     this.bindControls();
@@ -164,6 +171,9 @@ export class Inspector {
     this.lastStart = performance.now();
     this.showMessage();
 
+    // The server captures only the final output and what clients
+    // subscribe to, and streams subscribed outputs to this page.
+    this.hooks.subscribeOnly?.([{ pass, output }, ...(bSpec && !bSpec.lastGood ? [bSpec] : [])]);
     // The capture list carries formats and sizes; refreshing it alongside
     // keeps the selects and the info line in step with the data.
     const capturesP = this.hooks.fetchCaptures ? this.hooks.fetchCaptures().catch(() => null) : null;
@@ -173,9 +183,6 @@ export class Inspector {
           lastGood: spec.lastGood,
           fallback: this.metaFor(spec.pass, spec.output),
         });
-      // The server captures only the final output and what clients
-      // subscribe to; subscribing is idempotent, so always ask.
-      if (!spec.lastGood) this.hooks.subscribe?.(spec.pass, spec.output);
       try {
         return await get();
       } catch (err) {
@@ -224,10 +231,7 @@ export class Inspector {
       this.bError = bSpec ? rb.reason : null;
     }
 
-    this.needsRebuild = true;
-    this.flush();
-    this.showMessage();
-    this.refreshReadout();
+    this.redisplay();
 
     if (this.dirty) {
       this.dirty = false;
@@ -247,9 +251,77 @@ export class Inspector {
     return slot;
   }
 
-  /** A frame was rendered: refresh the inspected data when live. */
+  /**
+   * A frame was rendered: refresh the inspected data when live. Streamed
+   * captures refresh A (and B when it is another output) by themselves;
+   * a fetch is needed only before the stream starts and for a last-good B.
+   */
   onFrame() {
-    if (this.liveIn.checked && this.target) this.requestRefresh();
+    if (!this.liveIn.checked || !this.target) return;
+    const streaming = performance.now() - this.lastStreamed < 2000;
+    if (!streaming || this.compareSpec()?.lastGood) this.requestRefresh();
+  }
+
+  /** The slot spec a streamed `pass/output` fills when live: 'a', 'b' or null. */
+  streamSlot(key) {
+    if (!this.liveIn.checked || !this.target) return null;
+    if (key === keyOf(this.target.pass, this.target.output)) return 'a';
+    const b = this.compareSpec();
+    return b && !b.lastGood && key === keyOf(b.pass, b.output) ? 'b' : null;
+  }
+
+  /**
+   * A binary `capture` message. Newest wins: captures that arrive while
+   * one is shown are dropped, and at most one is shown per
+   * LIVE_MIN_INTERVAL_MS (a float image is megabytes to analyse).
+   */
+  onCapture(header, bytes) {
+    const key = keyOf(header.pass, header.output);
+    if (header.encoding !== 'f32' || !this.streamSlot(key)) return;
+    if (bytes.byteLength !== header.width * header.height * 16) return;
+    this.streamed.set(key, { header, bytes });
+    this.lastStreamed = performance.now();
+    this.scheduleStreamed();
+  }
+
+  scheduleStreamed() {
+    if (this.streamTimer !== null) return;
+    const wait = Math.max(0, this.lastApplied + LIVE_MIN_INTERVAL_MS - performance.now());
+    this.streamTimer = setTimeout(() => {
+      this.streamTimer = null;
+      this.applyStreamed();
+    }, wait);
+  }
+
+  applyStreamed() {
+    // A fetch in flight reports when it lands; streamed data waits for it.
+    if (this.loading) return this.scheduleStreamed();
+    this.lastApplied = performance.now();
+    for (const [key, { header, bytes }] of this.streamed) {
+      const which = this.streamSlot(key);
+      if (!which) continue;
+      // Copied: a Float32Array needs a 4-byte aligned start.
+      const loaded = { data: new Float32Array(bytes.slice().buffer), width: header.width, height: header.height, frame: header.frame, format: header.format };
+      const info = { key, pass: header.pass, output: header.output, lastGood: false, format: header.format };
+      if (which === 'a') {
+        this.a = this.makeSlot(loaded, info, this.a);
+        this.error = null;
+      } else {
+        this.b = this.makeSlot(loaded, info, this.b);
+        this.bError = null;
+      }
+    }
+    this.streamed.clear();
+    this.streamedLoads++;
+    this.redisplay();
+  }
+
+  /** New data in A or B: retonemap, draw, update the message and readout. */
+  redisplay() {
+    this.needsRebuild = true;
+    this.flush();
+    this.showMessage();
+    this.refreshReadout();
   }
 
   /**
@@ -441,6 +513,11 @@ export class Inspector {
     this.frameRequested = true;
     requestAnimationFrame(() => {
       this.frameRequested = false;
+    this.streamed = new Map(); // `pass/output` → newest streamed capture not yet shown
+    this.streamTimer = null;
+    this.lastStreamed = -Infinity; // when a streamed capture last arrived
+    this.lastApplied = -Infinity;
+    this.streamedLoads = 0;
       this.flush();
     });
   }
@@ -961,6 +1038,7 @@ export class Inspector {
       loaded: !!a,
       loading: this.loading,
       loads: this.loads,
+      streamedLoads: this.streamedLoads,
       error: this.error ? errorText(this.error) : null,
       width: a?.width ?? null,
       height: a?.height ?? null,

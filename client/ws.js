@@ -132,16 +132,33 @@ export class Connection {
   }
 
   /**
-   * Asks the server to capture `pass/output` every frame (it captures only
-   * the final output unless a client subscribes). Returns whether this is
-   * a new subscription on the current connection.
+   * Asks the server to capture `pass/output` every frame and stream it to
+   * this page as binary `capture` messages in `encoding` (`png`, `f32` or
+   * `f16`). Returns whether this is a new subscription.
    */
-  subscribe(pass, output) {
+  subscribe(pass, output, encoding = 'png') {
     const key = `${pass}/${output}`;
-    if (this.subscriptions.has(key)) return false;
-    const message = { type: 'subscribe', pass, output };
+    if (this.subscriptions.get(key)?.encoding === encoding) return false;
+    const message = { type: 'subscribe', pass, output, encoding };
     this.subscriptions.set(key, message);
     this.send(message);
     return true;
+  }
+
+  /** Stops the stream of `pass/output` (the server may stop capturing it). */
+  unsubscribe(pass, output) {
+    const key = `${pass}/${output}`;
+    if (!this.subscriptions.delete(key)) return false;
+    this.send({ type: 'unsubscribe', pass, output });
+    return true;
+  }
+
+  /** Subscribes to exactly `wanted` ([{pass, output}]) in `encoding`. */
+  subscribeOnly(wanted, encoding) {
+    const keys = new Set(wanted.map(({ pass, output }) => `${pass}/${output}`));
+    for (const message of [...this.subscriptions.values()]) {
+      if (!keys.has(`${message.pass}/${message.output}`)) this.unsubscribe(message.pass, message.output);
+    }
+    for (const { pass, output } of wanted) this.subscribe(pass, output, encoding);
   }
 }

@@ -152,6 +152,10 @@ struct ServeArgs {
     /// Project root: where shaders/ and scenes/ are.
     #[arg(long, default_value = ".")]
     root: PathBuf,
+    /// Enable the debug API for tests: `POST /api/debug/lose-device`
+    /// destroys the GPU device to exercise recovery.
+    #[arg(long)]
+    debug_api: bool,
 }
 
 #[derive(clap::Args)]
@@ -289,7 +293,7 @@ fn run_serve(args: ServeArgs) -> ExitCode {
         eprintln!("loupe serve: scene `{}` does not exist", scene.display());
         return ExitCode::from(exit::USAGE);
     }
-    let opts = ServeOptions { root: args.root, scene, bind: args.bind, port: args.port, mode: args.render, max_fps: args.fps };
+    let opts = ServeOptions { root: args.root, scene, bind: args.bind, port: args.port, mode: args.render, max_fps: args.fps, debug_api: args.debug_api };
     match serve::run(opts) {
         Ok(()) => ExitCode::from(exit::OK),
         Err(ServeError::NoDevice(e)) => {

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::diag::Diagnostic;
 
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// `GET /api/status`
 #[derive(Debug, Clone, Serialize, Default)]
@@ -46,7 +46,7 @@ pub enum PassStatus {
     Culled,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct OutputInfo {
     pub name: String,
     pub format: String,
@@ -55,7 +55,7 @@ pub struct OutputInfo {
 }
 
 /// One node of the render graph, `GET /api/passes`.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PassInfo {
     pub name: String,
     pub status: PassStatus,
@@ -69,6 +69,14 @@ pub struct PassInfo {
     /// `gpu` (timestamp queries) or `cpu` (wall clock around submit+wait).
     pub timing: String,
     pub diagnostics: usize,
+}
+
+impl PassInfo {
+    /// The same pass without its per-frame time: what a `passes` event
+    /// announces a change of (times travel in `frame` events).
+    pub fn shape(&self) -> PassInfo {
+        PassInfo { time_ms: None, ..self.clone() }
+    }
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -93,8 +101,12 @@ pub struct DiagnosticsReport {
 pub struct ReloadTimings {
     /// From the first file event to the debounced, content-checked change.
     pub watch_ms: f64,
+    /// The slowest pipeline's compose + validate, on a worker thread.
     pub compose_ms: f64,
+    /// Pipeline creation on the render thread, summed over the reload.
     pub pipeline_ms: f64,
+    /// The first frame that used the reload's pipelines: recording,
+    /// execution and readback.
     pub render_ms: f64,
 }
 
@@ -106,12 +118,16 @@ pub enum ServerEvent {
     ReloadStarted { id: u64, files: Vec<String>, pipelines: Vec<String> },
     ReloadSucceeded { id: u64, files: Vec<String>, pipelines: Vec<String>, timings: ReloadTimings },
     ReloadFailed { id: u64, files: Vec<String>, pipelines: Vec<String>, diagnostics: Vec<Diagnostic> },
-    Frame { frame: u64, passes: Vec<PassTiming>, total_ms: f64, timing: String, reload: Option<u64> },
+    /// `reload`: the newest reload this frame is the first to show;
+    /// `reloads`: every one of them (several can finish between frames).
+    Frame { frame: u64, passes: Vec<PassTiming>, total_ms: f64, timing: String, reload: Option<u64>, reloads: Vec<u64> },
     Passes { passes: Vec<PassInfo> },
     Diagnostics { diagnostics: Vec<Diagnostic> },
     DeviceLost { message: String, recovered: bool },
-    /// Messages this client missed because it read too slowly.
-    Dropped { count: u64 },
+    /// What this client missed because it read too slowly, since the
+    /// previous `dropped`: `frames` rendered that it got no images of, and
+    /// `events` it lost.
+    Dropped { frames: u64, events: u64 },
     /// The server could not use a message this client sent (bad JSON, an
     /// unknown `type`, a binary message); the connection stays open.
     Error { message: String },
@@ -123,12 +139,42 @@ pub struct PassTiming {
     pub time_ms: f64,
 }
 
+/// How a subscribed output is streamed as binary messages.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Encoding {
+    /// 8-bit sRGB PNG for display, as `/api/captures/…png`.
+    #[default]
+    Png,
+    /// Raw little-endian RGBA `f32`, as `/api/captures/…f32`.
+    F32,
+    /// Raw little-endian RGBA IEEE half floats, as `/api/captures/…f16`.
+    F16,
+}
+
+impl Encoding {
+    pub fn mime(self) -> &'static str {
+        match self {
+            Encoding::Png => "image/png",
+            Encoding::F32 | Encoding::F16 => "application/octet-stream",
+        }
+    }
+}
+
 /// WebSocket text messages, client → server.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum ClientMessage {
-    /// Which pass output the client wants streamed as images.
-    Subscribe { pass: String, output: String },
+    /// Capture `pass/output` every frame and stream it to this client as
+    /// binary `capture` messages, newest only.
+    Subscribe {
+        pass: String,
+        output: String,
+        #[serde(default)]
+        encoding: Encoding,
+    },
+    /// Stop streaming `pass/output` to this client.
+    Unsubscribe { pass: String, output: String },
     /// Rebuild every pipeline from the current sources (`POST /api/reload`
     /// sends this too).
     Rebuild {},

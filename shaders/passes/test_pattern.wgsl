@@ -18,7 +18,9 @@ fn vs_fullscreen(@builtin(vertex_index) vertex_index: u32) -> FullscreenOut {
 
 @fragment
 fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
-    let uv = in.uv;
+    // From the target size the renderer binds, not the interpolated uv:
+    // the pattern's bands then sit at exact pixel rows.
+    let uv = in.position.xy / frame.size;
     if uv.y < 0.33 {
         return vec4(vec3(uv.x * 4.0), 1.0);
     }

@@ -53,8 +53,28 @@ async fn browser() -> (Driver, Client) {
     }
 }
 
+/// What to print about the server when a wait times out.
+trait Log {
+    fn log(&self) -> String;
+}
+
+impl Log for Server {
+    fn log(&self) -> String {
+        Server::log(self)
+    }
+}
+
+/// A server that was stopped: its last log.
+struct Dead(String);
+
+impl Log for Dead {
+    fn log(&self) -> String {
+        format!("(stopped)\n{}", self.0)
+    }
+}
+
 /// Polls a JS expression until it is truthy; returns its value.
-async fn until(c: &Client, server: &Server, what: &str, js: &str) -> serde_json::Value {
+async fn until(c: &Client, server: &impl Log, what: &str, js: &str) -> serde_json::Value {
     let start = Instant::now();
     loop {
         if let Ok(v) = c.execute(&format!("return ({js});"), vec![]).await {
@@ -82,6 +102,13 @@ async fn page_shows_frame_and_errors_at_their_line_and_clears_them() {
     assert!(first.as_u64().unwrap() >= 1);
     until(&c, &s, "the tonemap pass listed ok", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"ok\"]')").await;
     let src_before = c.find(Locator::Css("#frame")).await.unwrap().attr("src").await.unwrap();
+    // The inspector opens on the final output and, live, gets its exact
+    // floats streamed over the WebSocket (a subscription of this page).
+    until(&c, &s, "a streamed capture in the inspector", "window.loupe.state.inspector.streamedLoads >= 1 && window.loupe.state.inspector.output === 'color'").await;
+    let alpha = c.execute("return window.loupe.valueAt(480, 270)[3];", vec![]).await.unwrap();
+    assert_eq!(alpha, 1.0, "the streamed final image is opaque");
+    let page = c.execute("const s = window.loupe.state; return [s.protocol, s.problems, document.querySelectorAll('#notices .notice').length];", vec![]).await.unwrap();
+    assert_eq!(page, serde_json::json!([2, [], 0]), "the page speaks the server's protocol, without problems or notices");
 
     // Break the shader as vim saves it.
     let good = p.read(TONEMAP);
@@ -104,5 +131,49 @@ async fn page_shows_frame_and_errors_at_their_line_and_clears_them() {
     p.write(TONEMAP, &good);
     until(&c, &s, "the error to clear", &format!("!document.querySelector('#diagnostics {sel}')")).await;
     until(&c, &s, "the pass ok again", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"ok\"]')").await;
+
+    // A uniform larger than the renderer binds once reached the GPU and
+    // blanked the frame; now pipeline creation refuses it at the binding's
+    // line, and the page shows that like any other error.
+    const PATTERN: &str = "shaders/passes/test_pattern.wgsl";
+    let pattern = p.read(PATTERN);
+    let bigger = pattern.replace("    frame: u32,\n}", "    frame: u32,\n    extra: vec4<f32>,\n}");
+    p.save_by_rename(PATTERN, &bigger);
+    let line = bigger.lines().position(|l| l.contains("var<uniform> frame")).unwrap() + 1;
+    let mismatch = format!("#diagnostics .diagnostic[data-code=\"binding-mismatch\"][data-file=\"{PATTERN}\"][data-line=\"{line}\"]");
+    until(&c, &s, "the uniform size error shown", &format!("document.querySelector('{mismatch}')")).await;
+    until(&c, &s, "the pass stale", "document.querySelector('#passes li[data-pass=\"test_pattern\"][data-status=\"stale\"]')").await;
+    p.save_by_rename(PATTERN, &pattern);
+    until(&c, &s, "the uniform size error to clear", &format!("!document.querySelector('{mismatch}')")).await;
+    c.close().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn page_reconnects_by_itself_after_a_server_restart_and_shows_a_new_frame() {
+    let p = Project::copy_of_repo("browser-reconnect");
+    let s = Server::start(&p.root, &["--render", "on-change"]);
+    let port = s.port();
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "connected", "document.querySelector('#connection').textContent === 'connected'").await;
+    until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    assert_eq!(c.execute("return window.loupe.state.connections;", vec![]).await.unwrap(), 1);
+
+    // The server dies without a close handshake (a crash, kill -9); nothing
+    // listens on its port until the new one is up.
+    let log = s.log();
+    s.kill();
+    let dead = Dead(log);
+    until(&c, &dead, "the page to see the server gone", "document.querySelector('#connection').textContent === 'reconnecting'").await;
+    let received: u64 = c.execute("return window.loupe.state.liveImages.received;", vec![]).await.unwrap().as_u64().unwrap();
+    let src = c.find(Locator::Css("#frame")).await.unwrap().attr("src").await.unwrap();
+
+    // A new server on the same port: the page reconnects by itself and
+    // shows the new server's frame.
+    let s = Server::start_on(&p.root, port, &["--render", "on-change"]);
+    until(&c, &s, "connected again", "document.querySelector('#connection').textContent === 'connected' && window.loupe.state.connections === 2").await;
+    until(&c, &s, "a new frame image", &format!("window.loupe.state.liveImages.received > {received}")).await;
+    until(&c, &s, "the new frame on screen", &format!("document.querySelector('#frame').getAttribute('src') !== {}", serde_json::json!(src))).await;
+    until(&c, &s, "the pass list again", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"ok\"]')").await;
     c.close().await.unwrap();
 }

@@ -1,8 +1,11 @@
 //! `loupe serve`: hot reload with real editor save patterns, keep-last-good,
-//! the HTTP API.
+//! the HTTP API, the WebSocket stream, uncaptured GPU errors, device loss,
+//! and a short soak.
 
 use std::time::Duration;
 
+use loupe_tests::reload::{self, Driver};
+use loupe_tests::ws::Msg;
 use loupe_tests::{Project, Server};
 
 const LIMIT: Duration = Duration::from_secs(60);
@@ -84,7 +87,7 @@ fn api_shapes() {
     let s = Server::start(&p.root, &["--render", "on-change"]);
     s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
     let st = s.get_json("/api/status");
-    assert_eq!(st["protocol"], 1);
+    assert_eq!(st["protocol"], 2);
     assert!(st["adapter"].as_str().is_some_and(|a| !a.is_empty()));
     let passes = s.get_json("/api/passes");
     let names: Vec<&str> = passes.as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
@@ -104,4 +107,214 @@ fn api_shapes() {
     assert!(px(last_bar) > 0.3 && px(last_bar + 1) > 0.3 && px(last_bar + 2) > 0.3, "white bar is lit: {:?}", (px(last_bar), px(last_bar + 1)));
     let (code, _) = s.get("/api/captures/nope/color.png");
     assert_eq!(code, 404);
+    let captures = s.get_json("/api/captures");
+    let finals: Vec<&str> = captures.as_array().unwrap().iter().filter(|c| c["final"] == true).map(|c| c["pass"].as_str().unwrap()).collect();
+    assert_eq!(finals, ["tonemap"], "{captures}");
+    // Without --debug-api there is no debug API.
+    let (code, body) = s.post("/api/debug/lose-device");
+    assert_eq!(code, 404, "{}", String::from_utf8_lossy(&body));
+    assert_eq!(s.get_json("/api/status")["device_resets"], 0);
+}
+
+fn image_kind(m: &Msg) -> Option<(String, serde_json::Value)> {
+    match m {
+        Msg::Image(h, _) => Some((h["kind"].as_str().unwrap_or("").to_owned(), h.clone())),
+        Msg::Event(_) => None,
+    }
+}
+
+#[test]
+fn websocket_streams_subscribed_outputs_per_client_and_announces_passes_only_on_change() {
+    let p = Project::copy_of_repo("serve-ws");
+    let s = Server::start(&p.root, &["--render", "continuous", "--fps", "10"]);
+    let mut ws = s.ws();
+    let hello = ws.event("hello", LIMIT, |_| true);
+    assert_eq!(hello["protocol"], 2);
+    let other = s.ws(); // a second client that subscribes to nothing
+
+    // Every client gets the final output as a `frame` image.
+    let (_, h) = ws.until("a frame image", LIMIT, |m| image_kind(m).filter(|(k, _)| k == "frame"));
+    assert_eq!((h["pass"].as_str(), h["final"].as_bool(), h["mime"].as_str()), (Some("tonemap"), Some(true), Some("image/png")), "{h}");
+
+    // Subscribed: the HDR test pattern streams as exact floats.
+    ws.send(serde_json::json!({ "type": "subscribe", "pass": "test_pattern", "output": "color", "encoding": "f32" }));
+    let (h, data) = ws.until("a capture image", LIMIT, |m| match m {
+        Msg::Image(h, d) if h["kind"] == "capture" => Some((h.clone(), d.clone())),
+        _ => None,
+    });
+    assert_eq!((h["pass"].as_str(), h["output"].as_str(), h["final"].as_bool()), (Some("test_pattern"), Some("color"), Some(false)), "{h}");
+    assert_eq!((h["encoding"].as_str(), h["format"].as_str()), (Some("f32"), Some("Rgba16Float")));
+    let (w, ht) = (h["width"].as_u64().unwrap() as usize, h["height"].as_u64().unwrap() as usize);
+    assert_eq!(data.len(), w * ht * 16);
+    let alpha = f32::from_le_bytes(data[(ht / 2 * w) * 16 + 12..][..4].try_into().unwrap());
+    assert_eq!(alpha, 1.0, "real pixels: the pattern is opaque");
+
+    // Frames keep coming; the pass list does not change, so no `passes`.
+    let mut frames = 0;
+    ws.until("five frames", LIMIT, |m| {
+        assert_ne!(m.event_type(), Some("passes"), "a `passes` event without a change");
+        frames += usize::from(m.event_type() == Some("frame"));
+        (frames == 5).then_some(())
+    });
+
+    // A change of status is announced.
+    p.save_by_rename(reload::TONEMAP, reload::broken(&p.read(reload::TONEMAP)));
+    let passes = ws.event("passes", LIMIT, |_| true);
+    let tonemap = passes["passes"].as_array().unwrap().iter().find(|p| p["name"] == "tonemap").unwrap().clone();
+    assert_eq!(tonemap["status"], "stale", "{passes}");
+
+    // Unsubscribed (an invalid message after it marks when the server has
+    // read it): no more captures.
+    ws.send(serde_json::json!({ "type": "unsubscribe", "pass": "test_pattern", "output": "color" }));
+    ws.send(serde_json::json!({ "type": "marker" }));
+    ws.event("error", LIMIT, |_| true);
+    three_frames_and_no_capture(&mut ws, "a capture after unsubscribing");
+
+    // The other client never subscribed: only final frames, never captures.
+    let mut other = other;
+    other.event("hello", LIMIT, |_| true);
+    three_frames_and_no_capture(&mut other, "a capture nobody on this connection asked for");
+}
+
+/// Reads until three `frame` images came, failing on any `capture` image.
+fn three_frames_and_no_capture(ws: &mut loupe_tests::ws::Ws, why: &str) {
+    let mut images = 0;
+    ws.until("three frame images", LIMIT, |m| {
+        let kind = image_kind(m).map(|k| k.0);
+        assert_ne!(kind.as_deref(), Some("capture"), "{why}");
+        images += usize::from(kind.as_deref() == Some("frame"));
+        (images == 3).then_some(())
+    });
+}
+
+#[test]
+fn a_reload_is_announced_with_its_render_time_and_the_frame_that_shows_it() {
+    let p = Project::copy_of_repo("serve-reload-frame");
+    let s = Server::start(&p.root, &["--render", "on-change"]);
+    let mut d = Driver::new(&p, &s);
+    let colour = reload::colour(7);
+    let o = d.save(reload::TONEMAP, &reload::constant_colour(&p.read(reload::TONEMAP), colour)).expect("the reload finished");
+    assert!(o.succeeded);
+    let t = o.timings.clone().unwrap();
+    for k in ["watch_ms", "compose_ms", "pipeline_ms", "render_ms"] {
+        assert!(t[k].as_f64().is_some_and(|v| v > 0.0), "{k} is measured: {t}");
+    }
+    // The frame that carries the reload shows the new colour.
+    let frame = o.frame.unwrap();
+    let c = s.capture_f32(reload::FINAL).unwrap();
+    assert_eq!(c.frame, frame, "on-change: nothing rendered after the reload's frame");
+    let px = c.pixel(c.width / 2, c.height / 2);
+    for (want, got) in colour.iter().zip(px) {
+        assert!((reload::srgb(*want) - got).abs() < 1.5 / 255.0, "{colour:?} vs {px:?}");
+    }
+}
+
+#[test]
+fn a_uniform_of_the_wrong_size_is_refused_before_it_reaches_the_gpu() {
+    let p = Project::copy_of_repo("serve-uniform-size");
+    let s = Server::start(&p.root, &["--render", "on-change"]);
+    s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
+    let before = s.capture_f32(reload::FINAL).unwrap();
+    let mut d = Driver::new(&p, &s);
+
+    // The shader asks for a 32-byte uniform where the renderer binds 16.
+    // It parses and validates; the layout's declared size refuses it.
+    const PATTERN: &str = "shaders/passes/test_pattern.wgsl";
+    let good = p.read(PATTERN);
+    let bigger = good.replace("    frame: u32,\n}", "    frame: u32,\n    extra: vec4<f32>,\n}");
+    assert_ne!(bigger, good);
+    let o = d.save(PATTERN, &bigger).expect("the reload finished");
+    assert!(!o.succeeded, "refused at pipeline creation");
+    let api = s.get_json("/api/diagnostics");
+    let line = bigger.lines().position(|l| l.contains("var<uniform> frame")).unwrap() + 1;
+    let mismatch = api["diagnostics"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|d| d["code"] == "binding-mismatch")
+        .unwrap_or_else(|| panic!("no binding-mismatch: {api}"));
+    assert_eq!(mismatch["location"]["file"], PATTERN, "{mismatch}");
+    assert_eq!(mismatch["location"]["line"].as_u64(), Some(line as u64), "{mismatch}");
+    assert!(mismatch.to_string().contains("32 bytes"), "{mismatch}");
+    // The last good pipeline keeps rendering: no GPU error, the frame's
+    // pixels are the old ones.
+    let passes = s.get_json("/api/passes");
+    let tp = passes.as_array().unwrap().iter().find(|p| p["name"] == "test_pattern").unwrap();
+    assert_eq!(tp["status"], "stale", "{tp}");
+    let now = s.capture_f32(reload::FINAL).unwrap();
+    assert_eq!(now.pixel(now.width - 1, now.height / 2), before.pixel(before.width - 1, before.height / 2));
+    assert!(!api.to_string().contains("\"gpu\""), "{api}");
+
+    // Fixed: the diagnostic goes and the pass is ok again.
+    let o = d.save(PATTERN, &good).expect("the reload finished");
+    assert!(o.succeeded);
+    s.wait_for("the diagnostic to clear", LIMIT, || s.get_json("/api/diagnostics")["diagnostics"].as_array()?.is_empty().then_some(()));
+}
+
+fn generation(s: &Server, name: &str) -> u64 {
+    let pipelines = s.get_json("/api/pipelines");
+    pipelines.as_array().unwrap().iter().find(|p| p["name"] == name).and_then(|p| p["generation"].as_u64()).unwrap()
+}
+
+#[test]
+fn a_lost_device_is_recreated_from_the_last_good_sources() {
+    let p = Project::copy_of_repo("serve-device-loss");
+    let s = Server::start(&p.root, &["--render", "continuous", "--fps", "10", "--debug-api"]);
+    s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
+    let good_pixels = s.capture_f32(reload::FINAL).unwrap();
+    let mut d = Driver::new(&p, &s);
+    let generation_before = generation(&s, "post.tonemap");
+
+    // Break the shader: stale, the last good pipeline renders.
+    let good = p.read(reload::TONEMAP);
+    let o = d.save(reload::TONEMAP, &reload::broken(&good)).expect("the reload finished");
+    assert!(!o.succeeded);
+    assert_eq!(pass_status(&s, "tonemap").as_deref(), Some("stale"));
+
+    // Lose the device for real.
+    let (code, body) = s.post("/api/debug/lose-device");
+    assert_eq!(code, 202, "{}", String::from_utf8_lossy(&body));
+    let lost = d.ws.event("device_lost", LIMIT, |_| true);
+    assert_eq!(lost["recovered"], true, "{lost}");
+    let st = s.get_json("/api/status");
+    assert_eq!(st["device_resets"], 1);
+    let lost_at = st["frame"].as_u64().unwrap();
+
+    // Rebuilt from the last good module, not from the broken file on disk:
+    // still stale (not failed), same generation, and frames keep coming
+    // with the same real pixels.
+    assert_eq!(pass_status(&s, "tonemap").as_deref(), Some("stale"));
+    assert_eq!(generation(&s, "post.tonemap"), generation_before);
+    let frame = d.ws.event("frame", LIMIT, |v| v["frame"].as_u64() > Some(lost_at + 1));
+    let after = s.wait_for("a capture after the loss", LIMIT, || s.capture_f32(reload::FINAL).filter(|c| c.frame > lost_at));
+    assert!(frame["frame"].as_u64().unwrap() > lost_at);
+    assert_eq!(after.data, good_pixels.data, "the recovered device renders the last good image");
+    assert_eq!(after.pixel(after.width / 2, after.height / 2)[3], 1.0);
+
+    // Fixing the file still swaps in.
+    let colour = reload::colour(3);
+    let o = d.save(reload::TONEMAP, &reload::constant_colour(&good, colour)).expect("the reload finished");
+    assert!(o.succeeded);
+    assert_eq!(pass_status(&s, "tonemap").as_deref(), Some("ok"));
+    assert_eq!(generation(&s, "post.tonemap"), generation_before + 1);
+    let shown = s.wait_for("the fixed frame", LIMIT, || s.capture_f32(reload::FINAL).filter(|c| c.frame >= o.frame.unwrap()));
+    assert!((shown.pixel(0, 0)[0] - reload::srgb(colour[0])).abs() < 1.5 / 255.0);
+    assert_eq!(s.get_json("/api/status")["device_resets"], 1);
+}
+
+/// A short version of `bench-reload soak`: every save produces its event,
+/// memory stays bounded, the final frame matches the final file.
+#[test]
+fn soak_edit_break_fix_cycles() {
+    const CYCLES: usize = 25;
+    const RSS_BOUND_MIB: u64 = 384;
+    let p = Project::copy_of_repo("serve-soak");
+    let s = Server::start(&p.root, &["--render", "on-change"]);
+    let mut d = Driver::new(&p, &s);
+    let r = reload::soak(&s, &mut d, CYCLES, 5, |_| {});
+    assert!(r.lost.is_empty(), "lost: {:?}\n{}", r.lost, s.log());
+    assert_eq!(r.outcomes, 3 * CYCLES);
+    assert_eq!(r.dropped_events, 0);
+    assert!(r.final_matches(), "final colour {:?} (sRGB-encoded), pixel {:?}", r.final_colour.map(reload::srgb), r.final_pixel);
+    assert!(r.rss_max_kib() <= RSS_BOUND_MIB * 1024, "VmRSS {:?} KiB over {RSS_BOUND_MIB} MiB", r.rss);
 }

@@ -1,6 +1,11 @@
 //! Harness for end-to-end tests of the built `loupe` binary: runs it as a
 //! user would and, on any failed expectation, prints the command line, exit
-//! code, stdout and stderr.
+//! code, stdout and stderr. `ws` is a blocking WebSocket client for `/ws`;
+//! `reload` drives edits and measures them (shared by the e2e tests and the
+//! `bench-reload` benchmark).
+
+pub mod reload;
+pub mod ws;
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -164,8 +169,24 @@ impl Server {
     /// Starts `loupe serve --port 0 ...extra` in `dir` and waits for the
     /// `listening on http://ADDR` line.
     pub fn start(dir: &Path, extra: &[&str]) -> Server {
-        let mut child = Command::new(loupe_bin())
-            .args(["serve", "--port", "0"])
+        Self::start_on(dir, 0, extra)
+    }
+
+    /// Starts `loupe serve --port PORT ...extra` (0 picks a free port).
+    pub fn start_on(dir: &Path, port: u16, extra: &[&str]) -> Server {
+        Self::start_with(&loupe_bin(), dir, port, extra)
+    }
+
+    /// Starts `BIN serve --port PORT ...extra` in `dir`.
+    pub fn start_with(bin: &Path, dir: &Path, port: u16, extra: &[&str]) -> Server {
+        // Run in `dir`: a relative binary path is relative to here.
+        let bin = std::path::absolute(bin).expect("an absolute path");
+        // The daemon's tests want frames quickly on lavapipe: unless a test
+        // names a scene, serve the test pattern, the lightest scene.
+        let scene: &[&str] = if extra.contains(&"--scene") { &[] } else { &["--scene", "scenes/pattern.toml"] };
+        let mut child = Command::new(bin)
+            .args(["serve", "--port", &port.to_string()])
+            .args(scene)
             .args(extra)
             .current_dir(dir)
             .stdout(Stdio::piped())
@@ -205,17 +226,68 @@ impl Server {
         format!("http://{}{}", self.addr, path)
     }
 
+    pub fn port(&self) -> u16 {
+        self.addr.rsplit(':').next().and_then(|p| p.parse().ok()).expect("ADDR ends in :PORT")
+    }
+
+    /// The server process's resident memory, from /proc/PID/status (VmRSS).
+    pub fn rss_kib(&self) -> u64 {
+        let status = std::fs::read_to_string(format!("/proc/{}/status", self.child.id())).expect("/proc/PID/status");
+        status
+            .lines()
+            .find_map(|l| l.strip_prefix("VmRSS:"))
+            .and_then(|v| v.split_whitespace().next())
+            .and_then(|v| v.parse().ok())
+            .expect("VmRSS in /proc/PID/status")
+    }
+
+    /// Stops the server the hard way (as a crash or `kill -9` would) and
+    /// waits for it to be gone.
+    pub fn kill(mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+
+    /// A WebSocket connection to `/ws`.
+    pub fn ws(&self) -> ws::Ws {
+        ws::Ws::connect(&self.addr).unwrap_or_else(|e| panic!("cannot connect to /ws: {e}\n{}", self.log()))
+    }
+
+    /// POST a path with an empty body; returns status and body.
+    pub fn post(&self, path: &str) -> (u16, Vec<u8>) {
+        self.answer(&format!("POST {path}"), agent().post(&self.url(path)).send_empty())
+    }
+
+    /// Status and body of a request's reply; panics, with the server's
+    /// log, when there was none.
+    fn answer(&self, what: &str, reply: Result<ureq::http::Response<ureq::Body>, ureq::Error>) -> (u16, Vec<u8>) {
+        let mut resp = reply.unwrap_or_else(|e| panic!("{what}: {e}\n{}", self.log()));
+        let status = resp.status().as_u16();
+        let body = resp.body_mut().read_to_vec().expect("body");
+        (status, body)
+    }
+
+    /// The capture `pass/output` as exact RGBA f32 values, with its frame
+    /// number; `None` while there is none.
+    pub fn capture_f32(&self, key: &str) -> Option<Capture> {
+        let mut resp = agent().get(&self.url(&format!("/api/captures/{key}.f32"))).call().ok()?;
+        if resp.status() != 200 {
+            return None;
+        }
+        let num = |name: &str| resp.headers().get(name)?.to_str().ok()?.parse::<u64>().ok();
+        let (frame, width, height) = (num("x-loupe-frame")?, num("x-loupe-width")? as u32, num("x-loupe-height")? as u32);
+        let body = resp.body_mut().with_config().limit(1 << 30).read_to_vec().ok()?;
+        let data = body.chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().expect("4 bytes"))).collect();
+        Some(Capture { frame, width, height, data })
+    }
+
     pub fn log(&self) -> String {
         self.log.lock().expect("log").clone()
     }
 
     /// GET a path; returns status and body.
     pub fn get(&self, path: &str) -> (u16, Vec<u8>) {
-        let agent = ureq::Agent::config_builder().http_status_as_error(false).build().new_agent();
-        let mut resp = agent.get(&self.url(path)).call().unwrap_or_else(|e| panic!("GET {path}: {e}\n{}", self.log()));
-        let status = resp.status().as_u16();
-        let body = resp.body_mut().read_to_vec().expect("body");
-        (status, body)
+        self.answer(&format!("GET {path}"), agent().get(&self.url(path)).call())
     }
 
     pub fn get_json(&self, path: &str) -> serde_json::Value {
@@ -236,6 +308,27 @@ impl Server {
             }
             std::thread::sleep(Duration::from_millis(50));
         }
+    }
+}
+
+/// An HTTP client that returns error statuses as replies.
+fn agent() -> ureq::Agent {
+    ureq::Agent::config_builder().http_status_as_error(false).build().new_agent()
+}
+
+/// A capture read back as f32 RGBA.
+#[derive(Debug, Clone)]
+pub struct Capture {
+    pub frame: u64,
+    pub width: u32,
+    pub height: u32,
+    pub data: Vec<f32>,
+}
+
+impl Capture {
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
+        let i = ((y * self.width + x) * 4) as usize;
+        [self.data[i], self.data[i + 1], self.data[i + 2], self.data[i + 3]]
     }
 }
 

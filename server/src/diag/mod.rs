@@ -100,6 +100,8 @@ pub enum Code {
     Scene,
     #[serde(rename = "unused-module")]
     UnusedModule,
+    #[serde(rename = "gpu")]
+    Gpu,
 }
 
 impl Code {
@@ -121,6 +123,7 @@ impl Code {
             Code::DeviceMissing => "device-missing",
             Code::Scene => "scene",
             Code::UnusedModule => "unused-module",
+            Code::Gpu => "gpu",
         }
     }
 
@@ -143,10 +146,11 @@ impl Code {
             Code::DeviceMissing => "a GPU device was required and none exists",
             Code::Scene => "the scene file is invalid",
             Code::UnusedModule => "a file has no entry point and no #define_import_path: nothing can use it",
+            Code::Gpu => "the GPU rejected commands while a frame was recorded or submitted (an error no error scope caught)",
         }
     }
 
-    pub const ALL: [Code; 16] = [
+    pub const ALL: [Code; 17] = [
         Code::Io,
         Code::Encoding,
         Code::EmptyFile,
@@ -163,6 +167,7 @@ impl Code {
         Code::DeviceMissing,
         Code::Scene,
         Code::UnusedModule,
+        Code::Gpu,
     ];
 }
 

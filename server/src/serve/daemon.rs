@@ -12,11 +12,11 @@ use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender};
 use std::time::{Duration, Instant};
 
 use super::event::{CompileResult, Event, FileBatch, FileChange};
-use super::shared::{self, FramePng, Shared};
-use crate::diag::{Diagnostic, Severity};
+use super::shared::{self, FrameImages, Shared};
+use crate::diag::{Code, Diagnostic, Location, Severity};
 use crate::gpu::{self, Gpu, pipeline};
-use crate::protocol::{self, ClientMessage, PassInfo, PassStatus, PassTiming, ReloadTimings, ServerEvent, Status};
-use crate::render::{self, frame, graph::PipelineKey, pipelines::{Installed, PipelineCache}, scene_gpu::SceneGpu};
+use crate::protocol::{self, PassInfo, PassStatus, PassTiming, ReloadTimings, ServerEvent, Status};
+use crate::render::{self, frame, graph::{Graph, PipelineKey}, pipelines::{Installed, PipelineCache}, scene_gpu::SceneGpu};
 use crate::scene::{self, Scene};
 use crate::shader::{Compose, Library, NagaOil, SourceFile, library};
 
@@ -40,10 +40,35 @@ struct Reload {
     pipelines: Vec<String>,
     pending: BTreeSet<PipelineKey>,
     diagnostics: Vec<Diagnostic>,
-    first_event: Instant,
     watch_ms: f64,
     compose_ms: f64,
     pipeline_ms: f64,
+    /// Some of its pipelines are swapped in, others still compiling: a
+    /// frame now would mix old and new.
+    swapped_any: bool,
+}
+
+/// A reload whose pipelines all swapped in, waiting for the first frame
+/// that uses them: `reload_succeeded` is sent once that frame is rendered,
+/// with its render time.
+struct Succeeded {
+    id: u64,
+    files: Vec<String>,
+    pipelines: Vec<String>,
+    timings: ReloadTimings,
+}
+
+/// A submitted frame on its way back.
+struct InFlight {
+    pending: frame::PendingFrame,
+    /// The reloads this frame is the first to show.
+    reloads: Vec<Succeeded>,
+    started: Instant,
+    /// `pass/output` of the final output.
+    final_key: Option<String>,
+    /// No uncaptured wgpu error while recording or submitting it: its
+    /// images are real and may be published.
+    clean: bool,
 }
 
 pub struct Daemon {
@@ -61,6 +86,9 @@ pub struct Daemon {
     /// Kept to rebuild `scene_gpu` on a new device.
     meshes: BTreeMap<String, Arc<crate::mesh::MeshData>>,
     scene_error: Option<Diagnostic>,
+    /// The graph of the newest frame (rebuilt once per frame and when the
+    /// scene changes); everything else reads this one.
+    graph: Graph,
     cache: PipelineCache,
     pool: frame::TexturePool,
     frame: u64,
@@ -70,11 +98,27 @@ pub struct Daemon {
     next_reload: u64,
     reloads: BTreeMap<u64, Reload>,
     /// Reloads finished since the last frame, to tag that frame with.
-    finished_reloads: Vec<(u64, ReloadTimings)>,
-    in_flight: VecDeque<(frame::PendingFrame, Vec<(u64, ReloadTimings)>)>,
+    finished_reloads: Vec<Succeeded>,
+    in_flight: VecDeque<InFlight>,
     dirty: bool,
-    subscriptions: BTreeSet<String>,
+    /// What each WebSocket client wants captured, by client id.
+    subscriptions: BTreeMap<u64, BTreeSet<String>>,
+    /// Pipelines swapped in since the last frame was submitted.
+    swapped_since_frame: BTreeSet<PipelineKey>,
+    /// Uncaptured wgpu errors of the newest frame, as diagnostics.
+    gpu_errors: Vec<Diagnostic>,
+    /// Where each uncaptured error (by message) was first attributed, so a
+    /// persisting error keeps its file.
+    gpu_error_files: BTreeMap<String, Vec<String>>,
+    /// The pass list last announced in a `passes` event, without times.
+    announced_passes: Option<Vec<PassInfo>>,
+    /// The newest frame's per-pass times and how they were measured.
+    last_timings: Vec<(String, f64)>,
+    last_timing: String,
     device_resets: u32,
+    /// The debug API asked for the device to be destroyed; its loss is on
+    /// its way.
+    destroy_requested: bool,
     last_frame: Instant,
 }
 
@@ -99,6 +143,8 @@ impl Daemon {
             .thread_name(|i| format!("loupe-compile-{i}"))
             .build()
             .expect("compile worker threads");
+        let graph = Self::graph_for(&loaded.scene, 0);
+        let timing = if gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) { "gpu" } else { "cpu" };
         Daemon {
             gpu,
             config,
@@ -109,6 +155,7 @@ impl Daemon {
             meshes: loaded.meshes,
             scene_gpu,
             scene_error,
+            graph,
             cache: PipelineCache::default(),
             pool: Default::default(),
             frame: 0,
@@ -120,24 +167,46 @@ impl Daemon {
             finished_reloads: Vec::new(),
             in_flight: VecDeque::new(),
             dirty: true,
-            subscriptions: BTreeSet::new(),
+            subscriptions: BTreeMap::new(),
+            swapped_since_frame: BTreeSet::new(),
+            gpu_errors: Vec::new(),
+            gpu_error_files: BTreeMap::new(),
+            announced_passes: None,
+            last_timings: Vec::new(),
+            last_timing: timing.to_owned(),
             device_resets: 0,
+            destroy_requested: false,
             last_frame: Instant::now(),
         }
+    }
+
+    /// The one place the render graph is built.
+    fn graph_for(scene: &Scene, frame: u64) -> Graph {
+        render::build_graph(scene, frame)
+    }
+
+    /// The one place a frame is recorded and submitted: `self.graph`,
+    /// capturing the outputs named in `capture`.
+    fn submit(&mut self, capture: &BTreeSet<String>) -> frame::PendingFrame {
+        let live = self.cache.live();
+        let g = &self.gpu;
+        frame::submit(&g.device, &g.queue, g.features, &self.scene_gpu, &self.graph, &mut self.pool, &live, Some(capture), self.frame)
     }
 
     /// Runs until `Shutdown` or until every sender is gone.
     pub fn run(mut self, rx: Receiver<Event>) {
         self.install_lost_callback();
         let keys = self.graph_pipelines();
-        self.start_reload(keys, Vec::new(), Instant::now(), 0.0);
+        self.start_reload(keys, Vec::new(), 0.0);
         self.publish_state();
         let interval = Duration::from_secs_f64(1.0 / self.config.max_fps.max(0.1));
         loop {
+            // Frames on their way back are polled for; otherwise only an
+            // event (or the next frame falling due) changes anything.
             let wait = if !self.in_flight.is_empty() {
                 Duration::from_millis(2)
-            } else if self.config.mode == RenderMode::Continuous || self.dirty {
-                interval.saturating_sub(self.last_frame.elapsed())
+            } else if self.wants_frame() && self.can_render() {
+                self.until_due(interval)
             } else {
                 Duration::from_millis(250)
             };
@@ -149,35 +218,57 @@ impl Daemon {
             }
             let _ = self.gpu.device.poll(wgpu::PollType::Poll);
             self.collect_frames();
-            let due = self.last_frame.elapsed() >= interval;
-            let wanted = self.config.mode == RenderMode::Continuous || self.dirty;
-            if due && wanted && self.in_flight.len() < 2 && self.reloads.is_empty() {
+            if self.wants_frame() && self.until_due(interval).is_zero() && self.can_render() {
                 self.render();
             }
         }
+    }
+
+    fn wants_frame(&self) -> bool {
+        self.config.mode == RenderMode::Continuous || self.dirty || !self.finished_reloads.is_empty()
+    }
+
+    /// How long until the next frame is due: at once when a reload is
+    /// waiting to be shown (the frame-rate cap does not delay a swap).
+    fn until_due(&self, interval: Duration) -> Duration {
+        if self.finished_reloads.is_empty() { interval.saturating_sub(self.last_frame.elapsed()) } else { Duration::ZERO }
+    }
+
+    /// Frames render while shaders compile, except when that would show a
+    /// half-applied reload (some of its pipelines swapped, others not yet)
+    /// or a pass whose first pipeline is still compiling.
+    fn can_render(&self) -> bool {
+        let half_applied = self.reloads.values().any(|r| {
+            r.swapped_any || r.pending.iter().any(|k| self.cache.entries.get(k).is_none_or(|e| e.current.is_none()))
+        });
+        self.in_flight.len() < 2 && !half_applied && !self.destroy_requested
     }
 
     fn handle(&mut self, ev: Event) {
         match ev {
             Event::FilesChanged(batch) => self.files_changed(batch),
             Event::CompileFinished(r) => self.compile_finished(r),
-            Event::Client(msg) => self.client(msg),
-            Event::Tick => self.dirty = true,
-            Event::DeviceLost(reason) => self.recover_device(reason),
-            Event::Shutdown => {}
-        }
-    }
-
-    fn client(&mut self, msg: ClientMessage) {
-        match msg {
-            ClientMessage::Subscribe { pass, output } => {
-                self.subscriptions.insert(format!("{pass}/{output}"));
-                self.dirty = true;
-            }
-            ClientMessage::Rebuild {} => {
+            Event::Rebuild => {
                 let keys = self.cache.entries.keys().cloned().chain(self.graph_pipelines()).collect();
-                self.start_reload(keys, Vec::new(), Instant::now(), 0.0);
+                self.start_reload(keys, Vec::new(), 0.0);
             }
+            Event::Subscriptions { client, outputs } => {
+                let before = self.subscriptions.remove(&client).unwrap_or_default();
+                // A new output needs a frame that captures it.
+                self.dirty |= !outputs.is_subset(&before);
+                if !outputs.is_empty() {
+                    self.subscriptions.insert(client, outputs);
+                }
+            }
+            Event::Tick => self.dirty = true,
+            Event::DeviceLost { device, reason, message } => self.device_lost(device, reason, message),
+            Event::LoseDevice => {
+                log::warn!("destroying the device on request (debug API)");
+                self.destroy_requested = true;
+                self.gpu.device.destroy();
+                let _ = self.gpu.device.poll(wgpu::PollType::Poll);
+            }
+            Event::Shutdown => {}
         }
     }
 
@@ -186,7 +277,7 @@ impl Daemon {
     }
 
     fn graph_pipelines(&self) -> BTreeSet<PipelineKey> {
-        render::build_graph(&self.scene, self.frame).pipelines()
+        self.graph.pipelines()
     }
 
     fn files_changed(&mut self, batch: FileBatch) {
@@ -242,7 +333,7 @@ impl Daemon {
             .map(|(k, _)| k.clone())
             .collect();
         keys.extend(self.graph_pipelines().into_iter().filter(|k| !self.cache.entries.contains_key(k)));
-        self.start_reload(keys, touched.into_iter().collect(), batch.first_event, watch_ms);
+        self.start_reload(keys, touched.into_iter().collect(), watch_ms);
     }
 
     fn reload_scene(&mut self) {
@@ -253,6 +344,7 @@ impl Daemon {
                 self.scene_files = l.files;
                 self.meshes = l.meshes;
                 self.scene_error = None;
+                self.graph = Self::graph_for(&self.scene, self.frame);
             }
             // The last good scene keeps rendering.
             Err(d) => self.scene_error = Some(d),
@@ -260,7 +352,7 @@ impl Daemon {
         self.dirty = true;
     }
 
-    fn start_reload(&mut self, keys: BTreeSet<PipelineKey>, files: Vec<String>, first_event: Instant, watch_ms: f64) {
+    fn start_reload(&mut self, keys: BTreeSet<PipelineKey>, files: Vec<String>, watch_ms: f64) {
         let id = self.next_reload;
         self.next_reload += 1;
         let pipelines: Vec<String> = keys.iter().map(PipelineKey::label).collect();
@@ -270,10 +362,10 @@ impl Daemon {
             pipelines,
             pending: keys.clone(),
             diagnostics: Vec::new(),
-            first_event,
             watch_ms,
             compose_ms: 0.0,
             pipeline_ms: 0.0,
+            swapped_any: false,
         };
         self.reloads.insert(id, reload);
         for key in keys {
@@ -309,11 +401,16 @@ impl Daemon {
         // Creation under an error scope; wgpu errors keep the old pipeline.
         let installed = self.cache.install(&self.gpu.device, &key, r.result, &self.lib, &display);
         let pipeline_ms = start.elapsed().as_secs_f64() * 1e3;
+        if installed == Installed::Swapped {
+            self.swapped_since_frame.insert(key.clone());
+        }
         if let Some(reload) = self.reloads.get_mut(&r.reload) {
             reload.pending.remove(&key);
             reload.compose_ms = reload.compose_ms.max(r.compose_ms);
             reload.pipeline_ms += pipeline_ms;
-            if installed != Installed::Swapped {
+            if installed == Installed::Swapped {
+                reload.swapped_any = true;
+            } else {
                 reload.diagnostics.extend(self.cache.entries[&key].diagnostics.iter().cloned());
             }
         }
@@ -328,13 +425,12 @@ impl Daemon {
         r.diagnostics.extend(self.file_errors.values().filter(|d| d.file().is_some_and(|f| r.files.iter().any(|x| x == f))).cloned());
         r.diagnostics.extend(self.scene_error.iter().cloned());
         if r.diagnostics.is_empty() {
+            // Announced with the first frame that shows it (`publish_frame`).
             let timings = ReloadTimings { watch_ms: r.watch_ms, compose_ms: r.compose_ms, pipeline_ms: r.pipeline_ms, render_ms: 0.0 };
-            self.finished_reloads.push((id, timings));
-            self.shared.publish(ServerEvent::ReloadSucceeded { id, files: r.files, pipelines: r.pipelines, timings });
+            self.finished_reloads.push(Succeeded { id, files: r.files, pipelines: r.pipelines, timings });
         } else {
             self.shared.publish(ServerEvent::ReloadFailed { id, files: r.files, pipelines: r.pipelines, diagnostics: r.diagnostics });
         }
-        let _ = r.first_event;
         self.dirty = true;
         self.publish_state();
     }
@@ -343,65 +439,137 @@ impl Daemon {
         self.frame += 1;
         self.last_frame = Instant::now();
         self.dirty = false;
-        self.pool_for_graph();
-        let graph = render::build_graph(&self.scene, self.frame);
-        let mut capture: BTreeSet<String> = self.subscriptions.clone();
-        if let Some(h) = graph.final_output() {
-            capture.insert(frame::capture_name(&graph, h));
-        }
-        let live = self.cache.live();
-        let pending = frame::submit(&self.gpu.device, &self.gpu.queue, self.gpu.features, &self.scene_gpu, &graph, &mut self.pool, &live, Some(&capture), self.frame);
-        self.in_flight.push_back((pending, std::mem::take(&mut self.finished_reloads)));
-        // Errors no scope caught (invalid frame commands) must not vanish:
-        // such a frame renders nothing.
+        self.graph = Self::graph_for(&self.scene, self.frame);
+        self.pool.retain(&self.graph);
+        let final_key = self.graph.final_output().map(|h| frame::capture_name(&self.graph, h));
+        let mut capture: BTreeSet<String> = self.subscriptions.values().flatten().cloned().collect();
+        capture.extend(final_key.clone());
+        let started = Instant::now();
+        let pending = self.submit(&capture);
+        // wgpu reports invalid frame commands on this thread, while the
+        // frame is recorded and submitted: they belong to this frame.
         let errors: Vec<String> = std::mem::take(&mut *self.gpu.uncaptured.lock().unwrap_or_else(|e| e.into_inner()));
-        for e in errors {
-            log::error!("frame {}: {e}", self.frame);
+        let clean = errors.is_empty();
+        let swapped = std::mem::take(&mut self.swapped_since_frame);
+        self.set_gpu_errors(&errors, &swapped);
+        let reloads = std::mem::take(&mut self.finished_reloads);
+        self.in_flight.push_back(InFlight { pending, reloads, started, final_key, clean });
+    }
+
+    /// Turns the uncaptured wgpu errors of the newest frame into
+    /// diagnostics, located at the shader of the pass or pipeline involved
+    /// when that can be known: a resource label naming one, or — for an
+    /// error that first appeared in the frame right after some pipelines
+    /// were swapped in — the file of the one pipeline swapped. Otherwise
+    /// the diagnostic has no file.
+    fn set_gpu_errors(&mut self, errors: &[String], swapped: &BTreeSet<PipelineKey>) {
+        let mut diagnostics: Vec<Diagnostic> = Vec::new();
+        let mut files_by_message = BTreeMap::new();
+        for text in errors {
+            let message = text.lines().map(str::trim).rfind(|l| !l.is_empty()).unwrap_or("wgpu error").to_owned();
+            if files_by_message.contains_key(&message) {
+                continue; // the same error, reported again at submit
+            }
+            let files = self
+                .gpu_error_files
+                .get(&message)
+                .cloned()
+                .or_else(|| self.files_named_in(text))
+                .or_else(|| {
+                    let files: BTreeSet<String> = swapped.iter().filter_map(|k| pipeline::spec(k.spec)).map(|s| self.shader_display(s)).collect();
+                    (self.gpu_errors.is_empty() && !files.is_empty()).then(|| files.into_iter().collect())
+                })
+                .unwrap_or_default();
+            let mut d = Diagnostic::error(Code::Gpu, format!("the GPU rejected frame commands: {message}"))
+                .with_note(format!("wgpu reported, with no error scope to catch it:\n{}", text.trim_end()))
+                .with_note("the frame's images were not published: the previous image stays");
+            match files.as_slice() {
+                [one] => d = d.at(Location::file_start(one)),
+                [] => {}
+                many => d = d.with_note(format!("it began when these were swapped in: {}", many.join(", "))),
+            }
+            files_by_message.insert(message, files);
+            diagnostics.push(d);
+        }
+        self.gpu_error_files = files_by_message;
+        if diagnostics != self.gpu_errors {
+            for d in &diagnostics {
+                log::error!("frame {}: {d}", self.frame);
+            }
+            self.gpu_errors = diagnostics;
+            self.publish_state();
         }
     }
 
-    fn pool_for_graph(&mut self) {
-        let graph = render::build_graph(&self.scene, self.frame);
-        self.pool.retain(&graph);
+    /// Shader files of the passes and pipelines an error's labels
+    /// (`label = 'name'`) name, if any.
+    fn files_named_in(&self, text: &str) -> Option<Vec<String>> {
+        let mut files = BTreeSet::new();
+        for label in text.split("label = '").skip(1).filter_map(|rest| rest.split('\'').next()) {
+            let specs: Vec<&pipeline::PipelineSpec> = match self.graph.passes.iter().find(|p| p.name == label) {
+                Some(pass) => pass.pipelines.iter().filter_map(|k| pipeline::spec(k.spec)).collect(),
+                None => pipeline::spec(label).into_iter().collect(),
+            };
+            files.extend(specs.into_iter().map(|s| self.shader_display(s)));
+        }
+        (!files.is_empty()).then(|| files.into_iter().collect())
     }
 
     fn collect_frames(&mut self) {
-        while self.in_flight.front().is_some_and(|(p, _)| p.ready()) {
-            let (pending, reloads) = self.in_flight.pop_front().expect("checked");
-            let result = pending.finish();
-            self.publish_frame(result, reloads);
+        while self.in_flight.front().is_some_and(|f| f.pending.ready()) {
+            let done = self.in_flight.pop_front().expect("checked");
+            self.publish_frame(done);
         }
     }
 
-    fn publish_frame(&mut self, result: frame::FrameResult, reloads: Vec<(u64, ReloadTimings)>) {
+    fn publish_frame(&mut self, done: InFlight) {
+        let InFlight { pending, reloads, started, final_key, clean } = done;
+        let result = pending.finish();
+        let render_ms = started.elapsed().as_secs_f64() * 1e3;
         let total: f64 = result.timings.iter().map(|(_, t)| t).sum();
-        let graph = render::build_graph(&self.scene, self.frame);
-        let final_name = graph.final_output().map(|h| frame::capture_name(&graph, h));
-        let mut captures = (*shared::read(&self.shared.captures)).clone();
-        if !reloads.is_empty() {
-            // The frame before a swap is what A/B compares against.
-            shared::write(&self.shared.last_good, Arc::new(captures.clone()));
-        }
-        for c in result.captures {
-            let c = Arc::new(c);
-            if Some(c.key()) == final_name {
-                let png = c.to_png();
-                let _ = self.shared.frame_png.send(Some(Arc::new(FramePng { frame: result.frame, width: c.width, height: c.height, png })));
+        let mut images = None;
+        if clean {
+            let mut captures = (*shared::read(&self.shared.captures)).clone();
+            if !reloads.is_empty() {
+                // The frame before a swap is what A/B compares against.
+                shared::write(&self.shared.last_good, Arc::new(captures.clone()));
             }
-            captures.insert(c.key(), c);
+            let this_frame: BTreeMap<String, Arc<_>> = result.captures.into_iter().map(|c| (c.key(), Arc::new(c))).collect();
+            captures.extend(this_frame.iter().map(|(k, c)| (k.clone(), c.clone())));
+            shared::write(&self.shared.captures, Arc::new(captures));
+            images = Some(FrameImages::new(result.frame, final_key, this_frame));
         }
-        shared::write(&self.shared.captures, Arc::new(captures));
-        let passes: Vec<PassTiming> = result.timings.iter().map(|(n, t)| PassTiming { name: n.clone(), time_ms: *t }).collect();
-        self.publish_passes(&result.timings, result.timing);
-        let reload = reloads.last().map(|(id, _)| *id);
-        self.shared.publish(ServerEvent::Frame { frame: result.frame, passes, total_ms: total, timing: result.timing.to_owned(), reload });
+        self.last_timings = result.timings;
+        self.last_timing = result.timing.to_owned();
+        for r in &reloads {
+            let timings = ReloadTimings { render_ms, ..r.timings };
+            self.shared.publish(ServerEvent::ReloadSucceeded { id: r.id, files: r.files.clone(), pipelines: r.pipelines.clone(), timings });
+        }
+        self.publish_passes();
+        let passes: Vec<PassTiming> = self.last_timings.iter().map(|(n, t)| PassTiming { name: n.clone(), time_ms: *t }).collect();
+        let ids: Vec<u64> = reloads.iter().map(|r| r.id).collect();
+        self.shared.publish(ServerEvent::Frame {
+            frame: result.frame,
+            passes,
+            total_ms: total,
+            timing: result.timing.to_owned(),
+            reload: ids.last().copied(),
+            reloads: ids,
+        });
         let mut status = shared::read(&self.shared.status);
         status.frame = result.frame;
         shared::write(&self.shared.status, status);
+        // Images last: encoding and sending them takes a client a while,
+        // and the events say what they show.
+        if let Some(images) = images {
+            self.shared.frames.send_replace(Some(Arc::new(images)));
+        }
     }
 
-    fn publish_passes(&self, timings: &[(String, f64)], timing: &str) {
-        let graph = render::build_graph(&self.scene, self.frame);
+    /// Writes the pass list snapshot (with the newest times) and announces
+    /// it in a `passes` event only when something but the times changed.
+    fn publish_passes(&mut self) {
+        let graph = &self.graph;
         let mut passes: Vec<PassInfo> = graph
             .passes
             .iter()
@@ -423,8 +591,8 @@ impl Daemon {
                         let t = graph.texture(*h);
                         protocol::OutputInfo { name: t.name.rsplit('/').next().unwrap_or("").to_owned(), format: format!("{:?}", t.format), width: t.width, height: t.height }
                     }).collect(),
-                    time_ms: timings.iter().find(|(n, _)| *n == p.name).map(|(_, t)| *t),
-                    timing: timing.to_owned(),
+                    time_ms: self.last_timings.iter().find(|(n, _)| *n == p.name).map(|(_, t)| *t),
+                    timing: self.last_timing.clone(),
                     diagnostics: entries.iter().map(|e| e.diagnostics.len()).sum(),
                 }
             })
@@ -437,16 +605,20 @@ impl Daemon {
             reads: Vec::new(),
             writes: Vec::new(),
             time_ms: None,
-            timing: timing.to_owned(),
+            timing: self.last_timing.clone(),
             diagnostics: 0,
         }));
         shared::write(&self.shared.passes, passes.clone());
-        self.shared.publish(ServerEvent::Passes { passes });
+        let shape: Vec<PassInfo> = passes.iter().map(PassInfo::shape).collect();
+        if self.announced_passes.as_ref() != Some(&shape) {
+            self.announced_passes = Some(shape);
+            self.shared.publish(ServerEvent::Passes { passes });
+        }
     }
 
     fn diagnostics(&self) -> Vec<Diagnostic> {
         let mut all = self.cache.diagnostics();
-        for d in self.file_errors.values().chain(self.scene_error.iter()) {
+        for d in self.file_errors.values().chain(self.scene_error.iter()).chain(self.gpu_errors.iter()) {
             if !all.iter().any(|x| x.to_string() == d.to_string()) {
                 all.push(d.clone());
             }
@@ -454,7 +626,7 @@ impl Daemon {
         all
     }
 
-    fn publish_state(&self) {
+    fn publish_state(&mut self) {
         let diagnostics = self.diagnostics();
         let infos = self.cache.info();
         let count = |s: PassStatus| infos.iter().filter(|i| i.status == s).count();
@@ -466,7 +638,7 @@ impl Daemon {
             features: format!("{:?}", self.gpu.features).split(" | ").map(str::to_owned).collect(),
             degraded: self.gpu.degraded.clone(),
             scene: library::display_path(&self.config.scene_path),
-            frame: self.frame,
+            frame: shared::read(&self.shared.status).frame,
             pipelines_ok: count(PassStatus::Ok),
             pipelines_stale: count(PassStatus::Stale),
             pipelines_failed: count(PassStatus::Failed),
@@ -482,16 +654,31 @@ impl Daemon {
         shared::write(&self.shared.pipelines, infos);
         shared::write(&self.shared.diagnostics, diagnostics.clone());
         self.shared.publish(ServerEvent::Diagnostics { diagnostics });
-        self.publish_passes(&[], "gpu");
+        self.publish_passes();
     }
 
     fn install_lost_callback(&self) {
         let tx = self.events.clone();
+        let device = self.device_resets;
         self.gpu.device.set_device_lost_callback(move |reason, message| {
-            if reason != wgpu::DeviceLostReason::Destroyed || !message.is_empty() {
-                let _ = tx.send(Event::DeviceLost(format!("{reason:?}: {message}")));
-            }
+            let _ = tx.send(Event::DeviceLost { device, reason, message });
         });
+    }
+
+    fn device_lost(&mut self, device: u32, reason: wgpu::DeviceLostReason, message: String) {
+        if device != self.device_resets {
+            return; // about a device already replaced
+        }
+        let requested = std::mem::take(&mut self.destroy_requested);
+        if reason == wgpu::DeviceLostReason::Destroyed && message.is_empty() && !requested {
+            return; // destroyed by loupe itself, not lost
+        }
+        let reason = if requested && message.is_empty() {
+            "device destroyed on request (POST /api/debug/lose-device)".to_owned()
+        } else {
+            format!("{reason:?}: {message}")
+        };
+        self.recover_device(reason);
     }
 
     /// A lost device is replaced and every pipeline rebuilt from its last
@@ -504,7 +691,13 @@ impl Daemon {
                 self.device_resets += 1;
                 self.pool = Default::default();
                 self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &self.scene, &self.meshes);
-                self.in_flight.clear();
+                // Frames of the old device never come back; the reloads
+                // they were to announce go with the next frame instead.
+                let lost: Vec<Succeeded> = self.in_flight.drain(..).flat_map(|f| f.reloads).collect();
+                self.finished_reloads.splice(0..0, lost);
+                self.swapped_since_frame.clear();
+                self.gpu_errors.clear();
+                self.gpu_error_files.clear();
                 let problems = self.cache.recreate_all(&self.gpu.device, &self.lib);
                 self.install_lost_callback();
                 self.shared.publish(ServerEvent::DeviceLost { message: reason, recovered: problems.is_empty() });

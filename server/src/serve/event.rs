@@ -1,12 +1,12 @@
 //! The one closed set of things that can happen to the daemon. The render
 //! thread handles them one at a time, in arrival order.
 
+use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
 use crate::diag::Diagnostic;
-use crate::protocol::ClientMessage;
 use crate::shader::{Composed, ShaderDefs};
 
 pub enum Event {
@@ -14,12 +14,21 @@ pub enum Event {
     FilesChanged(FileBatch),
     /// A compile worker finished composing one pipeline's shader.
     CompileFinished(CompileResult),
-    /// A browser or other client asked for something.
-    Client(ClientMessage),
+    /// Rebuild every pipeline from the current sources (the WebSocket
+    /// `rebuild` message, `POST /api/reload`).
+    Rebuild,
+    /// The outputs (`pass/output`) WebSocket client `client` wants captured
+    /// every frame, replacing what it wanted before; empty when it left.
+    Subscriptions { client: u64, outputs: BTreeSet<String> },
     /// Time to render a frame (continuous mode), or a forced redraw.
     Tick,
-    /// The device was lost (driver reset, hang, destroyed).
-    DeviceLost(String),
+    /// The device was lost (driver reset, hang, destroyed). `device` is
+    /// which device it was (the daemon's count of resets when it was
+    /// opened), so a late report about a replaced device is ignored.
+    DeviceLost { device: u32, reason: wgpu::DeviceLostReason, message: String },
+    /// Debug API only (`--debug-api`): destroy the device for real, to
+    /// exercise recovery.
+    LoseDevice,
     /// Stop the daemon: the HTTP side is shutting down.
     Shutdown,
 }

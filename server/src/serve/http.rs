@@ -21,11 +21,13 @@
 //! real one), compute [`allowed_hosts`] from the bound address, then
 //! [`serve`] until the shutdown future completes.
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::future::Future;
 use std::io;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
 use axum::Router;
@@ -35,7 +37,7 @@ use axum::extract::{Path as UrlPath, Query, Request, State};
 use axum::http::{HeaderMap, HeaderValue, Method, StatusCode, Uri, header};
 use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
-use axum::routing::{get, post};
+use axum::routing::{any, get, post};
 use rust_embed::RustEmbed;
 use serde::{Deserialize, Serialize};
 use tokio::net::TcpListener;
@@ -43,8 +45,8 @@ use tokio::sync::broadcast::error::RecvError;
 use tokio::sync::watch;
 
 use super::event::Event;
-use super::shared::{FramePng, Shared, read};
-use crate::protocol::{ClientMessage, DiagnosticsReport, ServerEvent, VERSION};
+use super::shared::{FrameImages, Shared, read};
+use crate::protocol::{ClientMessage, DiagnosticsReport, Encoding, ServerEvent, VERSION};
 use crate::render::capture::{CapturedImage, ImageStats};
 
 /// The web UI, from the repository's `client/` directory (the path is
@@ -67,6 +69,8 @@ struct AppState {
     hosts: Vec<String>,
     /// Set to true when the server shuts down: WebSocket tasks close.
     stop: watch::Sender<bool>,
+    /// Ids for WebSocket clients (their subscriptions are per client).
+    next_client: AtomicU64,
 }
 
 /// Binds a TCP listener; port 0 picks a free port. Returns the listener and
@@ -127,8 +131,13 @@ fn build(shared: Arc<Shared>, allowed_hosts: Vec<String>) -> (Router, watch::Sen
         shared,
         hosts: allowed_hosts.into_iter().map(|h| h.to_ascii_lowercase()).collect(),
         stop: stop.clone(),
+        next_client: AtomicU64::new(1),
     });
-    let app = Router::new()
+    let mut app = Router::new();
+    if state.shared.debug_api {
+        app = app.route("/api/debug/lose-device", post(lose_device));
+    }
+    let app = app
         .route("/api/status", get(status))
         .route("/api/passes", get(passes))
         .route("/api/pipelines", get(pipelines))
@@ -137,8 +146,8 @@ fn build(shared: Arc<Shared>, allowed_hosts: Vec<String>) -> (Router, watch::Sen
         .route("/api/captures/{pass}/{file}", get(capture))
         .route("/api/sources/{*path}", get(source))
         .route("/api/reload", post(reload))
-        .route("/api", get(api_not_found))
-        .route("/api/{*rest}", get(api_not_found))
+        .route("/api", any(api_not_found))
+        .route("/api/{*rest}", any(api_not_found))
         .route("/ws", get(ws))
         .route("/", get(index))
         .fallback(static_file)
@@ -315,6 +324,9 @@ struct CaptureInfo<'a> {
     /// Whether `?version=last_good` has this output too (always true when
     /// the list itself is the last good set).
     last_good: bool,
+    /// Whether this is the frame's final output.
+    #[serde(rename = "final")]
+    is_final: bool,
 }
 
 async fn captures(State(st): State<Arc<AppState>>, Query(q): Query<VersionQuery>) -> Response {
@@ -323,6 +335,7 @@ async fn captures(State(st): State<Arc<AppState>>, Query(q): Query<VersionQuery>
         Err(resp) => return *resp,
     };
     let last_good = read(&st.shared.last_good);
+    let final_key = st.shared.frames.borrow().as_ref().and_then(|f| f.final_key.clone());
     let list: Vec<CaptureInfo> = set
         .iter()
         .map(|(key, img)| CaptureInfo {
@@ -334,6 +347,7 @@ async fn captures(State(st): State<Arc<AppState>>, Query(q): Query<VersionQuery>
             format: &img.format,
             stats: &img.stats,
             last_good: last_good.contains_key(key),
+            is_final: final_key.as_ref() == Some(key),
         })
         .collect();
     json(&list)
@@ -402,11 +416,22 @@ async fn capture(
     resp
 }
 
-async fn reload(State(st): State<Arc<AppState>>) -> Response {
-    match st.shared.to_daemon.send(Event::Client(ClientMessage::Rebuild {})) {
+/// Hands `event` to the daemon: 202, or 503 when it is gone.
+fn to_daemon(st: &AppState, event: Event) -> Response {
+    match st.shared.to_daemon.send(event) {
         Ok(()) => json_response(StatusCode::ACCEPTED, &serde_json::json!({ "accepted": true })),
         Err(_) => error(StatusCode::SERVICE_UNAVAILABLE, "the daemon is not running"),
     }
+}
+
+async fn reload(State(st): State<Arc<AppState>>) -> Response {
+    to_daemon(&st, Event::Rebuild)
+}
+
+/// Debug API only: the render thread destroys its device, which is then
+/// lost and recovered as if the driver had lost it.
+async fn lose_device(State(st): State<Arc<AppState>>) -> Response {
+    to_daemon(&st, Event::LoseDevice)
 }
 
 // ------------------------------------------------------------------ sources
@@ -563,53 +588,137 @@ fn event_message(event: &ServerEvent) -> Option<Message> {
     serde_json::to_string(event).ok().map(|s| Message::Text(s.into()))
 }
 
+/// The header of a binary image message.
 #[derive(Serialize)]
-struct FrameHeader {
+struct ImageHeader<'a> {
+    /// `frame`: the final output as PNG, sent to every client; `capture`:
+    /// an output this client subscribed to.
     kind: &'static str,
     frame: u64,
+    pass: &'a str,
+    output: &'a str,
     width: u32,
     height: u32,
+    format: &'a str,
+    encoding: Encoding,
     mime: &'static str,
+    #[serde(rename = "final")]
+    is_final: bool,
 }
 
-/// The binary frame message: a little-endian u32 header length N, N bytes
-/// of JSON header, then the PNG.
-fn frame_message(frame: &FramePng) -> Option<Message> {
-    let header = serde_json::to_vec(&FrameHeader {
-        kind: "frame",
+/// A binary image message: a little-endian u32 header length N, N bytes of
+/// JSON header, then the encoded image.
+fn image_message(kind: &'static str, frame: &FrameImages, key: &str, encoding: Encoding, bytes: &[u8]) -> Option<Message> {
+    let img = frame.captures.get(key)?;
+    let header = serde_json::to_vec(&ImageHeader {
+        kind,
         frame: frame.frame,
-        width: frame.width,
-        height: frame.height,
-        mime: "image/png",
+        pass: &img.pass,
+        output: &img.output,
+        width: img.width,
+        height: img.height,
+        format: &img.format,
+        encoding,
+        mime: encoding.mime(),
+        is_final: frame.final_key.as_deref() == Some(key),
     })
     .ok()?;
-    let mut out = Vec::with_capacity(4 + header.len() + frame.png.len());
+    let mut out = Vec::with_capacity(4 + header.len() + bytes.len());
     out.extend_from_slice(&u32::try_from(header.len()).ok()?.to_le_bytes());
     out.extend_from_slice(&header);
-    out.extend_from_slice(&frame.png);
+    out.extend_from_slice(bytes);
     Some(Message::Binary(out.into()))
 }
 
-/// Sends the pending `Dropped` count, if any.
-async fn flush_dropped(socket: &mut WebSocket, dropped: &mut u64) -> Result<(), axum::Error> {
-    if *dropped > 0 {
-        let count = std::mem::take(dropped);
-        if let Some(m) = event_message(&ServerEvent::Dropped { count }) {
+/// Sends one frame's images: the final output as a `frame` message, then
+/// every output this client subscribed to that the frame captured.
+/// Encoding runs off the reactor, once per frame and encoding whatever the
+/// number of clients.
+async fn send_images(socket: &mut WebSocket, frame: &Arc<FrameImages>, subscriptions: &BTreeMap<String, Encoding>) -> Result<(), axum::Error> {
+    let wanted = frame
+        .final_key
+        .iter()
+        .map(|k| ("frame", k, Encoding::Png))
+        .chain(subscriptions.iter().map(|(k, e)| ("capture", k, *e)))
+        .filter(|(_, k, _)| frame.captures.contains_key(*k));
+    for (kind, key, encoding) in wanted {
+        let (f, k) = (frame.clone(), key.clone());
+        let Ok(Some(bytes)) = tokio::task::spawn_blocking(move || f.encoded(&k, encoding)).await else { continue };
+        if let Some(m) = image_message(kind, frame, key, encoding, &bytes) {
             socket.send(m).await?;
         }
     }
     Ok(())
 }
 
+/// What a client missed and has not been told yet.
+#[derive(Default)]
+struct Missed {
+    frames: u64,
+    events: u64,
+}
+
+impl Missed {
+    /// Sends the pending `Dropped` counts, if any.
+    async fn flush(&mut self, socket: &mut WebSocket) -> Result<(), axum::Error> {
+        if self.frames + self.events > 0 {
+            let Missed { frames, events } = std::mem::take(self);
+            if let Some(m) = event_message(&ServerEvent::Dropped { frames, events }) {
+                socket.send(m).await?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Tells the daemon, however the client's task ends, that it wants
+/// nothing captured any more.
+struct Unsubscribe {
+    to_daemon: std::sync::mpsc::Sender<Event>,
+    client: u64,
+}
+
+impl Drop for Unsubscribe {
+    fn drop(&mut self) {
+        let _ = self.to_daemon.send(Event::Subscriptions { client: self.client, outputs: BTreeSet::new() });
+    }
+}
+
+/// Applies a client's message: subscriptions change this client's set
+/// (and the daemon learns the new set), `rebuild` goes to the daemon.
+fn client_message(shared: &Shared, client: u64, subscriptions: &mut BTreeMap<String, Encoding>, msg: ClientMessage) {
+    let before: BTreeSet<String> = subscriptions.keys().cloned().collect();
+    match msg {
+        ClientMessage::Subscribe { pass, output, encoding } => {
+            subscriptions.insert(format!("{pass}/{output}"), encoding);
+        }
+        ClientMessage::Unsubscribe { pass, output } => {
+            subscriptions.remove(&format!("{pass}/{output}"));
+        }
+        ClientMessage::Rebuild {} => {
+            // The daemon may be gone while the server drains; nothing to
+            // tell the client then.
+            let _ = shared.to_daemon.send(Event::Rebuild);
+        }
+    }
+    let outputs: BTreeSet<String> = subscriptions.keys().cloned().collect();
+    if outputs != before {
+        let _ = shared.to_daemon.send(Event::Subscriptions { client, outputs });
+    }
+}
+
 /// One WebSocket client. Memory per client is bounded: events wait in the
 /// shared broadcast ring (`EVENT_QUEUE` deep; a lagging client loses the
-/// oldest and is told how many), frames in a `watch` (only the newest), and
-/// at most one message is in flight to the socket at a time.
+/// oldest and is told how many), images in a `watch` (only the newest
+/// frame's), and at most one message is in flight to the socket at a time.
 async fn client_loop(st: Arc<AppState>, mut socket: WebSocket) {
     let shared = st.shared.clone();
+    let client = st.next_client.fetch_add(1, Ordering::Relaxed);
+    let _leave = Unsubscribe { to_daemon: shared.to_daemon.clone(), client };
+    let mut subscriptions: BTreeMap<String, Encoding> = BTreeMap::new();
     // Subscribe before the Hello snapshot so nothing after it is missed.
     let mut events = shared.events.subscribe();
-    let mut frames = shared.frame_png.subscribe();
+    let mut frames = shared.frames.subscribe();
     frames.mark_changed(); // send the current frame, if any, right away
     let mut stop = st.stop.subscribe();
     if *stop.borrow_and_update() {
@@ -621,60 +730,48 @@ async fn client_loop(st: Arc<AppState>, mut socket: WebSocket) {
         return;
     }
 
-    // Missed events and skipped frames not yet reported in a `Dropped`.
-    let mut dropped: u64 = 0;
+    let mut missed = Missed::default();
     let mut last_frame: Option<u64> = None;
     let mut frames_open = true;
     let mut report = tokio::time::interval(DROPPED_REPORT_INTERVAL);
     report.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
 
     loop {
+        // Biased: events go before images, so an image being encoded or
+        // sent never holds back the events that say what happened.
         let step: Result<bool, axum::Error> = tokio::select! {
+            biased;
             _ = stop.changed() => {
                 let close = CloseFrame { code: 1001, reason: "server shutting down".into() };
                 let _ = socket.send(Message::Close(Some(close))).await;
                 return;
             }
-            incoming = socket.recv() => match incoming {
-                None | Some(Err(_)) | Some(Ok(Message::Close(_))) => Ok(false),
-                Some(Ok(Message::Text(text))) => match serde_json::from_str::<ClientMessage>(text.as_str()) {
-                    Ok(msg) => {
-                        // The daemon may be gone while the server drains;
-                        // nothing to tell the client then.
-                        let _ = shared.to_daemon.send(Event::Client(msg));
-                        Ok(true)
-                    }
-                    Err(e) => {
-                        let reply = ServerEvent::Error { message: format!("invalid message: {e}") };
-                        match event_message(&reply) {
-                            Some(m) => socket.send(m).await.map(|()| true),
-                            None => Ok(true),
-                        }
-                    }
-                },
-                Some(Ok(Message::Binary(_))) => {
-                    let reply = ServerEvent::Error { message: "binary messages are not accepted".into() };
-                    match event_message(&reply) {
-                        Some(m) => socket.send(m).await.map(|()| true),
-                        None => Ok(true),
-                    }
-                }
-                // Pings are answered by the WebSocket layer itself.
-                Some(Ok(_)) => Ok(true),
-            },
             received = events.recv() => match received {
                 Ok(event) => async {
-                    flush_dropped(&mut socket, &mut dropped).await?;
+                    missed.flush(&mut socket).await?;
                     if let Some(m) = event_message(&event) {
                         socket.send(m).await?;
                     }
                     Ok(true)
                 }.await,
                 Err(RecvError::Lagged(n)) => {
-                    dropped += n;
-                    flush_dropped(&mut socket, &mut dropped).await.map(|()| true)
+                    missed.events += n;
+                    missed.flush(&mut socket).await.map(|()| true)
                 }
                 Err(RecvError::Closed) => Ok(false),
+            },
+            incoming = socket.recv() => match incoming {
+                None | Some(Err(_)) | Some(Ok(Message::Close(_))) => Ok(false),
+                Some(Ok(Message::Text(text))) => match serde_json::from_str::<ClientMessage>(text.as_str()) {
+                    Ok(msg) => {
+                        client_message(&shared, client, &mut subscriptions, msg);
+                        Ok(true)
+                    }
+                    Err(e) => send_error(&mut socket, format!("invalid message: {e}")).await,
+                },
+                Some(Ok(Message::Binary(_))) => send_error(&mut socket, "binary messages are not accepted".into()).await,
+                // Pings are answered by the WebSocket layer itself.
+                Some(Ok(_)) => Ok(true),
             },
             changed = frames.changed(), if frames_open => match changed {
                 Err(_) => {
@@ -688,24 +785,29 @@ async fn client_loop(st: Arc<AppState>, mut socket: WebSocket) {
                             // Frames published while this client was busy
                             // were skipped: count the gap in frame numbers.
                             if let Some(last) = last_frame {
-                                dropped += frame.frame.saturating_sub(last).saturating_sub(1);
+                                missed.frames += frame.frame.saturating_sub(last).saturating_sub(1);
                             }
                             last_frame = Some(frame.frame);
-                            match frame_message(&frame) {
-                                Some(m) => socket.send(m).await.map(|()| true),
-                                None => Ok(true),
-                            }
+                            send_images(&mut socket, &frame, &subscriptions).await.map(|()| true)
                         }
                         None => Ok(true),
                     }
                 }
             },
-            _ = report.tick() => flush_dropped(&mut socket, &mut dropped).await.map(|()| true),
+            _ = report.tick() => missed.flush(&mut socket).await.map(|()| true),
         };
         match step {
             Ok(true) => {}
             Ok(false) | Err(_) => return,
         }
+    }
+}
+
+/// Sends an `error` event; the connection stays open.
+async fn send_error(socket: &mut WebSocket, message: String) -> Result<bool, axum::Error> {
+    match event_message(&ServerEvent::Error { message }) {
+        Some(m) => socket.send(m).await.map(|()| true),
+        None => Ok(true),
     }
 }
 
@@ -731,8 +833,12 @@ mod tests {
     }
 
     async fn start(roots: Vec<PathBuf>) -> Server {
+        start_with(roots, false).await
+    }
+
+    async fn start_with(roots: Vec<PathBuf>, debug_api: bool) -> Server {
         let (tx, daemon) = mpsc::channel();
-        let shared = Shared::new(tx, roots);
+        let shared = Shared::new(tx, roots, debug_api);
         let (listener, addr) = bind("127.0.0.1:0".parse().unwrap()).await.unwrap();
         let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
         let done = tokio::spawn(serve(listener, shared.clone(), allowed_hosts(addr), async move {
@@ -837,12 +943,8 @@ mod tests {
         }
     }
 
-    fn daemon_event(server: &Server) -> Option<ClientMessage> {
-        match server.daemon.recv_timeout(Duration::from_secs(5)) {
-            Ok(Event::Client(m)) => Some(m),
-            Ok(_) => panic!("unexpected event"),
-            Err(_) => None,
-        }
+    fn daemon_event(server: &Server) -> Option<Event> {
+        server.daemon.recv_timeout(Duration::from_secs(5)).ok()
     }
 
     #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -855,7 +957,7 @@ mod tests {
         assert_eq!(r.header("content-type").as_deref(), Some("application/json"));
         assert_eq!(r.header("cache-control").as_deref(), Some("no-store"));
         let v = r.json();
-        assert_eq!(v["protocol"], 1);
+        assert_eq!(v["protocol"], VERSION);
         assert_eq!(v["frame"], 42);
         for key in [
             "version", "adapter", "cpu_adapter", "features", "degraded", "scene", "pipelines_ok", "pipelines_stale",
@@ -1088,11 +1190,11 @@ mod tests {
         let r = request(s.addr, "POST", "/api/reload", &format!("Origin: http://localhost:{}\r\n", s.addr.port())).await;
         assert_eq!(r.status, 202, "{}", r.text());
         assert_eq!(r.json()["accepted"], true);
-        assert!(matches!(daemon_event(&s), Some(ClientMessage::Rebuild {})));
+        assert!(matches!(daemon_event(&s), Some(Event::Rebuild)));
 
         let r = request(s.addr, "POST", "/api/reload", "").await;
         assert_eq!(r.status, 202);
-        assert!(matches!(daemon_event(&s), Some(ClientMessage::Rebuild {})));
+        assert!(matches!(daemon_event(&s), Some(Event::Rebuild)));
 
         // A cross-site GET is harmless (the browser won't let the page read
         // it) and is allowed.
@@ -1131,13 +1233,32 @@ mod tests {
         }
     }
 
+    /// The next event the daemon got, from a blocking receive.
+    async fn daemon_event_async(s: Server) -> (Option<Event>, Server) {
+        tokio::task::spawn_blocking(move || (daemon_event(&s), s)).await.unwrap()
+    }
+
+    fn subscriptions(e: Option<Event>) -> (u64, Vec<String>) {
+        match e {
+            Some(Event::Subscriptions { client, outputs }) => (client, outputs.into_iter().collect()),
+            _ => panic!("expected a subscriptions event"),
+        }
+    }
+
     #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
     async fn client_messages_reach_the_daemon_and_bad_ones_get_an_error() {
         let s = start(vec![]).await;
         let mut ws = connect(s.addr, None).await.unwrap();
         assert_eq!(next_json(&mut ws).await["type"], "hello");
 
-        for bad in ["not json", "{\"type\":\"no_such_thing\"}", "{\"type\":\"subscribe\"}", "[]"] {
+        for bad in [
+            "not json",
+            "{\"type\":\"no_such_thing\"}",
+            "{\"type\":\"subscribe\"}",
+            "{\"type\":\"subscribe\",\"pass\":\"a\",\"output\":\"b\",\"encoding\":\"jpeg\"}",
+            "{\"type\":\"unsubscribe\",\"pass\":\"a\"}",
+            "[]",
+        ] {
             ws.send(tungstenite::Message::text(bad)).await.unwrap();
             let e = next_json(&mut ws).await;
             assert_eq!(e["type"], "error", "{bad}");
@@ -1146,56 +1267,152 @@ mod tests {
         ws.send(tungstenite::Message::binary(vec![1u8, 2, 3])).await.unwrap();
         assert_eq!(next_json(&mut ws).await["type"], "error");
 
-        ws.send(tungstenite::Message::text(r#"{"type":"subscribe","pass":"hdr","output":"color"}"#)).await.unwrap();
-        ws.send(tungstenite::Message::text(r#"{"type":"rebuild"}"#)).await.unwrap();
-        let s2 = tokio::task::spawn_blocking(move || {
-            let a = daemon_event(&s);
-            let b = daemon_event(&s);
-            (a, b, s)
-        });
-        let (a, b, s) = s2.await.unwrap();
-        match a {
-            Some(ClientMessage::Subscribe { pass, output }) => assert_eq!((pass.as_str(), output.as_str()), ("hdr", "color")),
-            _ => panic!("expected subscribe"),
+        // The daemon learns this client's whole set each time it changes,
+        // and only then: a repeated subscribe changes nothing.
+        for m in [
+            r#"{"type":"subscribe","pass":"hdr","output":"color"}"#,
+            r#"{"type":"subscribe","pass":"hdr","output":"color","encoding":"f32"}"#,
+            r#"{"type":"subscribe","pass":"bloom","output":"mip0","encoding":"f16"}"#,
+            r#"{"type":"unsubscribe","pass":"hdr","output":"color"}"#,
+            r#"{"type":"unsubscribe","pass":"never","output":"subscribed"}"#,
+            r#"{"type":"rebuild"}"#,
+        ] {
+            ws.send(tungstenite::Message::text(m)).await.unwrap();
         }
-        assert!(matches!(b, Some(ClientMessage::Rebuild {})));
+        let (e, s) = daemon_event_async(s).await;
+        let (client, outputs) = subscriptions(e);
+        assert_eq!(outputs, ["hdr/color"]);
+        let (e, s) = daemon_event_async(s).await;
+        assert_eq!(subscriptions(e), (client, vec!["bloom/mip0".to_owned(), "hdr/color".to_owned()]));
+        let (e, s) = daemon_event_async(s).await;
+        assert_eq!(subscriptions(e), (client, vec!["bloom/mip0".to_owned()]));
+        let (e, s) = daemon_event_async(s).await;
+        assert!(matches!(e, Some(Event::Rebuild)));
 
         // Still connected.
-        s.shared.publish(ServerEvent::Dropped { count: 0 });
+        s.shared.publish(ServerEvent::Dropped { frames: 0, events: 0 });
         assert_eq!(next_json(&mut ws).await["type"], "dropped");
+
+        // Leaving clears its subscriptions.
+        drop(ws);
+        let (e, _s) = daemon_event_async(s).await;
+        assert_eq!(subscriptions(e), (client, vec![]));
     }
 
-    fn parse_frame(bytes: &[u8]) -> (serde_json::Value, &[u8]) {
+    fn parse_image(bytes: &[u8]) -> (serde_json::Value, &[u8]) {
         let n = u32::from_le_bytes(bytes[..4].try_into().unwrap()) as usize;
         let header = serde_json::from_slice(&bytes[4..4 + n]).unwrap();
         (header, &bytes[4 + n..])
     }
 
+    async fn next_image(ws: &mut Ws) -> (serde_json::Value, Vec<u8>) {
+        match next_message(ws).await {
+            tungstenite::Message::Binary(bytes) => {
+                let (h, b) = parse_image(&bytes);
+                (h, b.to_vec())
+            }
+            other => panic!("expected binary, got {other:?}"),
+        }
+    }
+
+    /// A frame with a final output `tonemap/color` (1x1 sRGB) and an HDR
+    /// `hdr/color` (2x1) whose values say which frame it is.
+    fn frame_images(frame: u64) -> Option<Arc<FrameImages>> {
+        let v = frame as f32;
+        let ldr = CapturedImage::new("tonemap", "color", frame, 1, 1, wgpu::TextureFormat::Rgba8UnormSrgb, vec![1.0, 0.0, 0.0, 1.0]);
+        let hdr = CapturedImage::new("hdr", "color", frame, 2, 1, wgpu::TextureFormat::Rgba16Float, vec![v, -1.5, 2.0, 1.0, 0.5, v, 0.0, 1.0]);
+        let captures = BTreeMap::from([(ldr.key(), Arc::new(ldr)), (hdr.key(), Arc::new(hdr))]);
+        Some(Arc::new(FrameImages::new(frame, Some("tonemap/color".into()), captures)))
+    }
+
     #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-    async fn frames_arrive_as_binary_messages() {
+    async fn each_client_gets_the_final_frame_and_its_own_subscriptions_newest_only() {
         let s = start(vec![]).await;
-        let png = |frame: u64| {
-            Some(Arc::new(FramePng { frame, width: 4, height: 2, png: format!("png bytes {frame}").into_bytes() }))
-        };
         // The current frame is sent on connect.
-        s.shared.frame_png.send_replace(png(7));
-        let mut ws = connect(s.addr, None).await.unwrap();
-        assert_eq!(next_json(&mut ws).await["type"], "hello");
-        let tungstenite::Message::Binary(bytes) = next_message(&mut ws).await else { panic!("expected binary") };
-        let (header, body) = parse_frame(&bytes);
-        assert_eq!(header, serde_json::json!({ "kind": "frame", "frame": 7, "width": 4, "height": 2, "mime": "image/png" }));
-        assert_eq!(body, b"png bytes 7");
+        s.shared.frames.send_replace(frame_images(7));
+        let mut a = connect(s.addr, None).await.unwrap();
+        let mut b = connect(s.addr, None).await.unwrap();
+        for ws in [&mut a, &mut b] {
+            assert_eq!(next_json(ws).await["type"], "hello");
+            let (h, png) = next_image(ws).await;
+            assert_eq!(
+                h,
+                serde_json::json!({ "kind": "frame", "frame": 7, "pass": "tonemap", "output": "color", "width": 1, "height": 1,
+                    "format": "Rgba8UnormSrgb", "encoding": "png", "mime": "image/png", "final": true })
+            );
+            assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"));
+        }
 
-        s.shared.frame_png.send_replace(png(8));
-        let tungstenite::Message::Binary(bytes) = next_message(&mut ws).await else { panic!("expected binary") };
-        assert_eq!(parse_frame(&bytes).0["frame"], 8);
+        // A subscribes to the HDR output as exact floats; B to nothing.
+        a.send(tungstenite::Message::text(r#"{"type":"subscribe","pass":"hdr","output":"color","encoding":"f32"}"#)).await.unwrap();
+        let (e, s) = daemon_event_async(s).await;
+        assert_eq!(subscriptions(e).1, ["hdr/color"]);
+        s.shared.frames.send_replace(frame_images(8));
+        assert_eq!(next_image(&mut a).await.0["kind"], "frame");
+        let (h, raw) = next_image(&mut a).await;
+        assert_eq!(
+            h,
+            serde_json::json!({ "kind": "capture", "frame": 8, "pass": "hdr", "output": "color", "width": 2, "height": 1,
+                "format": "Rgba16Float", "encoding": "f32", "mime": "application/octet-stream", "final": false })
+        );
+        let values: Vec<f32> = raw.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect();
+        assert_eq!(values, [8.0, -1.5, 2.0, 1.0, 0.5, 8.0, 0.0, 1.0]);
+        let (h, _) = next_image(&mut b).await;
+        assert_eq!((h["kind"].as_str(), h["frame"].as_u64()), (Some("frame"), Some(8)));
 
-        // Frames 9..=11 never reached this client: they count as dropped.
-        s.shared.frame_png.send_replace(png(12));
-        let tungstenite::Message::Binary(bytes) = next_message(&mut ws).await else { panic!("expected binary") };
-        assert_eq!(parse_frame(&bytes).0["frame"], 12);
-        let d = next_json(&mut ws).await;
-        assert_eq!(d, serde_json::json!({ "type": "dropped", "count": 3 }));
+        // Frames 9..=11 never reached A: it gets the newest and the count.
+        s.shared.frames.send_replace(frame_images(12));
+        assert_eq!(next_image(&mut a).await.0["frame"], 12);
+        let (h, raw) = next_image(&mut a).await;
+        assert_eq!((h["kind"].as_str(), h["frame"].as_u64(), raw.len()), (Some("capture"), Some(12), 32));
+        assert_eq!(next_json(&mut a).await, serde_json::json!({ "type": "dropped", "frames": 3, "events": 0 }));
+
+        // B never subscribed: it got only final frames, and an event is the
+        // next thing it reads, not a capture.
+        assert_eq!(next_image(&mut b).await.0["frame"], 12);
+        assert_eq!(next_json(&mut b).await, serde_json::json!({ "type": "dropped", "frames": 3, "events": 0 }));
+        s.shared.publish(ServerEvent::DeviceLost { message: "marker".into(), recovered: true });
+        assert_eq!(next_json(&mut b).await["message"], "marker");
+
+        // Unsubscribed, A gets only the final frame again.
+        a.send(tungstenite::Message::text(r#"{"type":"unsubscribe","pass":"hdr","output":"color"}"#)).await.unwrap();
+        let (e, s) = daemon_event_async(s).await;
+        assert!(subscriptions(e).1.is_empty());
+        assert_eq!(next_json(&mut a).await["message"], "marker");
+        s.shared.frames.send_replace(frame_images(13));
+        assert_eq!(next_image(&mut a).await.0["kind"], "frame");
+        s.shared.publish(ServerEvent::DeviceLost { message: "after 13".into(), recovered: true });
+        assert_eq!(next_json(&mut a).await["message"], "after 13");
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn captures_say_which_is_final() {
+        let s = start(vec![]).await;
+        let images = frame_images(3).unwrap();
+        write(&s.shared.captures, Arc::new(images.captures.clone()));
+        s.shared.frames.send_replace(Some(images));
+        let list = get(s.addr, "/api/captures").await.json();
+        let finals: Vec<(String, bool)> =
+            list.as_array().unwrap().iter().map(|c| (c["pass"].as_str().unwrap().to_owned(), c["final"].as_bool().unwrap())).collect();
+        assert_eq!(finals, [("hdr".to_owned(), false), ("tonemap".to_owned(), true)]);
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn the_debug_api_exists_only_when_enabled() {
+        let s = start(vec![]).await;
+        let r = request(s.addr, "POST", "/api/debug/lose-device", "").await;
+        assert_eq!(r.status, 404, "{}", r.text());
+        assert!(r.json()["error"].is_string());
+        assert_eq!(request(s.addr, "POST", "/api/nope", "").await.status, 404);
+        assert!(s.daemon.try_recv().is_err());
+
+        let s = start_with(vec![], true).await;
+        let cross = "Origin: http://evil.example\r\n";
+        assert_eq!(request(s.addr, "POST", "/api/debug/lose-device", cross).await.status, 403);
+        let r = request(s.addr, "POST", "/api/debug/lose-device", "").await;
+        assert_eq!(r.status, 202, "{}", r.text());
+        assert!(matches!(daemon_event(&s), Some(Event::LoseDevice)));
+        assert_eq!(request(s.addr, "GET", "/api/debug/lose-device", "").await.status, 405);
     }
 
     #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -1223,7 +1440,10 @@ mod tests {
         loop {
             let v = next_json(&mut ws).await;
             match v["type"].as_str().unwrap() {
-                "dropped" => dropped += v["count"].as_u64().unwrap(),
+                "dropped" => {
+                    assert_eq!(v["frames"], 0);
+                    dropped += v["events"].as_u64().unwrap()
+                }
                 "device_lost" if v["message"] == "end" => break,
                 "device_lost" => {
                     let i: u64 = v["message"].as_str().unwrap().split(' ').next().unwrap().parse().unwrap();

@@ -26,6 +26,8 @@ pub struct ServeOptions {
     pub port: u16,
     pub mode: RenderMode,
     pub max_fps: f64,
+    /// Serve `/api/debug/*` (tests and benchmarks only).
+    pub debug_api: bool,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -46,7 +48,7 @@ pub fn run(opts: ServeOptions) -> Result<(), ServeError> {
     let shader_root = opts.root.join("shaders");
     let scene_root = opts.root.join("scenes");
     let (tx, rx) = mpsc::channel::<Event>();
-    let shared = shared::Shared::new(tx.clone(), vec![shader_root.clone(), scene_root.clone()]);
+    let shared = shared::Shared::new(tx.clone(), vec![shader_root.clone(), scene_root.clone()], opts.debug_api);
 
     // The device is opened on the render thread, which then owns it.
     let (ready_tx, ready_rx) = mpsc::channel();
@@ -83,6 +85,9 @@ pub fn run(opts: ServeOptions) -> Result<(), ServeError> {
         let (listener, local) = http::bind(addr).await.map_err(|source| ServeError::Bind { addr, source })?;
         if !opts.bind.is_loopback() {
             eprintln!("loupe: warning: listening on {local}, reachable from other machines; loupe has no authentication");
+        }
+        if opts.debug_api {
+            eprintln!("loupe: warning: the debug API is on (POST /api/debug/lose-device destroys the GPU device)");
         }
         println!("listening on http://{local}");
         let shutdown = async {

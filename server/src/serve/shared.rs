@@ -3,13 +3,13 @@
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
-use std::sync::{Arc, RwLock};
+use std::sync::{Arc, Mutex, OnceLock, RwLock};
 
 use tokio::sync::{broadcast, watch};
 
 use super::event::Event;
 use crate::diag::Diagnostic;
-use crate::protocol::{PassInfo, PipelineInfo, ServerEvent, Status};
+use crate::protocol::{Encoding, PassInfo, PipelineInfo, ServerEvent, Status};
 use crate::render::capture::CapturedImage;
 
 /// How many events a slow WebSocket client may fall behind before it
@@ -28,25 +28,59 @@ pub struct Shared {
     pub last_good: RwLock<Arc<BTreeMap<String, Arc<CapturedImage>>>>,
     /// JSON events for every client; a lagging receiver drops the oldest.
     pub events: broadcast::Sender<ServerEvent>,
-    /// The newest final frame as PNG: clients always get the latest, never a
-    /// queue of old ones.
-    pub frame_png: watch::Sender<Option<Arc<FramePng>>>,
+    /// The newest frame's images: each client always gets the latest, never
+    /// a queue of old ones.
+    pub frames: watch::Sender<Option<Arc<FrameImages>>>,
     /// Back to the render thread.
     pub to_daemon: std::sync::mpsc::Sender<Event>,
     /// Directories whose files may be served as sources (shaders/, scenes/).
     pub source_roots: Vec<PathBuf>,
+    /// Whether `/api/debug/*` exists (`loupe serve --debug-api`).
+    pub debug_api: bool,
 }
 
+/// One frame's captured images: the final output and every output some
+/// client subscribed to. Each encoding of each image is made once, by the
+/// first client that sends it, and shared by the others.
 #[derive(Debug)]
-pub struct FramePng {
+pub struct FrameImages {
     pub frame: u64,
-    pub width: u32,
-    pub height: u32,
-    pub png: Vec<u8>,
+    /// `pass/output` of the frame's final output, when it was captured.
+    pub final_key: Option<String>,
+    /// This frame's captures by `pass/output`.
+    pub captures: BTreeMap<String, Arc<CapturedImage>>,
+    encoded: Mutex<BTreeMap<(String, Encoding), Arc<OnceLock<Arc<[u8]>>>>>,
+}
+
+impl FrameImages {
+    pub fn new(frame: u64, final_key: Option<String>, captures: BTreeMap<String, Arc<CapturedImage>>) -> Self {
+        FrameImages { frame, final_key, captures, encoded: Mutex::new(BTreeMap::new()) }
+    }
+
+    /// `key` encoded as `encoding`, made at most once per frame (this may
+    /// take milliseconds: call it off the async reactor).
+    pub fn encoded(&self, key: &str, encoding: Encoding) -> Option<Arc<[u8]>> {
+        let image = self.captures.get(key)?;
+        let cell = self
+            .encoded
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .entry((key.to_owned(), encoding))
+            .or_default()
+            .clone();
+        Some(
+            cell.get_or_init(|| match encoding {
+                Encoding::Png => image.to_png().into(),
+                Encoding::F32 => image.raw_f32().into(),
+                Encoding::F16 => image.raw_f16().into(),
+            })
+            .clone(),
+        )
+    }
 }
 
 impl Shared {
-    pub fn new(to_daemon: std::sync::mpsc::Sender<Event>, source_roots: Vec<PathBuf>) -> Arc<Self> {
+    pub fn new(to_daemon: std::sync::mpsc::Sender<Event>, source_roots: Vec<PathBuf>, debug_api: bool) -> Arc<Self> {
         Arc::new(Shared {
             status: RwLock::new(Status::default()),
             passes: RwLock::new(Vec::new()),
@@ -55,9 +89,10 @@ impl Shared {
             captures: RwLock::new(Arc::new(BTreeMap::new())),
             last_good: RwLock::new(Arc::new(BTreeMap::new())),
             events: broadcast::channel(EVENT_QUEUE).0,
-            frame_png: watch::channel(None).0,
+            frames: watch::channel(None).0,
             to_daemon,
             source_roots,
+            debug_api,
         })
     }
 
