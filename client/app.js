@@ -28,6 +28,7 @@ import { PassList } from './passes.js';
 import { DiagnosticsPanel } from './diagnostics.js';
 import { Inspector } from './inspector.js';
 import { LiveFrame } from './live.js';
+import { ControlsPanel } from './controls.js';
 import * as tex from './texture.js';
 import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
 
@@ -294,6 +295,7 @@ function applyPipelines(list) {
 const refetchStatus = latestOnly(api.status, fetched('status', applyStatus), fetchFailed('status'));
 const refetchPasses = latestOnly(api.passes, fetched('passes', applyPasses), fetchFailed('passes'));
 const refetchPipelines = latestOnly(api.pipelines, fetched('pipelines', applyPipelines), fetchFailed('pipelines'));
+const refetchControls = latestOnly(() => api.getJson('/api/controls'), fetched('controls', (r) => controls.apply(r)), fetchFailed('controls'));
 const refetchDiagnostics = latestOnly(
   api.diagnostics,
   fetched('diagnostics', applyDiagnostics),
@@ -306,6 +308,7 @@ const resyncAll = coalesce(() => {
   refetchPasses();
   refetchPipelines();
   refetchDiagnostics();
+  refetchControls();
   loadCaptures();
 });
 const refetchCapturesSoon = coalesce(() => loadCaptures(), 100);
@@ -356,6 +359,9 @@ function onEvent(ev) {
     return;
   }
   switch (ev.type) {
+    case 'controls':
+      controls.apply(ev);
+      break;
     case 'hello':
       state.protocol = ev.protocol;
       if (ev.protocol !== PROTOCOL) {
@@ -447,6 +453,10 @@ $('rebuild').addEventListener('click', async () => {
     notify('rebuild', `rebuild request failed: ${errorText(err)}`, 'error', 10000);
   }
 });
+
+// ---- scene controls ------------------------------------------------------
+
+const controls = new ControlsPanel($('scene-panel'), (message) => conn.send(message));
 
 // ---- start ---------------------------------------------------------------
 

@@ -6,6 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::diag::Diagnostic;
+use crate::scene::overrides::{Control, Overrides, Value as OverrideValue};
 
 pub const VERSION: u32 = 2;
 
@@ -131,6 +132,18 @@ pub enum ServerEvent {
     /// The server could not use a message this client sent (bad JSON, an
     /// unknown `type`, a binary message); the connection stays open.
     Error { message: String },
+    /// The scene's live controls and the overrides set on top of the file
+    /// (also `GET /api/controls`), after any change to either.
+    Controls(ControlsReport),
+}
+
+/// `GET /api/controls`: what the browser's scene panel shows.
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct ControlsReport {
+    pub scene: String,
+    pub controls: Vec<Control>,
+    /// Values set from the browser, not yet saved to the file.
+    pub overrides: Overrides,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -178,4 +191,12 @@ pub enum ClientMessage {
     /// Rebuild every pipeline from the current sources (`POST /api/reload`
     /// sends this too).
     Rebuild {},
+    /// Set a scene value live (`post.exposure_ev`, `lights[0].intensity`):
+    /// the scene re-renders with it; the file is untouched until saved.
+    SetOverride { path: String, value: OverrideValue },
+    /// Drop every override: back to the file's values.
+    ClearOverrides {},
+    /// Write the overrides into the scene file, keeping its comments and
+    /// layout, and clear them.
+    SaveScene {},
 }

@@ -177,3 +177,31 @@ async fn page_reconnects_by_itself_after_a_server_restart_and_shows_a_new_frame(
     until(&c, &s, "the pass list again", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"ok\"]')").await;
     c.close().await.unwrap();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn live_controls_override_the_scene_and_save_keeps_its_comments() {
+    let p = Project::copy_of_repo("browser-controls");
+    let s = Server::start(&p.root, &["--render", "on-change"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    // At 0 EV the exposure pass is culled; the control is there.
+    until(&c, &s, "exposure culled", "document.querySelector('#passes li[data-pass=\"exposure\"][data-status=\"culled\"]')").await;
+    let slider = "document.querySelector('#controls [data-path=\"post.exposure_ev\"]')";
+    until(&c, &s, "the exposure control", slider).await;
+    // Move the slider as a user does: set, then `change`.
+    c.execute(&format!("const i = {slider}; i.value = '1'; i.dispatchEvent(new Event('change')); return true;"), vec![]).await.unwrap();
+    until(&c, &s, "the override counted", "document.querySelector('#overrides-count').textContent === '1 unsaved'").await;
+    until(&c, &s, "the exposure pass live", "document.querySelector('#passes li[data-pass=\"exposure\"][data-status=\"ok\"]')").await;
+    let before = p.read("scenes/pattern.toml");
+    assert!(before.contains("exposure_ev = 0.0\n"), "the file is untouched until saved");
+
+    // Save: the value lands in the file, every comment stays.
+    c.execute("document.querySelector('#save-scene').click(); return true;", vec![]).await.unwrap();
+    until(&c, &s, "saved: nothing unsaved", "document.querySelector('#overrides-count').textContent === 'as in the file'").await;
+    let after = p.read("scenes/pattern.toml");
+    assert_eq!(after, before.replace("exposure_ev = 0.0\n", "exposure_ev = 1.0\n"), "only the value changed");
+    // The reload of the saved file keeps the exposure pass live.
+    until(&c, &s, "still exposed after the file reload", "document.querySelector('#passes li[data-pass=\"exposure\"][data-status=\"ok\"]')").await;
+    c.close().await.unwrap();
+}

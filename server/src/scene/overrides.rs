@@ -75,6 +75,11 @@ fn set(table: &mut Table, path: &[Seg], value: &Value) -> Result<(), String> {
         let mut new = toml_value(value);
         match table.get_mut(key) {
             Some(Item::Value(old)) => {
+                // JSON has one number type: a whole number set where the file
+                // has a float stays a float (`1.0`, not `1`).
+                if let (TomlValue::Float(_), Value::Int(i)) = (&*old, value) {
+                    new = (*i as f64).into();
+                }
                 // Keep the comment after the value and the spacing around it.
                 *new.decor_mut() = old.decor().clone();
                 *old = new;
@@ -188,15 +193,15 @@ mod tests {
     #[test]
     fn apply_keeps_comments_and_layout() {
         let mut o = Overrides::new();
-        o.insert("post.exposure_ev".into(), Value::Float(1.5));
         o.insert("lights[0].intensity".into(), Value::Float(2.0));
         o.insert("quality.volume_steps".into(), Value::Int(12));
+        o.insert("post.exposure_ev".into(), Value::Int(2));
         let out = apply(TEXT, &o).unwrap();
-        assert!(out.starts_with("# My scene\n[post]\nexposure_ev = 1.5 # stops\ntonemap = \"aces\"\n\n[[lights]]\n"), "{out}");
+        assert!(out.starts_with("# My scene\n[post]\nexposure_ev = 2.0 # stops\ntonemap = \"aces\"\n\n[[lights]]\n"), "{out}");
         assert!(out.contains("intensity = 2.0\n"), "{out}");
         assert!(out.contains("[quality]\nvolume_steps = 12\n"), "{out}");
         let s = crate::scene::parse("s.toml", &out).unwrap();
-        assert_eq!(s.post.exposure_ev, 1.5);
+        assert_eq!(s.post.exposure_ev, 2.0);
         assert_eq!(s.quality.volume_steps, 12);
     }
 

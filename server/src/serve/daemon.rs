@@ -11,13 +11,13 @@ use std::sync::Arc;
 use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender};
 use std::time::{Duration, Instant};
 
-use super::event::{CompileResult, Event, FileBatch, FileChange};
+use super::event::{CompileResult, Event, FileBatch, FileChange, SceneCommand};
 use super::shared::{self, FrameImages, Shared};
 use crate::diag::{Code, Diagnostic, Location, Severity};
 use crate::gpu::{self, Gpu, pipeline};
-use crate::protocol::{self, PassInfo, PassStatus, PassTiming, ReloadTimings, ServerEvent, Status};
+use crate::protocol::{self, ControlsReport, PassInfo, PassStatus, PassTiming, ReloadTimings, ServerEvent, Status};
 use crate::render::{self, frame, graph::{Graph, PipelineKey}, pipelines::{Installed, PipelineCache}, scene_gpu::SceneGpu};
-use crate::scene::{self, Scene};
+use crate::scene::{self, Scene, overrides::Overrides};
 use crate::shader::{Compose, Library, NagaOil, SourceFile, library};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -86,6 +86,8 @@ pub struct Daemon {
     /// Kept to rebuild `scene_gpu` on a new device.
     meshes: BTreeMap<String, Arc<crate::mesh::MeshData>>,
     scene_error: Option<Diagnostic>,
+    /// Live values from the browser on top of the scene file.
+    overrides: Overrides,
     /// The graph of the newest frame (rebuilt once per frame and when the
     /// scene changes); everything else reads this one.
     graph: Graph,
@@ -155,6 +157,7 @@ impl Daemon {
             meshes: loaded.meshes,
             scene_gpu,
             scene_error,
+            overrides: Overrides::new(),
             graph,
             cache: PipelineCache::default(),
             pool: Default::default(),
@@ -199,6 +202,7 @@ impl Daemon {
         let keys = self.graph_pipelines();
         self.start_reload(keys, Vec::new(), 0.0);
         self.publish_state();
+        self.publish_controls();
         let interval = Duration::from_secs_f64(1.0 / self.config.max_fps.max(0.1));
         loop {
             // Frames on their way back are polled for; otherwise only an
@@ -248,6 +252,7 @@ impl Daemon {
         match ev {
             Event::FilesChanged(batch) => self.files_changed(batch),
             Event::CompileFinished(r) => self.compile_finished(r),
+            Event::Scene(cmd) => self.scene_command(cmd),
             Event::Rebuild => {
                 let keys = self.cache.entries.keys().cloned().chain(self.graph_pipelines()).collect();
                 self.start_reload(keys, Vec::new(), 0.0);
@@ -337,19 +342,71 @@ impl Daemon {
     }
 
     fn reload_scene(&mut self) {
-        match scene::load(&self.config.scene_path) {
-            Ok(l) => {
-                self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &l.scene, &l.meshes);
-                self.scene = l.scene;
-                self.scene_files = l.files;
-                self.meshes = l.meshes;
-                self.scene_error = None;
-                self.graph = Self::graph_for(&self.scene, self.frame);
-            }
+        match scene::load_with(&self.config.scene_path, &self.overrides) {
+            Ok(l) => self.install_scene(l),
             // The last good scene keeps rendering.
             Err(d) => self.scene_error = Some(d),
         }
         self.dirty = true;
+        self.publish_controls();
+    }
+
+    fn install_scene(&mut self, l: scene::Loaded) {
+        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &l.scene, &l.meshes);
+        self.scene = l.scene;
+        self.scene_files = l.files;
+        self.meshes = l.meshes;
+        self.scene_error = None;
+        self.graph = Self::graph_for(&self.scene, self.frame);
+    }
+
+    /// Live overrides: a value that makes the scene invalid is refused with
+    /// the scene's diagnostic and the previous overrides stay.
+    fn scene_command(&mut self, cmd: SceneCommand) {
+        let display = library::display_path(&self.config.scene_path);
+        let overrides = match cmd {
+            SceneCommand::Set { path, value } => {
+                let mut o = self.overrides.clone();
+                o.insert(path, value);
+                o
+            }
+            SceneCommand::Clear => Overrides::new(),
+            SceneCommand::Save => {
+                let saved = std::fs::read_to_string(&self.config.scene_path)
+                    .map_err(|e| e.to_string())
+                    .and_then(|text| scene::overrides::apply(&text, &self.overrides))
+                    .and_then(|text| write_atomically(&self.config.scene_path, &text).map_err(|e| e.to_string()));
+                match saved {
+                    // The file now holds the values: the watcher's reload
+                    // of it renders the same scene.
+                    Ok(()) => self.overrides.clear(),
+                    Err(e) => self.shared.publish(ServerEvent::Error { message: format!("cannot save {display}: {e}") }),
+                }
+                self.publish_controls();
+                return;
+            }
+        };
+        match scene::load_with(&self.config.scene_path, &overrides) {
+            Ok(l) => {
+                self.overrides = overrides;
+                self.install_scene(l);
+                self.dirty = true;
+                let keys = self.graph_pipelines().into_iter().filter(|k| !self.cache.entries.contains_key(k)).collect();
+                self.start_reload(keys, vec![display], 0.0);
+            }
+            Err(d) => self.shared.publish(ServerEvent::Error { message: format!("override refused: {d}") }),
+        }
+        self.publish_controls();
+    }
+
+    fn publish_controls(&self) {
+        let report = ControlsReport {
+            scene: library::display_path(&self.config.scene_path),
+            controls: scene::overrides::controls(&self.scene),
+            overrides: self.overrides.clone(),
+        };
+        shared::write(&self.shared.controls, report.clone());
+        self.shared.publish(ServerEvent::Controls(report));
     }
 
     fn start_reload(&mut self, keys: BTreeSet<PipelineKey>, files: Vec<String>, watch_ms: f64) {
@@ -712,4 +769,12 @@ impl Daemon {
 fn same_file(a: &Path, b: &Path) -> bool {
     let c = |p: &Path| p.canonicalize().unwrap_or_else(|_| std::path::absolute(p).unwrap_or_else(|_| p.to_owned()));
     c(a) == c(b)
+}
+
+/// Writes like an editor that saves safely: a temporary file beside the
+/// target, renamed over it, so a reader never sees half a file.
+fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
+    let tmp = path.with_extension("toml.loupe-save~");
+    std::fs::write(&tmp, text)?;
+    std::fs::rename(&tmp, path)
 }

@@ -20,6 +20,8 @@ pub enum Event {
     /// The outputs (`pass/output`) WebSocket client `client` wants captured
     /// every frame, replacing what it wanted before; empty when it left.
     Subscriptions { client: u64, outputs: BTreeSet<String> },
+    /// A live scene override from a client, or saving them to the file.
+    Scene(SceneCommand),
     /// Time to render a frame (continuous mode), or a forced redraw.
     Tick,
     /// The device was lost (driver reset, hang, destroyed). `device` is
@@ -31,6 +33,12 @@ pub enum Event {
     LoseDevice,
     /// Stop the daemon: the HTTP side is shutting down.
     Shutdown,
+}
+
+pub enum SceneCommand {
+    Set { path: String, value: crate::scene::overrides::Value },
+    Clear,
+    Save,
 }
 
 /// Files whose content changed, as one batch (a `git checkout` of many files

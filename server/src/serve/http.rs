@@ -44,7 +44,7 @@ use tokio::net::TcpListener;
 use tokio::sync::broadcast::error::RecvError;
 use tokio::sync::watch;
 
-use super::event::Event;
+use super::event::{Event, SceneCommand};
 use super::shared::{FrameImages, Shared, read};
 use crate::protocol::{ClientMessage, DiagnosticsReport, Encoding, ServerEvent, VERSION};
 use crate::render::capture::{CapturedImage, ImageStats};
@@ -146,6 +146,8 @@ fn build(shared: Arc<Shared>, allowed_hosts: Vec<String>) -> (Router, watch::Sen
         .route("/api/captures/{pass}/{file}", get(capture))
         .route("/api/sources/{*path}", get(source))
         .route("/api/reload", post(reload))
+        .route("/api/controls", get(controls))
+        .route("/api/scene/save", post(save_scene))
         .route("/api", any(api_not_found))
         .route("/api/{*rest}", any(api_not_found))
         .route("/ws", get(ws))
@@ -428,6 +430,14 @@ async fn reload(State(st): State<Arc<AppState>>) -> Response {
     to_daemon(&st, Event::Rebuild)
 }
 
+async fn controls(State(st): State<Arc<AppState>>) -> Response {
+    json(&read(&st.shared.controls))
+}
+
+async fn save_scene(State(st): State<Arc<AppState>>) -> Response {
+    to_daemon(&st, Event::Scene(SceneCommand::Save))
+}
+
 /// Debug API only: the render thread destroys its device, which is then
 /// lost and recovered as if the driver had lost it.
 async fn lose_device(State(st): State<Arc<AppState>>) -> Response {
@@ -695,10 +705,19 @@ fn client_message(shared: &Shared, client: u64, subscriptions: &mut BTreeMap<Str
         ClientMessage::Unsubscribe { pass, output } => {
             subscriptions.remove(&format!("{pass}/{output}"));
         }
+        // The daemon may be gone while the server drains; nothing to tell
+        // the client then.
         ClientMessage::Rebuild {} => {
-            // The daemon may be gone while the server drains; nothing to
-            // tell the client then.
             let _ = shared.to_daemon.send(Event::Rebuild);
+        }
+        ClientMessage::SetOverride { path, value } => {
+            let _ = shared.to_daemon.send(Event::Scene(SceneCommand::Set { path, value }));
+        }
+        ClientMessage::ClearOverrides {} => {
+            let _ = shared.to_daemon.send(Event::Scene(SceneCommand::Clear));
+        }
+        ClientMessage::SaveScene {} => {
+            let _ = shared.to_daemon.send(Event::Scene(SceneCommand::Save));
         }
     }
     let outputs: BTreeSet<String> = subscriptions.keys().cloned().collect();

@@ -9,7 +9,7 @@ use tokio::sync::{broadcast, watch};
 
 use super::event::Event;
 use crate::diag::Diagnostic;
-use crate::protocol::{Encoding, PassInfo, PipelineInfo, ServerEvent, Status};
+use crate::protocol::{ControlsReport, Encoding, PassInfo, PipelineInfo, ServerEvent, Status};
 use crate::render::capture::CapturedImage;
 
 /// How many events a slow WebSocket client may fall behind before it
@@ -37,6 +37,7 @@ pub struct Shared {
     pub source_roots: Vec<PathBuf>,
     /// Whether `/api/debug/*` exists (`loupe serve --debug-api`).
     pub debug_api: bool,
+    pub controls: RwLock<ControlsReport>,
 }
 
 /// One frame's captured images: the final output and every output some
@@ -93,6 +94,7 @@ impl Shared {
             to_daemon,
             source_roots,
             debug_api,
+            controls: RwLock::new(ControlsReport::default()),
         })
     }
 
