@@ -205,3 +205,27 @@ async fn live_controls_override_the_scene_and_save_keeps_its_comments() {
     until(&c, &s, "still exposed after the file reload", "document.querySelector('#passes li[data-pass=\"exposure\"][data-status=\"ok\"]')").await;
     c.close().await.unwrap();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn any_pass_output_is_inspectable_with_exact_values() {
+    let p = Project::copy_of_repo("browser-gbuffer");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/minimal.toml"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    until(&c, &s, "volumes culled with its reason", "document.querySelector('#passes li[data-pass=\"volumes\"][data-status=\"culled\"]')").await;
+    // A G-buffer target, not the final image: the knot covers the centre
+    // of minimal.toml's frame, so the normal there is a unit vector.
+    let loaded = c.execute_async("window.loupe.inspect('gbuffer', 'normal').then(arguments[0]);", vec![]).await.unwrap();
+    assert_eq!(loaded, true, "the inspector loaded gbuffer/normal");
+    let v = c.execute("return window.loupe.valueAt(320, 180);", vec![]).await.unwrap();
+    let n: Vec<f64> = v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    assert!((len - 1.0).abs() < 2e-3 && n[3] == 1.0, "an exact unit normal, w = 1: {n:?}");
+    // The depth prepass's Depth32Float reads back too, in (0, 1) there.
+    let loaded = c.execute_async("window.loupe.inspect('depth_prepass', 'depth').then(arguments[0]);", vec![]).await.unwrap();
+    assert_eq!(loaded, true);
+    let d = c.execute("return window.loupe.valueAt(320, 180)[0];", vec![]).await.unwrap().as_f64().unwrap();
+    assert!(d > 0.0 && d < 1.0, "depth {d}");
+    c.close().await.unwrap();
+}
