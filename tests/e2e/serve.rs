@@ -307,7 +307,7 @@ fn a_lost_device_is_recreated_from_the_last_good_sources() {
 #[test]
 fn soak_edit_break_fix_cycles() {
     const CYCLES: usize = 25;
-    const RSS_BOUND_MIB: u64 = 384;
+    const RSS_BOUND_MIB: u64 = 256;
     let p = Project::copy_of_repo("serve-soak");
     let s = Server::start(&p.root, &["--render", "on-change"]);
     let mut d = Driver::new(&p, &s);
