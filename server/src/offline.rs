@@ -15,11 +15,11 @@ use crate::gpu::{self, Gpu, pipeline};
 use crate::render::capture::ImageStats;
 use crate::render::frame::{self, FrameResult, NanOrigin, TexturePool};
 use crate::render::graph::{Graph, PipelineKey};
-use crate::render::pipelines::PipelineCache;
+use crate::render::pipelines::{self, PipelineCache};
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::{self};
 use crate::scene::{self, overrides::Overrides};
-use crate::shader::{Compose, Library, NagaOil, SourceFile, library};
+use crate::shader::library;
 
 #[derive(Debug, thiserror::Error)]
 pub enum OfflineError {
@@ -45,6 +45,8 @@ pub struct Job {
 pub struct Prepared {
     pub gpu: Gpu,
     pub scene_display: String,
+    /// The output size the scene renders at (after `Job::size`).
+    pub size: (u32, u32),
     pub graph: Graph,
     pub scene_gpu: SceneGpu,
     pub pipelines: BTreeMap<PipelineKey, pipeline::Pipeline>,
@@ -61,22 +63,13 @@ pub fn prepare(job: &Job) -> Result<Prepared, OfflineError> {
     }
     let gpu = gpu::open()?;
     let graph = render::build_graph(&loaded.scene, 1);
-    let files: Vec<SourceFile> = library::discover(std::slice::from_ref(&job.shader_root))
-        .map_err(OfflineError::Io)?
-        .iter()
-        .filter_map(|p| SourceFile::read(p, library::display_path(p)).ok())
-        .collect();
-    let lib = Library::new(files);
+    let lib = library::read_tree(&job.shader_root).map_err(OfflineError::Io)?;
     let mut cache = PipelineCache::default();
     let mut errors = Vec::new();
     for key in graph.pipelines() {
         let spec = pipeline::spec(key.spec).expect("keys come from specs");
         let display = library::display_path(&job.shader_root.join(spec.shader));
-        let composed = match lib.get(&display) {
-            Some(file) => NagaOil.compose(&lib, file, &key.defs, gpu::capabilities_without_device()),
-            None => Err(vec![Diagnostic::error(crate::diag::Code::Io, format!("pipeline `{}` needs `{display}`, which does not exist", spec.name))]),
-        };
-        cache.install(&gpu.device, &key, composed, &lib, &display);
+        cache.install(&gpu.device, &key, pipelines::compose(&lib, &key, &display), &lib, &display);
         errors.extend(cache.entries[&key].diagnostics.iter().cloned());
     }
     if !errors.is_empty() {
@@ -85,6 +78,7 @@ pub fn prepare(job: &Job) -> Result<Prepared, OfflineError> {
     let scene_gpu = SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes);
     Ok(Prepared {
         scene_display: library::display_path(&job.scene),
+        size: (loaded.scene.width, loaded.scene.height),
         graph,
         scene_gpu,
         pipelines: cache.live(),
@@ -195,8 +189,8 @@ pub fn render(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
         scene: p.scene_display.clone(),
         adapter: p.gpu.adapter_name(),
         cpu_adapter: p.gpu.is_cpu(),
-        width: p.graph.final_output().map_or(0, |h| p.graph.texture(h).width),
-        height: p.graph.final_output().map_or(0, |h| p.graph.texture(h).height),
+        width: p.size.0,
+        height: p.size.1,
         timing: result.timing.to_owned(),
         total_ms: result.timings.iter().map(|(_, t)| t).sum(),
         passes,
@@ -258,8 +252,8 @@ pub fn bench(job: &Job, frames: u32) -> Result<BenchReport, OfflineError> {
     Ok(BenchReport {
         scene: p.scene_display.clone(),
         adapter: p.gpu.adapter_name(),
-        width: p.graph.final_output().map_or(0, |h| p.graph.texture(h).width),
-        height: p.graph.final_output().map_or(0, |h| p.graph.texture(h).height),
+        width: p.size.0,
+        height: p.size.1,
         frames,
         timing,
         passes: order.into_iter().map(|n| (n.clone(), median(per_pass.remove(&n).unwrap_or_default()))).collect(),

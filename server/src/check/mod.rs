@@ -164,7 +164,7 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
         if renderer_tree && !specs_by_file.values().flatten().any(|s| s.name == spec.name) {
             let wanted = opts.shader_root.join(spec.shader);
             report.general.push(
-                Diagnostic::error(Code::Io, format!("pipeline `{}` needs `{}`, which does not exist", spec.name, library::display_path(&wanted)))
+                pipeline::missing_shader(spec.name, &library::display_path(&wanted))
                     .with_note("the renderer builds this pipeline from that file"),
             );
         }

@@ -266,6 +266,11 @@ pub const SPECS: &[PipelineSpec] = &[
     },
 ];
 
+/// The error for a pipeline whose shader file is not there.
+pub fn missing_shader(spec: &str, display: &str) -> Diagnostic {
+    Diagnostic::error(Code::Io, format!("pipeline `{spec}` needs `{display}`, which does not exist"))
+}
+
 pub fn spec(name: &str) -> Option<&'static PipelineSpec> {
     SPECS.iter().find(|s| s.name == name)
 }

@@ -23,7 +23,6 @@ pub struct PassContext<'a> {
     pub inputs: Vec<&'a wgpu::TextureView>,
     pub outputs: Vec<&'a wgpu::TextureView>,
     pub output_textures: Vec<&'a wgpu::Texture>,
-    pub output_descs: Vec<&'a TextureDesc>,
     pipelines: &'a BTreeMap<PipelineKey, Pipeline>,
     /// The query slots of this pass's begin and end timestamps.
     timestamps: Option<(&'a wgpu::QuerySet, u32)>,
@@ -34,10 +33,6 @@ pub struct PassContext<'a> {
 }
 
 impl PassContext<'_> {
-    pub fn pipeline(&self, key: &PipelineKey) -> Option<&Pipeline> {
-        self.pipelines.get(key)
-    }
-
     /// A uniform buffer holding `data`, for this frame only.
     pub fn uniform(&self, data: &[u8]) -> wgpu::Buffer {
         self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -107,7 +102,7 @@ impl PassContext<'_> {
     /// two when the pipeline was built with TWO_TRIANGLES.
     pub fn fullscreen(&mut self, key: &PipelineKey, groups: &[&[wgpu::BindingResource<'_>]]) {
         let Some((pipeline, bind_groups)) = self.prepare(key, groups) else { return };
-        let outputs: Vec<wgpu::TextureView> = self.outputs.iter().map(|v| (*v).clone()).collect();
+        let outputs = self.outputs.clone();
         let attachments = color_attachments(&outputs);
         let mut rp = self.begin(&attachments, None);
         rp.set_pipeline(&pipeline);
@@ -124,7 +119,7 @@ impl PassContext<'_> {
         &mut self,
         key: &PipelineKey,
         groups: &[&[wgpu::BindingResource<'_>]],
-        colors: &[wgpu::TextureView],
+        colors: &[&wgpu::TextureView],
         depth: Option<(&wgpu::TextureView, bool)>,
     ) {
         let Some((pipeline, bind_groups)) = self.prepare(key, groups) else { return };
@@ -152,7 +147,7 @@ impl PassContext<'_> {
     }
 }
 
-fn color_attachments(views: &[wgpu::TextureView]) -> Vec<Option<wgpu::RenderPassColorAttachment<'_>>> {
+fn color_attachments<'v>(views: &[&'v wgpu::TextureView]) -> Vec<Option<wgpu::RenderPassColorAttachment<'v>>> {
     views
         .iter()
         .map(|view| {
@@ -324,7 +319,6 @@ pub fn submit(
             inputs: pass.reads.iter().map(|h| views[h.0]).collect(),
             outputs: pass.writes.iter().map(|h| views[h.0]).collect(),
             output_textures: pass.writes.iter().map(|h| textures[h.0]).collect(),
-            output_descs: pass.writes.iter().map(|h| graph.texture(*h)).collect(),
             pipelines,
             timestamps: query_set.as_ref().map(|qs| (qs, i as u32 * 2)),
             recorded: 0,

@@ -11,11 +11,6 @@ pub mod scene_gpu;
 use crate::scene::Scene;
 use graph::{Graph, GraphBuilder};
 
-/// Every pass the renderer has, in frame order: the pass list shows each,
-/// live or culled.
-pub const PASSES: &[&str] =
-    &["test_pattern", "shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes", "exposure", "tonemap", "debug_view"];
-
 /// Builds the frame's graph from the scene: only what the scene calls for.
 pub fn build_graph(scene: &Scene, frame: u64) -> Graph {
     let mut g = GraphBuilder::new();

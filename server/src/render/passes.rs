@@ -59,12 +59,11 @@ pub fn shadows(g: &mut GraphBuilder, scene: &Scene) -> Option<Handle> {
         &[],
         vec![Target::new("depth", DEPTH, size, size).layers(layers)],
         Box::new(move |ctx| {
-            let matrices: Vec<glam::Mat4> = ctx.scene.shadow_layers.clone();
-            for (layer, m) in matrices.iter().enumerate() {
+            let s = ctx.scene;
+            for (layer, m) in s.shadow_layers.iter().enumerate() {
                 let u = ctx.uniform(bytemuck::cast_slice(&m.to_cols_array()));
-                let objects = ctx.scene.objects.clone();
                 let target = ctx.output_layer(0, layer as u32);
-                ctx.draw_objects(&exec_key, &[&[u.as_entire_binding(), objects.as_entire_binding()]], &[], Some((&target, true)));
+                ctx.draw_objects(&exec_key, &[&[u.as_entire_binding(), s.objects.as_entire_binding()]], &[], Some((&target, true)));
             }
         }),
     );
@@ -82,9 +81,8 @@ pub fn depth_prepass(g: &mut GraphBuilder, scene: &Scene) -> Handle {
         &[],
         vec![Target::new("depth", DEPTH, scene.width, scene.height)],
         Box::new(move |ctx| {
-            let (view, objects) = (ctx.scene.view.clone(), ctx.scene.objects.clone());
-            let target = ctx.outputs[0].clone();
-            ctx.draw_objects(&exec_key, &[&[view.as_entire_binding(), objects.as_entire_binding()]], &[], Some((&target, true)));
+            let (s, target) = (ctx.scene, ctx.outputs[0]);
+            ctx.draw_objects(&exec_key, &[&[s.view.as_entire_binding(), s.objects.as_entire_binding()]], &[], Some((target, true)));
         }),
     )[0]
 }
@@ -106,12 +104,9 @@ pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle) -> GBuffer {
         &[depth],
         vec![Target::new("normal", HDR, w, h), Target::new("albedo", HDR, w, h), Target::new("material", HDR, w, h)],
         Box::new(move |ctx| {
-            let s = ctx.scene;
-            let (view, objects, materials) = (s.view.clone(), s.objects.clone(), s.materials.clone());
-            let depth = ctx.inputs[0].clone();
-            let colors: Vec<wgpu::TextureView> = ctx.outputs.iter().map(|v| (*v).clone()).collect();
-            let bindings = [view.as_entire_binding(), objects.as_entire_binding(), materials.as_entire_binding()];
-            ctx.draw_objects(&exec_key, &[&bindings], &colors, Some((&depth, false)));
+            let (s, depth, colors) = (ctx.scene, ctx.inputs[0], ctx.outputs.clone());
+            let bindings = [s.view.as_entire_binding(), s.objects.as_entire_binding(), s.materials.as_entire_binding()];
+            ctx.draw_objects(&exec_key, &[&bindings], &colors, Some((depth, false)));
         }),
     );
     GBuffer { normal: out[0], albedo: out[1], material: out[2] }
@@ -166,30 +161,28 @@ pub fn lighting(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle
         &reads,
         vec![Target::new("color", HDR, scene.width, scene.height)],
         Box::new(move |ctx| {
-            let s = ctx.scene;
-            let (view, lights, shadow_views, media_buf) = (s.view.clone(), s.lights.clone(), s.shadow_views.clone(), s.media.clone());
-            let i = ctx.inputs.clone();
+            let (s, i) = (ctx.scene, ctx.inputs.clone());
             let core = [
-                view.as_entire_binding(),
-                lights.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&i[0]),
-                wgpu::BindingResource::TextureView(&i[1]),
-                wgpu::BindingResource::TextureView(&i[2]),
-                wgpu::BindingResource::TextureView(&i[3]),
+                s.view.as_entire_binding(),
+                s.lights.as_entire_binding(),
+                wgpu::BindingResource::TextureView(i[0]),
+                wgpu::BindingResource::TextureView(i[1]),
+                wgpu::BindingResource::TextureView(i[2]),
+                wgpu::BindingResource::TextureView(i[3]),
             ];
             let mut next = 4;
             let shadow_group: Vec<wgpu::BindingResource> = if has_shadows {
                 next += 1;
-                vec![wgpu::BindingResource::TextureView(&i[4]), shadow_views.as_entire_binding()]
+                vec![wgpu::BindingResource::TextureView(i[4]), s.shadow_views.as_entire_binding()]
             } else {
                 vec![]
             };
             let ltc_group: Vec<wgpu::BindingResource> = if has_ltc {
-                vec![wgpu::BindingResource::TextureView(&i[next]), wgpu::BindingResource::TextureView(&i[next + 1])]
+                vec![wgpu::BindingResource::TextureView(i[next]), wgpu::BindingResource::TextureView(i[next + 1])]
             } else {
                 vec![]
             };
-            let media_group: Vec<wgpu::BindingResource> = if media { vec![media_buf.as_entire_binding()] } else { vec![] };
+            let media_group: Vec<wgpu::BindingResource> = if media { vec![s.media.as_entire_binding()] } else { vec![] };
             ctx.fullscreen(&exec_key, &[&core, &shadow_group, &ltc_group, &media_group]);
         }),
     )[0]
@@ -220,13 +213,11 @@ pub fn volumes(g: &mut GraphBuilder, scene: &Scene, color: Handle, depth: Handle
         &reads,
         vec![Target::new("color", HDR, w, h), Target::new("transmittance", HDR, w, h)],
         Box::new(move |ctx| {
-            let s = ctx.scene;
-            let (view, lights, shadow_views, media) = (s.view.clone(), s.lights.clone(), s.shadow_views.clone(), s.media.clone());
-            let i = ctx.inputs.clone();
-            let core = [view.as_entire_binding(), lights.as_entire_binding(), wgpu::BindingResource::TextureView(&i[0]), wgpu::BindingResource::TextureView(&i[1])];
+            let (s, i) = (ctx.scene, ctx.inputs.clone());
+            let core = [s.view.as_entire_binding(), s.lights.as_entire_binding(), wgpu::BindingResource::TextureView(i[0]), wgpu::BindingResource::TextureView(i[1])];
             let shadow_group: Vec<wgpu::BindingResource> =
-                if has_shadows { vec![wgpu::BindingResource::TextureView(&i[2]), shadow_views.as_entire_binding()] } else { vec![] };
-            ctx.fullscreen(&exec_key, &[&core, &shadow_group, &[], &[media.as_entire_binding()]]);
+                if has_shadows { vec![wgpu::BindingResource::TextureView(i[2]), s.shadow_views.as_entire_binding()] } else { vec![] };
+            ctx.fullscreen(&exec_key, &[&core, &shadow_group, &[], &[s.media.as_entire_binding()]]);
         }),
     )[0]
 }
@@ -247,8 +238,8 @@ pub fn exposure(g: &mut GraphBuilder, scene: &Scene, hdr: Handle) -> Handle {
         vec![Target::new("color", HDR, scene.width, scene.height)],
         Box::new(move |ctx| {
             let buf = ctx.uniform(&vec4_bytes([scale, 0.0, 0.0, 0.0]));
-            let input = ctx.inputs[0].clone();
-            ctx.fullscreen(&exec_key, &[&[buf.as_entire_binding(), wgpu::BindingResource::TextureView(&input)]]);
+            let input = ctx.inputs[0];
+            ctx.fullscreen(&exec_key, &[&[buf.as_entire_binding(), wgpu::BindingResource::TextureView(input)]]);
         }),
     )[0]
 }
@@ -267,8 +258,8 @@ pub fn tonemap(g: &mut GraphBuilder, scene: &Scene, hdr: Handle) -> Handle {
         &[hdr],
         vec![Target::new("color", LDR, scene.width, scene.height)],
         Box::new(move |ctx| {
-            let input = ctx.inputs[0].clone();
-            ctx.fullscreen(&exec_key, &[&[wgpu::BindingResource::TextureView(&input)]]);
+            let input = ctx.inputs[0];
+            ctx.fullscreen(&exec_key, &[&[wgpu::BindingResource::TextureView(input)]]);
         }),
     )[0]
 }
@@ -302,8 +293,8 @@ pub fn debug_view(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Hand
             let mut u = vec4_bytes([0.0, near, far, 0.0]);
             u[0..4].copy_from_slice(&mode.to_le_bytes());
             let buf = ctx.uniform(&u);
-            let input = ctx.inputs[0].clone();
-            ctx.fullscreen(&exec_key, &[&[buf.as_entire_binding()], &[wgpu::BindingResource::TextureView(&input)]]);
+            let input = ctx.inputs[0];
+            ctx.fullscreen(&exec_key, &[&[buf.as_entire_binding()], &[wgpu::BindingResource::TextureView(input)]]);
         }),
     );
     Some(out[0])

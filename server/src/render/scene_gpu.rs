@@ -147,24 +147,23 @@ fn light_bytes(scene: &Scene) -> Vec<u8> {
     let mut out = Vec::new();
     for (l, layer) in scene.lights.iter().zip(first_layer) {
         let c = l.color.map(|x| x * l.intensity);
-        let (kind, position, direction, extra, right, up) = match l.kind {
-            LightKind::Directional { direction } => (0.0, [0.0; 3], direction, [0.0; 4], [0.0; 3], [0.0; 3]),
-            LightKind::Point { position } => (1.0, position, [0.0, -1.0, 0.0], [0.0; 4], [0.0; 3], [0.0; 3]),
+        // direction.w holds cos(outer cone) and extra.x cos(inner cone) for
+        // spots, as `incident` in lights.wgsl reads them.
+        let (kind, position, direction, cos_outer, extra, right, up) = match l.kind {
+            LightKind::Directional { direction } => (0.0, [0.0; 3], direction, 0.0, [0.0; 4], [0.0; 3], [0.0; 3]),
+            LightKind::Point { position } => (1.0, position, [0.0, -1.0, 0.0], 0.0, [0.0; 4], [0.0; 3], [0.0; 3]),
             LightKind::Spot { position, direction, inner_deg, outer_deg } => {
-                let d = [direction[0], direction[1], direction[2]];
-                (2.0, position, d, [inner_deg.to_radians().cos(), outer_deg.to_radians().cos(), 0.0, 0.0], [0.0; 3], [0.0; 3])
+                (2.0, position, direction, outer_deg.to_radians().cos(), [inner_deg.to_radians().cos(), 0.0, 0.0, 0.0], [0.0; 3], [0.0; 3])
             }
             LightKind::Rect { position, direction, size, two_sided } => {
                 let n = Vec3::from(direction);
                 let right = up_for(n).cross(n).normalize();
                 let up = n.cross(right);
-                (3.0, position, direction, [size[0] * 0.5, size[1] * 0.5, if two_sided { 1.0 } else { 0.0 }, 0.0], right.into(), up.into())
+                (3.0, position, direction, 0.0, [size[0] * 0.5, size[1] * 0.5, if two_sided { 1.0 } else { 0.0 }, 0.0], right.into(), up.into())
             }
         };
         push_vec4(&mut out, [c[0], c[1], c[2], kind]);
         push_vec4(&mut out, [position[0], position[1], position[2], layer as f32]);
-        // Spots keep cos(outer) in direction.w, as `incident` reads it.
-        let cos_outer = if let LightKind::Spot { outer_deg, .. } = l.kind { outer_deg.to_radians().cos() } else { 0.0 };
         push_vec4(&mut out, [direction[0], direction[1], direction[2], cos_outer]);
         push_vec4(&mut out, extra);
         push_vec4(&mut out, [right[0], right[1], right[2], 0.0]);

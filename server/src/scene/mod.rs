@@ -88,16 +88,6 @@ pub struct Medium {
     pub noise: Option<Noise>,
 }
 
-impl Medium {
-    /// Single-scattering albedo per channel, σs / (σa + σs).
-    pub fn albedo(&self) -> Vec3 {
-        std::array::from_fn(|i| {
-            let t = self.absorption[i] + self.scattering[i];
-            if t > 0.0 { self.scattering[i] / t } else { 0.0 }
-        })
-    }
-}
-
 #[derive(Debug, Clone, PartialEq)]
 pub struct Quality {
     pub shadows: bool,

@@ -24,13 +24,17 @@ struct Checker<'a> {
 type Checked<T> = Result<T, Diagnostic>;
 
 impl Checker<'_> {
+    /// Where the value at `path` is written, when the document has a span
+    /// for it.
+    fn location(&self, path: &[Seg]) -> Option<Location> {
+        let span = self.doc.as_ref().and_then(|d| span_of(d.as_item(), path))?;
+        Some(LineIndex::new(self.text).location(self.display, self.text, span))
+    }
+
     fn error(&self, path: &[Seg], message: impl Into<String>) -> Diagnostic {
-        let message = message.into();
-        let span = self.doc.as_ref().and_then(|d| span_of(d.as_item(), path));
-        let lines = LineIndex::new(self.text);
-        let d = Diagnostic::error(Code::Scene, format!("{}: {message}", path_string(path)));
-        match span {
-            Some(s) => d.with_label(lines.location(self.display, self.text, s), "here", true),
+        let d = Diagnostic::error(Code::Scene, format!("{}: {}", path_string(path), message.into()));
+        match self.location(path) {
+            Some(at) => d.with_label(at, "here", true),
             None => d.at(Location::file_start(self.display)),
         }
     }
@@ -188,11 +192,7 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
                 Geometry::Shape(s.clone())
             }
             (None, Some(m)) => {
-                let span = c.doc.as_ref().and_then(|d| span_of(d.as_item(), &p("mesh")));
-                let at = match span {
-                    Some(s) => LineIndex::new(text).location(display, text, s),
-                    None => Location::file_start(display),
-                };
+                let at = c.location(&p("mesh")).unwrap_or_else(|| Location::file_start(display));
                 Geometry::Mesh { file: m.clone(), at }
             }
             (Some(_), Some(_)) => return Err(c.error(&p("mesh"), "give either `shape` or `mesh`, not both")),

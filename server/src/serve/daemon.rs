@@ -16,9 +16,9 @@ use super::shared::{self, FrameImages, Shared};
 use crate::diag::{Code, Diagnostic, Location, Severity};
 use crate::gpu::{self, Gpu, pipeline};
 use crate::protocol::{self, ControlsReport, PassInfo, PassStatus, PassTiming, ReloadTimings, ServerEvent, Status};
-use crate::render::{self, frame, graph::{Graph, PipelineKey}, pipelines::{Installed, PipelineCache}, scene_gpu::SceneGpu};
+use crate::render::{self, frame, graph::{Graph, PipelineKey}, pipelines::{self, Installed, PipelineCache}, scene_gpu::SceneGpu};
 use crate::scene::{self, Scene, overrides::Overrides};
-use crate::shader::{Compose, Library, NagaOil, SourceFile, library};
+use crate::shader::{Library, SourceFile, library};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum RenderMode {
@@ -126,11 +126,7 @@ pub struct Daemon {
 
 impl Daemon {
     pub fn new(gpu: Gpu, config: Config, shared: Arc<Shared>, events: Sender<Event>) -> Self {
-        let files: Vec<SourceFile> = library::discover(std::slice::from_ref(&config.shader_root))
-            .unwrap_or_default()
-            .iter()
-            .filter_map(|p| SourceFile::read(p, library::display_path(p)).ok())
-            .collect();
+        let lib = library::read_tree(&config.shader_root).unwrap_or_else(|_| Library::new([]));
         let (loaded, scene_error) = match scene::load(&config.scene_path) {
             Ok(l) => (l, None),
             Err(d) => {
@@ -150,7 +146,7 @@ impl Daemon {
         Daemon {
             gpu,
             config,
-            lib: Arc::new(Library::new(files)),
+            lib: Arc::new(lib),
             file_errors: BTreeMap::new(),
             scene: loaded.scene,
             scene_files: loaded.files,
@@ -435,14 +431,9 @@ impl Daemon {
             }).cloned();
             self.workers.spawn(move || {
                 let start = Instant::now();
-                let result = match (file_error, lib.get(&display)) {
-                    (Some(d), _) => Err(vec![d]),
-                    (None, Some(file)) => {
-                        let caps = gpu::capabilities_without_device();
-                        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| NagaOil.compose(&lib, file, &key.defs, caps)))
-                            .unwrap_or_else(|_| Err(vec![Diagnostic::error(crate::diag::Code::CompilerPanic, "the WGSL compiler crashed on this file").at(crate::diag::Location::file_start(&display))]))
-                    }
-                    (None, None) => Err(vec![Diagnostic::error(crate::diag::Code::Io, format!("pipeline `{}` needs `{display}`, which does not exist", key.spec))]),
+                let result = match file_error {
+                    Some(d) => Err(vec![d]),
+                    None => pipelines::compose(&lib, &key, &display),
                 };
                 let compose_ms = start.elapsed().as_secs_f64() * 1e3;
                 let _ = tx.send(Event::CompileFinished(CompileResult { reload: id, pipeline: key.spec.to_owned(), defs: key.defs, result, compose_ms }));

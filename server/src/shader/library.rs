@@ -366,6 +366,16 @@ pub fn display_path(path: &Path) -> String {
     shown.to_string_lossy().replace('\\', "/")
 }
 
+/// The readable `*.wgsl` files under `root`, as a library. Unreadable ones
+/// are left out here: whoever builds from them reports the missing file.
+pub fn read_tree(root: &Path) -> Result<Library, String> {
+    let files = discover(std::slice::from_ref(&root.to_path_buf()))?
+        .iter()
+        .filter_map(|p| SourceFile::read(p, display_path(p)).ok())
+        .collect::<Vec<_>>();
+    Ok(Library::new(files))
+}
+
 /// Every `*.wgsl` file under `roots` (files named directly are taken as
 /// they are), sorted, deduplicated.
 pub fn discover(roots: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
