@@ -160,7 +160,7 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     // A shader tree that holds some of the renderer's shaders must hold all
     // of them; a tree with none is someone else's WGSL, checked as sources.
     let renderer_tree = !specs_by_file.is_empty() && opts.paths.iter().any(|p| canon(p) == shader_root);
-    for spec in pipeline::SPECS {
+    for spec in crate::render::passes::specs() {
         if renderer_tree && !specs_by_file.values().flatten().any(|s| s.name == spec.name) {
             let wanted = opts.shader_root.join(spec.shader);
             report.general.push(
@@ -217,7 +217,7 @@ fn specs_by_display(lib: &Library, shader_root: &Path) -> BTreeMap<String, Vec<&
         let canon = f.path.canonicalize().unwrap_or_else(|_| f.path.clone());
         let Ok(rel) = canon.strip_prefix(shader_root) else { continue };
         let rel = rel.to_string_lossy().replace('\\', "/");
-        for spec in pipeline::SPECS.iter().filter(|s| s.shader == rel) {
+        for spec in crate::render::passes::specs().filter(|s| s.shader == rel) {
             out.entry(f.display.clone()).or_default().push(spec);
         }
     }

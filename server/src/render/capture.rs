@@ -4,6 +4,8 @@
 
 use serde::Serialize;
 
+use super::resource::{Element, TensorLayout};
+
 /// One pass output of one frame, exactly as the pass wrote it.
 #[derive(Debug, Clone)]
 pub struct CapturedImage {
@@ -226,6 +228,88 @@ impl CapturedImage {
     }
 }
 
+/// One buffer of one frame, read as the tensor its layout describes: any
+/// number of channels, converted to f32, with the statistics images get.
+#[derive(Debug, Clone)]
+pub struct CapturedTensor {
+    pub pass: String,
+    pub output: String,
+    pub frame: u64,
+    pub layout: TensorLayout,
+    /// Every element in layout order, as f32 (u32 and f16 converted).
+    pub data: Vec<f32>,
+    pub stats: TensorStats,
+}
+
+#[derive(Debug, Clone, Default, Serialize, PartialEq)]
+pub struct TensorStats {
+    pub nan: u64,
+    pub inf: u64,
+    pub negative: u64,
+    /// Per channel (the innermost dimension), over finite values only.
+    pub min: Vec<f32>,
+    pub max: Vec<f32>,
+    pub mean: Vec<f32>,
+    /// The flat index of the first NaN or Inf.
+    pub first_nan: Option<u64>,
+}
+
+impl TensorStats {
+    pub fn of(data: &[f32], channels: usize) -> Self {
+        let channels = channels.max(1);
+        let mut s = TensorStats { min: vec![f32::INFINITY; channels], max: vec![f32::NEG_INFINITY; channels], ..Default::default() };
+        let mut sum = vec![0f64; channels];
+        let mut count = vec![0u64; channels];
+        for (i, &v) in data.iter().enumerate() {
+            let c = i % channels;
+            if !v.is_finite() {
+                if v.is_nan() { s.nan += 1 } else { s.inf += 1 }
+                s.first_nan.get_or_insert(i as u64);
+                continue;
+            }
+            s.negative += u64::from(v < 0.0);
+            s.min[c] = s.min[c].min(v);
+            s.max[c] = s.max[c].max(v);
+            sum[c] += f64::from(v);
+            count[c] += 1;
+        }
+        s.mean = sum.iter().zip(&count).map(|(s, n)| if *n == 0 { 0.0 } else { (s / *n as f64) as f32 }).collect();
+        for c in 0..channels {
+            if count[c] == 0 {
+                (s.min[c], s.max[c]) = (0.0, 0.0);
+            }
+        }
+        s
+    }
+
+    pub fn has_non_finite(&self) -> bool {
+        self.nan + self.inf > 0
+    }
+}
+
+impl CapturedTensor {
+    /// Reads `bytes` (tightly packed, little-endian) as `layout` says.
+    pub fn new(pass: &str, output: &str, frame: u64, layout: TensorLayout, bytes: &[u8]) -> Self {
+        let n = layout.len() as usize;
+        let data: Vec<f32> = match layout.element {
+            Element::F32 => bytes.chunks_exact(4).take(n).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect(),
+            Element::U32 => bytes.chunks_exact(4).take(n).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32).collect(),
+            Element::F16 => bytes.chunks_exact(2).take(n).map(|b| half::f16::from_le_bytes([b[0], b[1]]).to_f32()).collect(),
+        };
+        let stats = TensorStats::of(&data, layout.channels());
+        CapturedTensor { pass: pass.to_owned(), output: output.to_owned(), frame, layout, data, stats }
+    }
+
+    pub fn key(&self) -> String {
+        format!("{}/{}", self.pass, self.output)
+    }
+
+    /// Raw little-endian f32, in layout order.
+    pub fn raw_f32(&self) -> Vec<u8> {
+        self.data.iter().flat_map(|v| v.to_le_bytes()).collect()
+    }
+}
+
 pub fn linear_to_srgb(v: f32) -> f32 {
     if v <= 0.003_130_8 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
 }
@@ -247,6 +331,25 @@ mod tests {
         assert_eq!(s.first_nan, Some([1, 0]));
         assert_eq!(s.min[0], 0.25);
         assert_eq!(s.max[1], 2.0);
+    }
+
+    #[test]
+    fn tensors_read_every_element_type_with_per_channel_stats() {
+        let layout = TensorLayout::new(&[("x", 3), ("c", 2)], Element::F32);
+        let values = [1.0f32, -2.0, f32::NAN, 4.0, 3.0, f32::INFINITY];
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let t = CapturedTensor::new("p", "t", 1, layout, &bytes);
+        assert_eq!((t.stats.nan, t.stats.inf, t.stats.negative), (1, 1, 1));
+        assert_eq!(t.stats.first_nan, Some(2));
+        assert_eq!((t.stats.min.clone(), t.stats.max.clone()), (vec![1.0, -2.0], vec![3.0, 4.0]));
+        assert_eq!(t.stats.mean, vec![2.0, 1.0]);
+
+        let u: Vec<u8> = [7u32, 0, 3_000_000].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let t = CapturedTensor::new("p", "h", 1, TensorLayout::new(&[("bin", 3)], Element::U32), &u);
+        assert_eq!(t.data, [7.0, 0.0, 3_000_000.0]);
+        let h: Vec<u8> = [0.5f32, 65504.0].iter().flat_map(|v| half::f16::from_f32(*v).to_le_bytes()).collect();
+        let t = CapturedTensor::new("p", "f", 1, TensorLayout::new(&[("x", 2)], Element::F16), &h);
+        assert_eq!(t.data, [0.5, 65504.0]);
     }
 
     #[test]

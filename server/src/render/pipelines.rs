@@ -7,10 +7,11 @@
 
 use std::collections::BTreeMap;
 
-use super::graph::PipelineKey;
+use serde::Serialize;
+
+use super::resource::PipelineKey;
 use crate::diag::{Code, Diagnostic, Location};
 use crate::gpu::{self, pipeline::{self, Pipeline}};
-use crate::protocol::{PassStatus, PipelineInfo};
 use crate::shader::{Compose, Composed, Library, NagaOil};
 
 /// Composes and validates the shader of pipeline `key`, which lives at
@@ -18,7 +19,7 @@ use crate::shader::{Compose, Composed, Library, NagaOil};
 /// panic come back as diagnostics like any other error.
 pub fn compose(lib: &Library, key: &PipelineKey, display: &str) -> Result<Composed, Vec<Diagnostic>> {
     let Some(file) = lib.get(display) else {
-        return Err(vec![pipeline::missing_shader(key.spec, display)]);
+        return Err(vec![pipeline::missing_shader(key.spec.name, display)]);
     };
     let caps = gpu::capabilities_without_device();
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| NagaOil.compose(lib, file, &key.defs, caps))).unwrap_or_else(|_| {
@@ -36,14 +37,39 @@ pub struct Entry {
     pub files: Vec<String>,
 }
 
+/// How a pipeline stands, worst last.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Status {
+    /// Its current version renders.
+    Ok,
+    /// Its newest source failed; the last good pipeline still renders.
+    Stale,
+    /// It has never built: it does not render.
+    Failed,
+}
+
 impl Entry {
-    pub fn status(&self) -> PassStatus {
+    pub fn status(&self) -> Status {
         match (&self.current, self.diagnostics.is_empty()) {
-            (Some(_), true) => PassStatus::Ok,
-            (Some(_), false) => PassStatus::Stale,
-            (None, _) => PassStatus::Failed,
+            (Some(_), true) => Status::Ok,
+            (Some(_), false) => Status::Stale,
+            (None, _) => Status::Failed,
         }
     }
+}
+
+/// One pipeline as reports show it.
+#[derive(Debug, Clone, Serialize)]
+pub struct PipelineSummary {
+    /// `spec[DEFS]`.
+    pub name: String,
+    pub shader: String,
+    pub defs: String,
+    pub status: Status,
+    /// Increases each time a new version is swapped in.
+    pub generation: u64,
+    pub files: Vec<String>,
 }
 
 #[derive(Default)]
@@ -77,10 +103,9 @@ impl PipelineCache {
             diagnostics: Vec::new(),
             files: vec![shader_display.to_owned()],
         });
-        let spec = pipeline::spec(key.spec).expect("keys come from specs");
         let created = result.and_then(|composed| {
             entry.files = composed.files.clone();
-            pipeline::create(device, spec, &key.defs, &composed, lib, shader_display).map(|p| (p, composed))
+            pipeline::create(device, key.spec, &key.defs, &composed, lib, shader_display).map(|p| (p, composed))
         });
         match created {
             Ok((p, composed)) => {
@@ -103,9 +128,8 @@ impl PipelineCache {
         for (key, entry) in &mut self.entries {
             entry.current = None;
             let Some(composed) = &entry.last_good else { continue };
-            let spec = pipeline::spec(key.spec).expect("keys come from specs");
             let display = entry.files.last().cloned().unwrap_or_default();
-            match pipeline::create(device, spec, &key.defs, composed, lib, &display) {
+            match pipeline::create(device, key.spec, &key.defs, composed, lib, &display) {
                 Ok(p) => entry.current = Some(p),
                 Err(d) => problems.extend(d),
             }
@@ -117,10 +141,10 @@ impl PipelineCache {
         self.entries.iter().filter_map(|(k, e)| e.current.clone().map(|p| (k.clone(), p))).collect()
     }
 
-    pub fn info(&self) -> Vec<PipelineInfo> {
+    pub fn summaries(&self) -> Vec<PipelineSummary> {
         self.entries
             .iter()
-            .map(|(k, e)| PipelineInfo {
+            .map(|(k, e)| PipelineSummary {
                 name: k.label(),
                 shader: e.files.last().cloned().unwrap_or_default(),
                 defs: crate::shader::defs_key(&k.defs),

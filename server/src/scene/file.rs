@@ -221,11 +221,24 @@ pub struct Post {
     /// Draw fullscreen passes as two triangles instead of one, to compare.
     pub two_triangles: bool,
     pub debug_view: DebugView,
+    pub auto_exposure: bool,
+    pub auto_exposure_speed: f32,
+    pub auto_exposure_min_ev: f32,
+    pub auto_exposure_max_ev: f32,
 }
 
 impl Default for Post {
     fn default() -> Self {
-        Post { exposure_ev: 0.0, tonemap: Tonemap::Aces, two_triangles: false, debug_view: DebugView::None }
+        Post {
+            exposure_ev: 0.0,
+            tonemap: Tonemap::Aces,
+            two_triangles: false,
+            debug_view: DebugView::None,
+            auto_exposure: false,
+            auto_exposure_speed: 3.0,
+            auto_exposure_min_ev: -8.0,
+            auto_exposure_max_ev: 8.0,
+        }
     }
 }
 

@@ -10,7 +10,7 @@ use tokio::sync::{broadcast, watch};
 use super::event::Event;
 use crate::diag::Diagnostic;
 use crate::protocol::{ControlsReport, Encoding, PassInfo, PipelineInfo, ServerEvent, Status};
-use crate::render::capture::CapturedImage;
+use crate::render::capture::{CapturedImage, CapturedTensor};
 
 /// How many events a slow WebSocket client may fall behind before it
 /// starts losing (and being told how many it lost).
@@ -23,6 +23,9 @@ pub struct Shared {
     pub diagnostics: RwLock<Vec<Diagnostic>>,
     /// Every captured output of the newest frame, by `pass/output`.
     pub captures: RwLock<Arc<BTreeMap<String, Arc<CapturedImage>>>>,
+    /// Every captured buffer (as a tensor) of the newest frames, by
+    /// `pass/output`.
+    pub tensors: RwLock<Arc<BTreeMap<String, Arc<CapturedTensor>>>>,
     /// The previous good version of each output, kept when a reload swaps a
     /// pipeline, for A/B compares: by `pass/output`.
     pub last_good: RwLock<Arc<BTreeMap<String, Arc<CapturedImage>>>>,
@@ -89,6 +92,7 @@ impl Shared {
             diagnostics: RwLock::new(Vec::new()),
             captures: RwLock::new(Arc::new(BTreeMap::new())),
             last_good: RwLock::new(Arc::new(BTreeMap::new())),
+            tensors: RwLock::new(Arc::new(BTreeMap::new())),
             events: broadcast::channel(EVENT_QUEUE).0,
             frames: watch::channel(None).0,
             to_daemon,
