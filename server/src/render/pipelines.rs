@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use super::resource::PipelineKey;
-use crate::diag::{Code, Diagnostic, Location};
+use crate::diag::Diagnostic;
 use crate::gpu::{self, pipeline::{self, Pipeline}};
 use crate::shader::{Compose, Composed, Library, NagaOil};
 
@@ -22,9 +22,7 @@ pub fn compose(lib: &Library, key: &PipelineKey, display: &str) -> Result<Compos
         return Err(vec![pipeline::missing_shader(key.spec.name, display)]);
     };
     let caps = gpu::capabilities_without_device();
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| NagaOil.compose(lib, file, &key.defs, caps))).unwrap_or_else(|_| {
-        Err(vec![Diagnostic::error(Code::CompilerPanic, "the WGSL compiler crashed on this file").at(Location::file_start(display))])
-    })
+    crate::shader::guard::guarded(display, "the WGSL compiler", || NagaOil.compose(lib, file, &key.defs, caps))
 }
 
 pub struct Entry {

@@ -67,3 +67,51 @@ pub fn fullscreen_key(spec: &'static PipelineSpec, scene: &Scene, defs: &[(&'sta
 pub fn vec4_bytes(v: [f32; 4]) -> Vec<u8> {
     bytemuck::cast_slice(&v).to_vec()
 }
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeSet;
+
+    use super::*;
+    use crate::scene::overrides::{Overrides, Value};
+
+    /// Every pipeline a frame can use is one `loupe check` creates: the
+    /// graphs of every bundled scene under every switch that changes the
+    /// pass list or a permutation only name specs in `specs()`, and every
+    /// spec there is used by some frame.
+    #[test]
+    fn every_pipeline_a_frame_uses_is_enumerated_for_loupe_check() {
+        let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+        let switches: &[(&str, &[Value])] = &[
+            ("post.auto_exposure", &[Value::Bool(false), Value::Bool(true)]),
+            ("post.two_triangles", &[Value::Bool(false), Value::Bool(true)]),
+            ("post.tonemap", &[Value::Text("aces".into()), Value::Text("reinhard".into())]),
+            ("post.debug_view", &[Value::Text("none".into()), Value::Text("normal".into()), Value::Text("depth".into())]),
+            ("post.exposure_ev", &[Value::Float(0.0), Value::Float(1.0)]),
+            ("quality.shadows", &[Value::Bool(true), Value::Bool(false)]),
+            ("quality.volume_estimator", &[Value::Text("constant".into()), Value::Text("analytic".into())]),
+        ];
+        let mut used = BTreeSet::new();
+        let mut scenes_seen = 0;
+        for entry in std::fs::read_dir(&scenes).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_none_or(|e| e != "toml") {
+                continue;
+            }
+            scenes_seen += 1;
+            for (key, values) in switches {
+                for v in *values {
+                    let overrides = Overrides::from([((*key).to_owned(), v.clone())]);
+                    let loaded = crate::scene::load_with(&path, &overrides).unwrap_or_else(|d| panic!("{d}"));
+                    for k in crate::render::build_graph(&loaded.scene).pipelines() {
+                        assert!(specs().any(|s| std::ptr::eq(s, k.spec)), "{} is built by a frame but not listed for loupe check", k.label());
+                        used.insert(k.spec.name);
+                    }
+                }
+            }
+        }
+        assert!(scenes_seen >= 4, "the bundled scenes are found");
+        let listed: BTreeSet<&str> = specs().map(|s| s.name).collect();
+        assert_eq!(listed, used, "every listed spec is used by some frame");
+    }
+}
