@@ -14,7 +14,8 @@ use super::AppState;
 use super::guard::{error, json, json_response};
 use crate::protocol::DiagnosticsReport;
 use crate::render::capture::{CapturedImage, ImageStats};
-use crate::serve::event::{Event, SceneCommand};
+use crate::serve::event::SceneCommand;
+use crate::serve::inbox::Command;
 use crate::serve::shared::{Shared, read};
 
 pub(super) async fn status(State(st): State<Arc<AppState>>) -> Response {
@@ -160,16 +161,17 @@ pub(super) async fn capture(
     resp
 }
 
-/// Hands `event` to the daemon: 202, or 503 when it is gone.
-fn to_daemon(st: &AppState, event: Event) -> Response {
-    match st.shared.to_daemon.send(event) {
+/// Hands `command` to the daemon: 202, or 503 when it is gone or too many
+/// commands already wait for it.
+fn to_daemon(st: &AppState, command: Command) -> Response {
+    match st.shared.clients.command(command) {
         Ok(()) => json_response(StatusCode::ACCEPTED, &serde_json::json!({ "accepted": true })),
-        Err(_) => error(StatusCode::SERVICE_UNAVAILABLE, "the daemon is not running"),
+        Err(refused) => error(StatusCode::SERVICE_UNAVAILABLE, &refused.to_string()),
     }
 }
 
 pub(super) async fn reload(State(st): State<Arc<AppState>>) -> Response {
-    to_daemon(&st, Event::Rebuild)
+    to_daemon(&st, Command::Rebuild)
 }
 
 pub(super) async fn controls(State(st): State<Arc<AppState>>) -> Response {
@@ -177,24 +179,26 @@ pub(super) async fn controls(State(st): State<Arc<AppState>>) -> Response {
 }
 
 pub(super) async fn save_scene(State(st): State<Arc<AppState>>) -> Response {
-    to_daemon(&st, Event::Scene(SceneCommand::Save))
+    to_daemon(&st, Command::Scene(SceneCommand::Save))
 }
 
 /// Debug API only: the render thread destroys its device, which is then
 /// lost and recovered as if the driver had lost it.
 pub(super) async fn lose_device(State(st): State<Arc<AppState>>) -> Response {
-    to_daemon(&st, Event::LoseDevice)
+    to_daemon(&st, Command::LoseDevice)
 }
 
 #[cfg(test)]
 mod tests {
     use std::collections::BTreeMap;
     use std::sync::Arc;
+    use std::time::Duration;
 
     use super::super::testing::{daemon_event, frame_images, get, request, start, start_with};
     use crate::protocol::VERSION;
     use crate::render::capture::CapturedImage;
     use crate::serve::event::Event;
+    use crate::serve::inbox::COMMAND_QUEUE;
     use crate::serve::shared::write;
 
     #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -316,13 +320,32 @@ mod tests {
     }
 
     #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn requests_for_the_daemon_are_refused_with_503_while_its_queue_is_full() {
+        let s = start(vec![]).await;
+        for _ in 0..COMMAND_QUEUE {
+            assert_eq!(request(s.addr, "POST", "/api/reload", "").await.status, 202);
+        }
+        for path in ["/api/reload", "/api/scene/save"] {
+            let r = request(s.addr, "POST", path, "").await;
+            assert_eq!(r.status, 503, "{path}");
+            assert_eq!(r.header("cache-control").as_deref(), Some("no-store"));
+            let message = r.json()["error"].as_str().unwrap().to_owned();
+            assert!(message.starts_with("the daemon is busy"), "{message}");
+        }
+        // One read by the daemon makes room for one.
+        assert!(matches!(daemon_event(&s), Some(Event::Rebuild)));
+        assert_eq!(request(s.addr, "POST", "/api/scene/save", "").await.status, 202);
+        assert_eq!(request(s.addr, "POST", "/api/reload", "").await.status, 503);
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
     async fn the_debug_api_exists_only_when_enabled() {
         let s = start(vec![]).await;
         let r = request(s.addr, "POST", "/api/debug/lose-device", "").await;
         assert_eq!(r.status, 404, "{}", r.text());
         assert!(r.json()["error"].is_string());
         assert_eq!(request(s.addr, "POST", "/api/nope", "").await.status, 404);
-        assert!(s.daemon.try_recv().is_err());
+        assert!(s.daemon.recv_timeout(Duration::ZERO).is_err());
 
         let s = start_with(vec![], true).await;
         let cross = "Origin: http://evil.example\r\n";

@@ -39,7 +39,6 @@ use std::future::Future;
 use std::io;
 use std::net::SocketAddr;
 use std::sync::Arc;
-use std::sync::atomic::AtomicU64;
 
 use axum::Router;
 use axum::middleware;
@@ -55,8 +54,6 @@ struct AppState {
     hosts: Vec<String>,
     /// Set to true when the server shuts down: WebSocket tasks close.
     stop: watch::Sender<bool>,
-    /// Ids for WebSocket clients (their subscriptions are per client).
-    next_client: AtomicU64,
 }
 
 /// Binds a TCP listener; port 0 picks a free port. Returns the listener and
@@ -117,7 +114,6 @@ fn build(shared: Arc<Shared>, allowed_hosts: Vec<String>) -> (Router, watch::Sen
         shared,
         hosts: allowed_hosts.into_iter().map(|h| h.to_ascii_lowercase()).collect(),
         stop: stop.clone(),
-        next_client: AtomicU64::new(1),
     });
     let mut app = Router::new();
     if state.shared.debug_api {

@@ -7,7 +7,6 @@ use std::io;
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::mpsc;
 use std::time::Duration;
 
 use futures_util::StreamExt;
@@ -18,6 +17,7 @@ use tokio_tungstenite::tungstenite::{self, client::IntoClientRequest};
 use super::{allowed_hosts, bind, serve};
 use crate::render::capture::CapturedImage;
 use crate::serve::event::Event;
+use crate::serve::inbox::{self, Inbox};
 use crate::serve::shared::{FrameImages, Shared};
 
 /// A server on a free loopback port. `daemon` receives what the server
@@ -26,7 +26,7 @@ use crate::serve::shared::{FrameImages, Shared};
 pub(super) struct Server {
     pub addr: SocketAddr,
     pub shared: Arc<Shared>,
-    pub daemon: mpsc::Receiver<Event>,
+    pub daemon: Inbox,
     /// Send to shut the server down.
     pub stop: Option<tokio::sync::oneshot::Sender<()>>,
     pub done: tokio::task::JoinHandle<io::Result<()>>,
@@ -37,8 +37,8 @@ pub(super) async fn start(roots: Vec<PathBuf>) -> Server {
 }
 
 pub(super) async fn start_with(roots: Vec<PathBuf>, debug_api: bool) -> Server {
-    let (tx, daemon) = mpsc::channel();
-    let shared = Shared::new(tx, roots, debug_api);
+    let (_, clients, daemon) = inbox::open();
+    let shared = Shared::new(clients, roots, debug_api);
     let (listener, addr) = bind("127.0.0.1:0".parse().unwrap()).await.unwrap();
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
     let done = tokio::spawn(serve(listener, shared.clone(), allowed_hosts(addr), async move {

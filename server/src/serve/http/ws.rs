@@ -3,20 +3,22 @@
 //! outputs this client subscribed to), and hands the client's messages to
 //! the daemon.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 use std::sync::Arc;
-use std::sync::atomic::Ordering;
 use std::time::Duration;
 
 use axum::extract::State;
 use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade};
+use axum::http::StatusCode;
 use axum::response::Response;
 use serde::Serialize;
 use tokio::sync::broadcast::error::RecvError;
 
 use super::AppState;
+use super::guard::error;
 use crate::protocol::{ClientMessage, Encoding, ServerEvent, VERSION};
-use crate::serve::event::{Event, SceneCommand};
+use crate::serve::event::SceneCommand;
+use crate::serve::inbox::{Client, Command, MAX_CONNECTIONS, Refused};
 use crate::serve::shared::{FrameImages, Shared, read};
 
 /// The largest message a WebSocket client may send.
@@ -24,11 +26,22 @@ const MAX_CLIENT_MESSAGE: usize = 1024 * 1024;
 /// How often pending skipped-frame counts are reported when no event is
 /// flowing to carry them.
 const DROPPED_REPORT_INTERVAL: Duration = Duration::from_secs(1);
+/// How many outputs one WebSocket client may subscribe to.
+pub const MAX_SUBSCRIPTIONS: usize = 64;
+
+/// Upgrades to a WebSocket, or answers 503 when [`MAX_CONNECTIONS`]
+/// clients hold a slot.
 pub(super) async fn upgrade(State(st): State<Arc<AppState>>, upgrade: WebSocketUpgrade) -> Response {
+    let Some(client) = st.shared.clients.join() else {
+        return error(
+            StatusCode::SERVICE_UNAVAILABLE,
+            &format!("too many WebSocket connections: at most {MAX_CONNECTIONS} at once; try again when one closes"),
+        );
+    };
     upgrade
         .max_message_size(MAX_CLIENT_MESSAGE)
         .max_frame_size(MAX_CLIENT_MESSAGE)
-        .on_upgrade(move |socket| client_loop(st, socket))
+        .on_upgrade(move |socket| client_loop(st, socket, client))
 }
 
 fn event_message(event: &ServerEvent) -> Option<Message> {
@@ -118,59 +131,59 @@ impl Missed {
     }
 }
 
-/// Tells the daemon, however the client's task ends, that it wants
-/// nothing captured any more.
-struct Unsubscribe {
-    to_daemon: std::sync::mpsc::Sender<Event>,
-    client: u64,
-}
-
-impl Drop for Unsubscribe {
-    fn drop(&mut self) {
-        let _ = self.to_daemon.send(Event::Subscriptions { client: self.client, outputs: BTreeSet::new() });
-    }
-}
-
 /// Applies a client's message: subscriptions change this client's set
-/// (and the daemon learns the new set), `rebuild` goes to the daemon.
-fn client_message(shared: &Shared, client: u64, subscriptions: &mut BTreeMap<String, Encoding>, msg: ClientMessage) {
-    let before: BTreeSet<String> = subscriptions.keys().cloned().collect();
-    match msg {
+/// (and the daemon learns the new set), commands go to the daemon. `Err`:
+/// what to tell the client (a subscription over [`MAX_SUBSCRIPTIONS`], a
+/// command refused because
+/// [`COMMAND_QUEUE`](crate::serve::inbox::COMMAND_QUEUE) wait); nothing changed then.
+fn client_message(
+    shared: &Shared,
+    client: &mut Client,
+    subscriptions: &mut BTreeMap<String, Encoding>,
+    msg: ClientMessage,
+) -> Result<(), String> {
+    let (kind, command) = match msg {
         ClientMessage::Subscribe { pass, output, encoding } => {
-            subscriptions.insert(format!("{pass}/{output}"), encoding);
+            let key = format!("{pass}/{output}");
+            if subscriptions.len() >= MAX_SUBSCRIPTIONS && !subscriptions.contains_key(&key) {
+                return Err(format!(
+                    "subscription to `{key}` refused: a connection may subscribe to at most {MAX_SUBSCRIPTIONS} outputs"
+                ));
+            }
+            let new = subscriptions.insert(key, encoding).is_none();
+            if new {
+                client.subscribe(subscriptions.keys().cloned().collect());
+            }
+            return Ok(());
         }
         ClientMessage::Unsubscribe { pass, output } => {
-            subscriptions.remove(&format!("{pass}/{output}"));
+            if subscriptions.remove(&format!("{pass}/{output}")).is_some() {
+                client.subscribe(subscriptions.keys().cloned().collect());
+            }
+            return Ok(());
         }
+        ClientMessage::Rebuild {} => ("rebuild", Command::Rebuild),
+        ClientMessage::SetOverride { path, value } => ("set_override", Command::Scene(SceneCommand::Set { path, value })),
+        ClientMessage::ClearOverrides {} => ("clear_overrides", Command::Scene(SceneCommand::Clear)),
+        ClientMessage::SaveScene {} => ("save_scene", Command::Scene(SceneCommand::Save)),
+    };
+    match shared.clients.command(command) {
+        Err(busy @ Refused::Busy) => Err(format!("`{kind}` refused: {busy}")),
         // The daemon may be gone while the server drains; nothing to tell
         // the client then.
-        ClientMessage::Rebuild {} => {
-            let _ = shared.to_daemon.send(Event::Rebuild);
-        }
-        ClientMessage::SetOverride { path, value } => {
-            let _ = shared.to_daemon.send(Event::Scene(SceneCommand::Set { path, value }));
-        }
-        ClientMessage::ClearOverrides {} => {
-            let _ = shared.to_daemon.send(Event::Scene(SceneCommand::Clear));
-        }
-        ClientMessage::SaveScene {} => {
-            let _ = shared.to_daemon.send(Event::Scene(SceneCommand::Save));
-        }
-    }
-    let outputs: BTreeSet<String> = subscriptions.keys().cloned().collect();
-    if outputs != before {
-        let _ = shared.to_daemon.send(Event::Subscriptions { client, outputs });
+        Ok(()) | Err(Refused::Gone) => Ok(()),
     }
 }
 
 /// One WebSocket client. Memory per client is bounded: events wait in the
 /// shared broadcast ring (`EVENT_QUEUE` deep; a lagging client loses the
 /// oldest and is told how many), images in a `watch` (only the newest
-/// frame's), and at most one message is in flight to the socket at a time.
-async fn client_loop(st: Arc<AppState>, mut socket: WebSocket) {
+/// frame's), at most one message is in flight to the socket at a time,
+/// and it subscribes to at most [`MAX_SUBSCRIPTIONS`] outputs.
+///
+/// Dropping `client` when this ends tells the daemon the client left.
+async fn client_loop(st: Arc<AppState>, mut socket: WebSocket, mut client: Client) {
     let shared = st.shared.clone();
-    let client = st.next_client.fetch_add(1, Ordering::Relaxed);
-    let _leave = Unsubscribe { to_daemon: shared.to_daemon.clone(), client };
     let mut subscriptions: BTreeMap<String, Encoding> = BTreeMap::new();
     // Subscribe before the Hello snapshot so nothing after it is missed.
     let mut events = shared.events.subscribe();
@@ -219,10 +232,10 @@ async fn client_loop(st: Arc<AppState>, mut socket: WebSocket) {
             incoming = socket.recv() => match incoming {
                 None | Some(Err(_)) | Some(Ok(Message::Close(_))) => Ok(false),
                 Some(Ok(Message::Text(text))) => match serde_json::from_str::<ClientMessage>(text.as_str()) {
-                    Ok(msg) => {
-                        client_message(&shared, client, &mut subscriptions, msg);
-                        Ok(true)
-                    }
+                    Ok(msg) => match client_message(&shared, &mut client, &mut subscriptions, msg) {
+                        Ok(()) => Ok(true),
+                        Err(refused) => send_error(&mut socket, refused).await,
+                    },
                     Err(e) => send_error(&mut socket, format!("invalid message: {e}")).await,
                 },
                 Some(Ok(Message::Binary(_))) => send_error(&mut socket, "binary messages are not accepted".into()).await,
@@ -269,11 +282,16 @@ async fn send_error(socket: &mut WebSocket, message: String) -> Result<bool, axu
 
 #[cfg(test)]
 mod tests {
-    use futures_util::SinkExt;
+    use std::net::SocketAddr;
+
+    use futures_util::{SinkExt, StreamExt};
     use tokio_tungstenite::tungstenite;
 
     use super::super::testing::{Ws, connect, daemon_event_async, frame_images, next_json, next_message, start};
     use super::*;
+    use crate::scene::overrides::Value;
+    use crate::serve::event::Event;
+    use crate::serve::inbox::COMMAND_QUEUE;
     use crate::serve::shared::{EVENT_QUEUE, write};
 
     #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -338,22 +356,25 @@ mod tests {
         assert_eq!(next_json(&mut ws).await["type"], "error");
 
         // The daemon learns this client's whole set each time it changes,
-        // and only then: a repeated subscribe changes nothing.
-        for m in [
-            r#"{"type":"subscribe","pass":"hdr","output":"color"}"#,
-            r#"{"type":"subscribe","pass":"hdr","output":"color","encoding":"f32"}"#,
-            r#"{"type":"subscribe","pass":"bloom","output":"mip0","encoding":"f16"}"#,
-            r#"{"type":"unsubscribe","pass":"hdr","output":"color"}"#,
-            r#"{"type":"unsubscribe","pass":"never","output":"subscribed"}"#,
-            r#"{"type":"rebuild"}"#,
-        ] {
-            ws.send(tungstenite::Message::text(m)).await.unwrap();
-        }
+        // and only then: a repeated subscribe changes nothing (the daemon
+        // reads each change before the next is sent, as sets that wait are
+        // replaced by newer ones; a `rebuild` behind a message shows that
+        // message queued nothing).
+        let send = |m: &'static str| tungstenite::Message::text(m);
+        ws.send(send(r#"{"type":"subscribe","pass":"hdr","output":"color"}"#)).await.unwrap();
         let (e, s) = daemon_event_async(s).await;
         let (client, outputs) = subscriptions(e);
         assert_eq!(outputs, ["hdr/color"]);
+        ws.send(send(r#"{"type":"subscribe","pass":"hdr","output":"color","encoding":"f32"}"#)).await.unwrap();
+        ws.send(send(r#"{"type":"rebuild"}"#)).await.unwrap();
+        let (e, s) = daemon_event_async(s).await;
+        assert!(matches!(e, Some(Event::Rebuild)));
+        ws.send(send(r#"{"type":"subscribe","pass":"bloom","output":"mip0","encoding":"f16"}"#)).await.unwrap();
         let (e, s) = daemon_event_async(s).await;
         assert_eq!(subscriptions(e), (client, vec!["bloom/mip0".to_owned(), "hdr/color".to_owned()]));
+        ws.send(send(r#"{"type":"unsubscribe","pass":"hdr","output":"color"}"#)).await.unwrap();
+        ws.send(send(r#"{"type":"unsubscribe","pass":"never","output":"subscribed"}"#)).await.unwrap();
+        ws.send(send(r#"{"type":"rebuild"}"#)).await.unwrap();
         let (e, s) = daemon_event_async(s).await;
         assert_eq!(subscriptions(e), (client, vec!["bloom/mip0".to_owned()]));
         let (e, s) = daemon_event_async(s).await;
@@ -488,5 +509,142 @@ mod tests {
         assert!(dropped > 0, "a stalled client was never told it lost events");
         assert!(delivered < N as u64);
         assert_eq!(delivered + dropped, N as u64);
+    }
+
+    /// The body of a refused upgrade: its status and JSON error.
+    fn refusal(r: Result<Ws, tungstenite::Error>) -> (u16, String) {
+        match r {
+            Err(tungstenite::Error::Http(resp)) => {
+                let body: serde_json::Value = serde_json::from_slice(resp.body().as_deref().unwrap_or_default()).unwrap();
+                (resp.status().as_u16(), body["error"].as_str().unwrap_or_default().to_owned())
+            }
+            Err(e) => panic!("unexpected error {e}"),
+            Ok(_) => panic!("the connection was accepted"),
+        }
+    }
+
+    /// Connects as soon as the server has freed a slot (it notices a
+    /// closed connection on its own time).
+    async fn connect_when_free(addr: SocketAddr) -> Ws {
+        for _ in 0..400 {
+            match connect(addr, None).await {
+                Ok(ws) => return ws,
+                Err(tungstenite::Error::Http(resp)) if resp.status() == 503 => {
+                    tokio::time::sleep(Duration::from_millis(25)).await
+                }
+                Err(e) => panic!("unexpected error {e}"),
+            }
+        }
+        panic!("no connection slot was freed")
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn connections_past_the_limit_are_refused_until_one_closes() {
+        let s = start(vec![]).await;
+        let mut open = Vec::new();
+        for _ in 0..MAX_CONNECTIONS {
+            let mut ws = connect(s.addr, None).await.unwrap();
+            assert_eq!(next_json(&mut ws).await["type"], "hello");
+            open.push(ws);
+        }
+        let (status, message) = refusal(connect(s.addr, None).await);
+        assert_eq!(status, 503);
+        assert!(message.contains(&format!("at most {MAX_CONNECTIONS}")), "{message}");
+
+        // A slot frees when a connection closes.
+        open.pop().unwrap().close(None).await.unwrap();
+        let mut ws = connect_when_free(s.addr).await;
+        assert_eq!(next_json(&mut ws).await["type"], "hello");
+        assert_eq!(refusal(connect(s.addr, None).await).0, 503);
+
+        // One whose outputs the daemon holds frees its slot once the daemon
+        // has read that it left.
+        ws.send(tungstenite::Message::text(r#"{"type":"subscribe","pass":"hdr","output":"color"}"#)).await.unwrap();
+        let (e, s) = daemon_event_async(s).await;
+        let (client, outputs) = subscriptions(e);
+        assert_eq!(outputs, ["hdr/color"]);
+        ws.close(None).await.unwrap();
+        let (e, s) = daemon_event_async(s).await;
+        assert_eq!(subscriptions(e), (client, vec![]));
+        let mut ws = connect_when_free(s.addr).await;
+        assert_eq!(next_json(&mut ws).await["type"], "hello");
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn a_flood_of_commands_fills_the_queue_to_its_bound_and_the_rest_is_refused() {
+        let s = start(vec![]).await;
+        let ws = connect(s.addr, None).await.unwrap();
+        let (mut sink, mut stream) = ws.split();
+
+        // 10,000 overrides while the daemon reads none, the replies read as
+        // they come (the server waits on a client that does not read).
+        const N: usize = 10_000;
+        let flood = tokio::spawn(async move {
+            for i in 0..N {
+                let m = format!(r#"{{"type":"set_override","path":"post.exposure_ev","value":{i}}}"#);
+                sink.send(tungstenite::Message::text(m)).await.unwrap();
+            }
+            sink
+        });
+        let mut next = async || loop {
+            let m = tokio::time::timeout(Duration::from_secs(10), stream.next()).await.unwrap().unwrap().unwrap();
+            if let tungstenite::Message::Text(t) = m {
+                return serde_json::from_str::<serde_json::Value>(t.as_str()).unwrap();
+            }
+        };
+        assert_eq!(next().await["type"], "hello");
+        for _ in COMMAND_QUEUE..N {
+            let e = next().await;
+            assert_eq!(e["type"], "error");
+            let message = e["message"].as_str().unwrap();
+            assert!(message.starts_with("`set_override` refused: the daemon is busy"), "{message}");
+        }
+        let mut sink = flood.await.unwrap();
+
+        // The first COMMAND_QUEUE wait for the daemon, in order; no more.
+        for i in 0..COMMAND_QUEUE {
+            match s.daemon.recv_timeout(Duration::ZERO) {
+                Ok(Event::Scene(SceneCommand::Set { value: Value::Int(v), .. })) => assert_eq!(v, i as i64),
+                _ => panic!("expected override {i}"),
+            }
+        }
+        assert!(s.daemon.recv_timeout(Duration::ZERO).is_err(), "more than COMMAND_QUEUE commands waited");
+
+        // Read, they make room.
+        sink.send(tungstenite::Message::text(r#"{"type":"rebuild"}"#)).await.unwrap();
+        let (e, _s) = daemon_event_async(s).await;
+        assert!(matches!(e, Some(Event::Rebuild)));
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn subscriptions_past_the_limit_are_refused_and_the_set_stays() {
+        let s = start(vec![]).await;
+        let mut ws = connect(s.addr, None).await.unwrap();
+        assert_eq!(next_json(&mut ws).await["type"], "hello");
+        let subscribe = |pass: &str, encoding: &str| {
+            tungstenite::Message::text(format!(r#"{{"type":"subscribe","pass":"{pass}","output":"o","encoding":"{encoding}"}}"#))
+        };
+        let mut wanted: Vec<String> = (0..MAX_SUBSCRIPTIONS).map(|i| format!("p{i}")).collect();
+        for pass in &wanted {
+            ws.send(subscribe(pass, "png")).await.unwrap();
+        }
+        ws.send(subscribe("too_many", "png")).await.unwrap();
+        let e = next_json(&mut ws).await;
+        assert_eq!(e["type"], "error");
+        let message = e["message"].as_str().unwrap();
+        assert!(message.contains("`too_many/o`") && message.contains(&format!("at most {MAX_SUBSCRIPTIONS}")), "{message}");
+
+        // At the limit, changing the encoding of an output it has is fine.
+        ws.send(subscribe("p0", "f32")).await.unwrap();
+        s.shared.publish(ServerEvent::DeviceLost { message: "marker".into(), recovered: true });
+        assert_eq!(next_json(&mut ws).await["message"], "marker");
+
+        // The daemon reads the newest set once (the sets that waited were
+        // replaced): the first MAX_SUBSCRIPTIONS, without the refused one.
+        let (e, s) = daemon_event_async(s).await;
+        let (_, outputs) = subscriptions(e);
+        wanted.sort();
+        assert_eq!(outputs, wanted.iter().map(|p| format!("{p}/o")).collect::<Vec<_>>());
+        assert!(s.daemon.recv_timeout(Duration::ZERO).is_err());
     }
 }
