@@ -150,8 +150,7 @@ fn client_message(
                     "subscription to `{key}` refused: a connection may subscribe to at most {MAX_SUBSCRIPTIONS} outputs"
                 ));
             }
-            let new = subscriptions.insert(key, encoding).is_none();
-            if new {
+            if subscriptions.insert(key, encoding).is_none() {
                 client.subscribe(subscriptions.keys().cloned().collect());
             }
             return Ok(());
