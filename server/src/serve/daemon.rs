@@ -8,10 +8,11 @@
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender};
+use std::sync::mpsc::{RecvTimeoutError, Sender};
 use std::time::{Duration, Instant};
 
 use super::event::{CompileResult, Event, FileBatch, FileChange, SceneCommand};
+use super::inbox::Inbox;
 use super::shared::{self, FrameImages, Shared};
 use crate::diag::{Code, Diagnostic, Location, Severity};
 use crate::gpu::{self, Gpu};
@@ -170,7 +171,7 @@ impl Daemon {
     }
 
     /// Runs until `Shutdown` or until every sender is gone.
-    pub fn run(mut self, rx: Receiver<Event>) {
+    pub fn run(mut self, rx: Inbox) {
         self.install_lost_callback();
         let keys = self.session.wanted();
         self.start_reload(keys, Vec::new(), 0.0);
