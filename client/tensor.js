@@ -27,6 +27,7 @@ export class TensorView {
     this.target = null;
     this.data = null;
     this.last = 0;
+    this.timer = null;
     this.canvas.addEventListener('mousemove', (e) => this.hover(e));
     this.canvas.addEventListener('mouseleave', () => (this.readout.textContent = ''));
     new ResizeObserver(() => this.draw()).observe(this.canvas);
@@ -41,8 +42,9 @@ export class TensorView {
     this.root.hidden = false;
     this.root.dataset.key = `${pass}/${output}`;
     this.title.textContent = `${pass}/${output}`;
+    this.data = null;
     this.subscribe([{ pass, output }]);
-    this.refresh(true);
+    this.refresh();
   }
 
   hide() {
@@ -51,12 +53,22 @@ export class TensorView {
     delete this.root.dataset.key;
   }
 
-  /** A frame was rendered: fetch the new values (throttled). */
+  /** A frame was rendered: fetch the new values, at most every REFRESH_MS
+   * (a frame inside that window is fetched when it ends). */
   onFrame() {
-    if (this.active && performance.now() - this.last > REFRESH_MS) this.refresh(false);
+    if (this.active) this.schedule();
   }
 
-  async refresh(force) {
+  schedule() {
+    if (this.timer) return;
+    const wait = Math.max(0, REFRESH_MS - (performance.now() - this.last));
+    this.timer = setTimeout(() => {
+      this.timer = null;
+      this.refresh();
+    }, wait);
+  }
+
+  async refresh() {
     const target = this.target;
     if (!target) return;
     this.last = performance.now();
@@ -69,8 +81,14 @@ export class TensorView {
       this.data = new Float32Array(bytes);
       this.render();
     } catch (err) {
-      // Not captured yet: the subscription makes the next frame capture it.
-      if (force || !(err instanceof api.ApiError && err.notFound)) this.shape.textContent = err.message;
+      if (err instanceof api.ApiError && err.notFound) {
+        // Not captured yet: the subscription makes the next frame capture
+        // it; look again shortly.
+        this.shape.textContent = 'waiting for a frame that captures it…';
+        if (this.target === target) this.schedule();
+      } else {
+        this.shape.textContent = err.message;
+      }
     }
   }
 

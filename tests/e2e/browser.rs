@@ -229,3 +229,45 @@ async fn any_pass_output_is_inspectable_with_exact_values() {
     assert!(d > 0.0 && d < 1.0, "depth {d}");
     c.close().await.unwrap();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_auto_exposure_histogram_is_a_plot_with_its_gpu_time() {
+    let p = Project::copy_of_repo("browser-tensor");
+    p.write("scenes/auto.toml", "[output]\nwidth = 320\nheight = 180\n\n[post]\nauto_exposure = true\n");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/auto.toml"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    // The compute pass is listed with its GPU time, and its buffer output.
+    let row = "#passes li[data-pass=\"exposure_histogram\"][data-status=\"ok\"]";
+    until(&c, &s, "the histogram pass timed", &format!("document.querySelector('{row} .pass-time .ms')?.textContent.match(/[0-9]/)")).await;
+    let chip = format!("{row} .chip[data-output=\"histogram\"]");
+    let meta = until(&c, &s, "the histogram chip", &format!("document.querySelector('{chip}')?.textContent")).await;
+    assert!(meta.as_str().unwrap().contains("u32 [256]"), "the chip says what the buffer is: {meta}");
+    c.find(Locator::Css(&chip)).await.unwrap().click().await.unwrap();
+
+    until(&c, &s, "the tensor view with 256 bars", "!document.querySelector('#tensor-panel').hidden && document.querySelector('#tensor-plot').dataset.bars === '256'").await;
+    assert_eq!(c.execute("return document.querySelector('#inspector').hidden;", vec![]).await.unwrap(), true, "the tensor view takes the inspector's place");
+    let shape = c.find(Locator::Css("#tensor-shape")).await.unwrap().text().await.unwrap();
+    assert!(shape.contains("[bin 256] u32"), "{shape}");
+    // The plot reads the captured values: hovering the fullest bin shows
+    // its exact count, and the counts add up to every pixel.
+    let values = c
+        .execute_async(
+            "fetch('/api/tensors/exposure_histogram/histogram.f32').then(r => r.arrayBuffer()).then(b => arguments[0](Array.from(new Float32Array(b))));",
+            vec![],
+        )
+        .await
+        .unwrap();
+    let values: Vec<f64> = values.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    assert_eq!(values.iter().sum::<f64>(), 320.0 * 180.0, "every pixel metered once");
+    let (top, count) = values.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).unwrap();
+    let hover = format!(
+        "const c = document.querySelector('#tensor-plot'); const r = c.getBoundingClientRect();
+         c.dispatchEvent(new MouseEvent('mousemove', {{ clientX: r.left + ({top} + 0.5) * r.width / 256, clientY: r.top + r.height / 2 }}));
+         return document.querySelector('#tensor-readout').textContent;"
+    );
+    let readout = c.execute(&hover, vec![]).await.unwrap();
+    assert_eq!(readout, format!("[{top}] = {count}"), "the readout under the mouse is the captured value");
+    c.close().await.unwrap();
+}

@@ -83,9 +83,13 @@ impl TensorLayout {
         self.len() == 0
     }
 
-    /// The innermost dimension's size: what the statistics are split by.
+    /// What statistics are split by: the innermost dimension's size when
+    /// there are several dimensions (channels last); one for a 1-D tensor.
     pub fn channels(&self) -> usize {
-        self.dims.last().map_or(1, |(_, n)| *n as usize)
+        match self.dims.as_slice() {
+            [_, .., (_, n)] => *n as usize,
+            _ => 1,
+        }
     }
 
     pub fn bytes(&self) -> u64 {

@@ -30,6 +30,7 @@
 mod api;
 mod guard;
 mod sources;
+mod tensors;
 #[cfg(test)]
 mod testing;
 mod ui;
@@ -126,6 +127,8 @@ fn build(shared: Arc<Shared>, allowed_hosts: Vec<String>) -> (Router, watch::Sen
         .route("/api/diagnostics", get(api::diagnostics))
         .route("/api/captures", get(api::captures))
         .route("/api/captures/{pass}/{file}", get(api::capture))
+        .route("/api/tensors", get(tensors::list))
+        .route("/api/tensors/{pass}/{file}", get(tensors::tensor))
         .route("/api/sources/{*path}", get(sources::source))
         .route("/api/reload", post(api::reload))
         .route("/api/controls", get(api::controls))
