@@ -271,3 +271,41 @@ async fn the_auto_exposure_histogram_is_a_plot_with_its_gpu_time() {
     assert_eq!(readout, format!("[{top}] = {count}"), "the readout under the mouse is the captured value");
     c.close().await.unwrap();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_srgb_output_looks_in_the_inspector_as_in_the_live_frame() {
+    let p = Project::copy_of_repo("browser-srgb");
+    let s = Server::start(&p.root, &["--render", "on-change"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "a frame", "document.querySelector('#frame').complete && Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    // The inspector opens on the final output, tonemap/color (Rgba8UnormSrgb).
+    let loaded = c.execute_async("window.loupe.inspect('tonemap', 'color').then(arguments[0]);", vec![]).await.unwrap();
+    assert_eq!(loaded, true);
+    // The live frame's pixels as the browser decodes its PNG, against what
+    // the inspector displays at the same pixels (linear floats, encoded).
+    let compared = c
+        .execute(
+            "const img = document.querySelector('#frame');
+             const cv = document.createElement('canvas'); cv.width = img.naturalWidth; cv.height = img.naturalHeight;
+             const g = cv.getContext('2d'); g.drawImage(img, 0, 0);
+             const out = [];
+             for (const fx of [0.05, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95]) for (const fy of [0.1, 0.5, 0.9]) {
+               const x = Math.floor(fx * cv.width), y = Math.floor(fy * cv.height);
+               out.push([x, y, Array.from(g.getImageData(x, y, 1, 1).data).slice(0, 3), window.loupe.displayedAt(x, y, 'a').slice(0, 3)]);
+             }
+             return out;",
+            vec![],
+        )
+        .await
+        .unwrap();
+    let mut differing = 0;
+    for sample in compared.as_array().unwrap() {
+        let live: Vec<i64> = sample[2].as_array().unwrap().iter().map(|v| v.as_i64().unwrap()).collect();
+        let shown: Vec<i64> = sample[3].as_array().unwrap().iter().map(|v| v.as_i64().unwrap()).collect();
+        assert!(live.iter().zip(&shown).all(|(a, b)| (a - b).abs() <= 1), "pixel ({}, {}): live {live:?}, inspector {shown:?}", sample[0], sample[1]);
+        differing += usize::from(live.iter().any(|v| *v != live[0]));
+    }
+    assert!(differing > 0, "the samples include coloured pixels, not only greys: {compared}");
+    c.close().await.unwrap();
+}

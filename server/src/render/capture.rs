@@ -85,10 +85,11 @@ enum Kind {
     F16,
     F32,
     Unorm8,
-    /// 8-bit sRGB-encoded values: reported as stored (encoded), since that
-    /// is what the pass wrote and what a PNG shows.
+    /// 8-bit sRGB-encoded colour: decoded to linear on readback, as a
+    /// shader sampling the texture sees it (alpha stays linear).
     Srgb8,
-    Bgra8Unorm,
+    /// 8-bit BGRA, swizzled to RGBA; `srgb` decodes as `Srgb8` does.
+    Bgra8 { srgb: bool },
 }
 
 impl Layout {
@@ -106,7 +107,8 @@ impl Layout {
             F::Rg8Unorm => (2, 1, Kind::Unorm8),
             F::Rgba8Unorm => (4, 1, Kind::Unorm8),
             F::Rgba8UnormSrgb => (4, 1, Kind::Srgb8),
-            F::Bgra8Unorm | F::Bgra8UnormSrgb => (4, 1, Kind::Bgra8Unorm),
+            F::Bgra8Unorm => (4, 1, Kind::Bgra8 { srgb: false }),
+            F::Bgra8UnormSrgb => (4, 1, Kind::Bgra8 { srgb: true }),
             _ => return None,
         };
         Some(Layout { channels, bytes_per_channel, kind })
@@ -127,19 +129,17 @@ impl Layout {
                 *v = match self.kind {
                     Kind::F16 => half::f16::from_le_bytes([b[0], b[1]]).to_f32(),
                     Kind::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-                    Kind::Unorm8 | Kind::Srgb8 | Kind::Bgra8Unorm => f32::from(b[0]) / 255.0,
+                    Kind::Unorm8 | Kind::Bgra8 { srgb: false } => f32::from(b[0]) / 255.0,
+                    Kind::Srgb8 | Kind::Bgra8 { srgb: true } if c < 3 => srgb_to_linear(f32::from(b[0]) / 255.0),
+                    Kind::Srgb8 | Kind::Bgra8 { srgb: true } => f32::from(b[0]) / 255.0,
                 };
             }
-            if matches!(self.kind, Kind::Bgra8Unorm) {
+            if matches!(self.kind, Kind::Bgra8 { .. }) {
                 px.swap(0, 2);
             }
             out.extend_from_slice(&px);
         }
         out
-    }
-
-    pub fn is_display_encoded(&self) -> bool {
-        matches!(self.kind, Kind::Srgb8)
     }
 }
 
@@ -163,14 +163,10 @@ impl CapturedImage {
         format!("{}/{}", self.pass, self.output)
     }
 
-    fn display_encoded(&self) -> bool {
-        self.format.ends_with("Srgb")
-    }
-
     /// An 8-bit sRGB PNG for display: linear values are clamped to [0, 1]
-    /// and encoded; NaN shows as magenta so it is never mistaken for black.
+    /// and encoded (for an sRGB texture, that gives back its stored bytes);
+    /// NaN shows as magenta so it is never mistaken for black.
     pub fn to_png(&self) -> Vec<u8> {
-        let encoded = self.display_encoded();
         let mut rgba = Vec::with_capacity(self.data.len());
         for px in self.data.chunks_exact(4) {
             if px.iter().any(|v| !v.is_finite()) {
@@ -179,7 +175,7 @@ impl CapturedImage {
             }
             for (c, &v) in px.iter().enumerate() {
                 let v = v.clamp(0.0, 1.0);
-                let v = if encoded || c == 3 { v } else { linear_to_srgb(v) };
+                let v = if c == 3 { v } else { linear_to_srgb(v) };
                 rgba.push((v * 255.0 + 0.5) as u8);
             }
         }
@@ -310,6 +306,11 @@ impl CapturedTensor {
     }
 }
 
+/// The sRGB transfer function's inverse, exactly as the spec writes it.
+pub fn srgb_to_linear(v: f32) -> f32 {
+    if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
+}
+
 pub fn linear_to_srgb(v: f32) -> f32 {
     if v <= 0.003_130_8 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
 }
@@ -350,6 +351,30 @@ mod tests {
         let h: Vec<u8> = [0.5f32, 65504.0].iter().flat_map(|v| half::f16::from_f32(*v).to_le_bytes()).collect();
         let t = CapturedTensor::new("p", "f", 1, TensorLayout::new(&[("x", 2)], Element::F16), &h);
         assert_eq!(t.data, [0.5, 65504.0]);
+    }
+
+    #[test]
+    fn srgb_texels_read_back_linear_and_their_png_is_the_stored_bytes() {
+        let bytes: Vec<u8> = (0..=255u8).flat_map(|b| [b, b, 255 - b, b]).collect();
+        for format in [wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::TextureFormat::Bgra8UnormSrgb] {
+            let data = Layout::of(format).unwrap().to_rgba_f32(&bytes);
+            for (b, px) in (0..=255u8).zip(data.chunks_exact(4)) {
+                let lin = |b: u8| srgb_to_linear(f32::from(b) / 255.0);
+                let (r, bl) = if format == wgpu::TextureFormat::Rgba8UnormSrgb { (b, 255 - b) } else { (255 - b, b) };
+                assert_eq!(px, [lin(r), lin(b), lin(bl), f32::from(b) / 255.0], "{format:?} byte {b}");
+            }
+            let img = CapturedImage::new("p", "o", 1, 256, 1, format, data);
+            let png = image::load_from_memory(&img.to_png()).unwrap().to_rgba8();
+            let swizzled: Vec<u8> = if format == wgpu::TextureFormat::Bgra8UnormSrgb {
+                bytes.chunks_exact(4).flat_map(|p| [p[2], p[1], p[0], p[3]]).collect()
+            } else {
+                bytes.clone()
+            };
+            assert_eq!(png.into_raw(), swizzled, "{format:?}: the PNG shows what the texture stores");
+        }
+        // The decode is the sRGB curve, not a plain /255: mid-grey 188 is
+        // linear 0.5 (to 3 digits).
+        assert!((srgb_to_linear(188.0 / 255.0) - 0.5029).abs() < 1e-3);
     }
 
     #[test]
