@@ -139,3 +139,16 @@ fn bad_scenes_are_diagnosed_at_their_line() {
     let run = p.run(&["render", "--scene", "scenes/minimal.toml", "--out", "out", "--size", "0x10"]);
     run.code(2).stderr_has("outside");
 }
+
+#[test]
+fn render_and_bench_read_the_scene_under_root_as_serve_does() {
+    let p = Project::copy_of_repo("render-root");
+    let elsewhere = Project::empty("render-root-cwd");
+    let root = p.root.to_str().unwrap();
+    let out = elsewhere.path("out");
+    let run = loupe_tests::loupe(&elsewhere.root, &["render", "--root", root, "--scene", "scenes/pattern.toml", "--size", "32x18", "--out", out.to_str().unwrap()]);
+    run.code(0);
+    assert!(out.join("report.json").is_file());
+    let run = loupe_tests::loupe(&elsewhere.root, &["bench", "--root", root, "--size", "32x18", "--frames", "1", "scenes/pattern.toml"]);
+    run.code(0).stdout_has("scenes/pattern.toml");
+}
