@@ -139,9 +139,11 @@ impl PipelineCache {
         self.entries.iter().filter_map(|(k, e)| e.current.clone().map(|p| (k.clone(), p))).collect()
     }
 
-    pub fn summaries(&self) -> Vec<PipelineSummary> {
+    /// The entries `keep` selects, as reports show them.
+    pub fn summaries_of(&self, keep: impl Fn(&PipelineKey) -> bool) -> Vec<PipelineSummary> {
         self.entries
             .iter()
+            .filter(|(k, _)| keep(k))
             .map(|(k, e)| PipelineSummary {
                 name: k.label(),
                 shader: e.files.last().cloned().unwrap_or_default(),
@@ -153,11 +155,13 @@ impl PipelineCache {
             .collect()
     }
 
-    pub fn diagnostics(&self) -> Vec<Diagnostic> {
+    /// The diagnostics of the entries `keep` selects, each once.
+    pub fn diagnostics_of(&self, keep: impl Fn(&PipelineKey) -> bool) -> Vec<Diagnostic> {
         let mut seen = std::collections::BTreeSet::new();
         self.entries
-            .values()
-            .flat_map(|e| e.diagnostics.iter())
+            .iter()
+            .filter(|(k, _)| keep(k))
+            .flat_map(|(_, e)| e.diagnostics.iter())
             .filter(|d| seen.insert(d.to_string()))
             .cloned()
             .collect()

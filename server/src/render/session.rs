@@ -15,7 +15,7 @@ use serde::Serialize;
 
 use super::frame::{self, FrameInputs, FrameResult, PendingFrame};
 use super::graph::{Graph, PassKind};
-use super::pipelines::{self, Installed, PipelineCache, Status};
+use super::pipelines::{self, Installed, PipelineCache, PipelineSummary, Status};
 use super::pool::ResourcePool;
 use super::resource::{Lifetime, PipelineKey, ResourceDesc, TensorLayout};
 use super::scene_gpu::SceneGpu;
@@ -75,6 +75,10 @@ pub struct PassSummary {
     /// Diagnostics of its pipelines.
     pub diagnostics: usize,
 }
+
+/// Pipelines no longer used by the frame that are kept, in case a setting
+/// switches back.
+const KEPT_UNUSED: usize = 32;
 
 pub struct Session {
     gpu: Gpu,
@@ -138,12 +142,19 @@ impl Session {
         self.graph = graph;
     }
 
-    /// Replaces the scene: its GPU data and the graph follow.
+    /// Replaces the scene: its GPU data and the graph follow. Pipelines
+    /// the new frame no longer uses are kept (switching back costs
+    /// nothing), at most `KEPT_UNUSED` of them.
     pub fn set_scene(&mut self, loaded: &Loaded) {
         self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &loaded.scene, &loaded.meshes);
         self.scene = loaded.scene.clone();
         self.meshes = loaded.meshes.clone();
         self.graph = super::build_graph(&self.scene);
+        let wanted = self.wanted();
+        let unused: Vec<PipelineKey> = self.cache.entries.keys().filter(|k| !wanted.contains(*k)).cloned().collect();
+        for k in unused.iter().take(unused.len().saturating_sub(KEPT_UNUSED)) {
+            self.cache.entries.remove(k);
+        }
     }
 
     /// A new version of the shader sources; pipelines rebuild only when
@@ -167,14 +178,34 @@ impl Session {
         self.wanted().into_iter().filter(|k| !self.cache.entries.contains_key(k)).collect()
     }
 
-    /// Installed pipelines built from any of `files` (shader displays).
-    pub fn built_from(&self, files: &BTreeSet<String>) -> BTreeSet<PipelineKey> {
-        self.cache
+    /// The pipelines the frame uses that were built from any of `files`
+    /// (shader displays): what a change to them rebuilds. Pipelines kept
+    /// from earlier frames that were built from them are dropped instead:
+    /// they would be stale, and the frame does not use them.
+    pub fn built_from(&mut self, files: &BTreeSet<String>) -> BTreeSet<PipelineKey> {
+        let wanted = self.wanted();
+        let touched: BTreeSet<PipelineKey> = self
+            .cache
             .entries
             .iter()
             .filter(|(k, e)| e.files.iter().any(|f| files.contains(f)) || files.contains(&self.shader_display(k.spec)))
             .map(|(k, _)| k.clone())
-            .collect()
+            .collect();
+        self.cache.entries.retain(|k, _| wanted.contains(k) || !touched.contains(k));
+        touched.into_iter().filter(|k| wanted.contains(k)).collect()
+    }
+
+    /// The pipelines the frame uses, as reports show them. Pipelines kept
+    /// for quick toggling back are not reported.
+    pub fn pipeline_summaries(&self) -> Vec<PipelineSummary> {
+        let wanted = self.wanted();
+        self.cache.summaries_of(|k| wanted.contains(k))
+    }
+
+    /// Diagnostics of the pipelines the frame uses.
+    pub fn pipeline_diagnostics(&self) -> Vec<Diagnostic> {
+        let wanted = self.wanted();
+        self.cache.diagnostics_of(|k| wanted.contains(k))
     }
 
     /// Composing `key` as a job for any thread: it holds this version of
@@ -321,5 +352,46 @@ fn output_summary(graph: &Graph, h: super::resource::Handle) -> OutputSummary {
             tensor: Some(t.clone()),
             history,
         },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::overrides::{Overrides, Value};
+
+    fn pattern(two_triangles: bool) -> Loaded {
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/pattern.toml");
+        crate::scene::load_with(&scenes, &Overrides::from([("post.two_triangles".to_owned(), Value::Bool(two_triangles))])).unwrap()
+    }
+
+    /// Culled permutations are neither reported nor rebuilt: a change to a
+    /// file they were built from drops them, and switching back builds
+    /// them again from the sources of the day.
+    #[test]
+    fn pipelines_the_frame_does_not_use_are_neither_reported_nor_rebuilt() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+        let lib = library::read_tree(&root).unwrap();
+        let gpu = crate::gpu::open().unwrap_or_else(|e| panic!("a GPU device (lavapipe will do): {e}"));
+        let mut s = Session::new(gpu, &root, lib, &pattern(false));
+        assert_eq!(s.install_missing(), vec![]);
+        let one: BTreeSet<String> = s.wanted().iter().map(PipelineKey::label).collect();
+        assert_eq!(one, BTreeSet::from(["debug.test_pattern".to_owned(), "post.tonemap".to_owned()]));
+
+        s.set_scene(&pattern(true));
+        assert_eq!(s.install_missing(), vec![]);
+        let two: BTreeSet<String> = s.wanted().iter().map(PipelineKey::label).collect();
+        let reported: BTreeSet<String> = s.pipeline_summaries().into_iter().map(|p| p.name).collect();
+        assert_eq!(reported, two, "only what the frame uses is reported");
+        assert_eq!(s.pipelines().entries.len(), 4, "the one-triangle pipelines are kept for switching back");
+
+        let fullscreen = BTreeSet::from([library::display_path(&root.join("lib/fullscreen.wgsl"))]);
+        let rebuilt: BTreeSet<String> = s.built_from(&fullscreen).iter().map(PipelineKey::label).collect();
+        assert_eq!(rebuilt, two, "a change rebuilds only what the frame uses");
+        assert_eq!(s.pipelines().entries.len(), 2, "the unused ones built from the changed file are dropped");
+
+        s.set_scene(&pattern(false));
+        let missing: BTreeSet<String> = s.missing().iter().map(PipelineKey::label).collect();
+        assert_eq!(missing, one, "switching back builds them again");
     }
 }

@@ -231,7 +231,7 @@ impl Daemon {
             Event::CompileFinished(r) => self.compile_finished(r),
             Event::Scene(cmd) => self.scene_command(cmd),
             Event::Rebuild => {
-                let keys = self.session.pipelines().entries.keys().cloned().chain(self.session.wanted()).collect();
+                let keys = self.session.wanted();
                 self.start_reload(keys, Vec::new(), 0.0);
             }
             Event::Subscriptions { client, outputs } => {
@@ -602,7 +602,7 @@ impl Daemon {
     }
 
     fn diagnostics(&self) -> Vec<Diagnostic> {
-        let mut all = self.session.pipelines().diagnostics();
+        let mut all = self.session.pipeline_diagnostics();
         for d in self.file_errors.values().chain(self.scene_error.iter()).chain(self.gpu_errors.iter()) {
             if !all.iter().any(|x| x.to_string() == d.to_string()) {
                 all.push(d.clone());
@@ -613,7 +613,7 @@ impl Daemon {
 
     fn publish_state(&mut self) {
         let diagnostics = self.diagnostics();
-        let infos: Vec<protocol::PipelineInfo> = self.session.pipelines().summaries().into_iter().map(Into::into).collect();
+        let infos: Vec<protocol::PipelineInfo> = self.session.pipeline_summaries().into_iter().map(Into::into).collect();
         let count = |s: PassStatus| infos.iter().filter(|i| i.status == s).count();
         let gpu = self.gpu();
         let status = Status {
