@@ -33,6 +33,9 @@ pub struct Entry {
     pub diagnostics: Vec<Diagnostic>,
     /// Files the newest attempt was composed from.
     pub files: Vec<String>,
+    /// The content of the files `current` was built from: a compile of the
+    /// same content changes nothing.
+    sources: Option<blake3::Hash>,
 }
 
 /// How a pipeline stands, worst last.
@@ -79,8 +82,20 @@ pub struct PipelineCache {
 #[derive(Debug, PartialEq, Eq)]
 pub enum Installed {
     Swapped,
+    /// It built from the same sources as the current pipeline, which stays.
+    Unchanged,
     KeptLastGood,
     Failed,
+}
+
+/// The content of `files` as the library holds them.
+fn sources_hash(lib: &Library, files: &[String]) -> blake3::Hash {
+    let mut h = blake3::Hasher::new();
+    for f in files {
+        h.update(f.as_bytes());
+        h.update(lib.get(f).map_or(&[0u8; 32], |s| s.hash.as_bytes()));
+    }
+    h.finalize()
 }
 
 impl PipelineCache {
@@ -100,13 +115,23 @@ impl PipelineCache {
             generation: 0,
             diagnostics: Vec::new(),
             files: vec![shader_display.to_owned()],
+            sources: None,
         });
+        if let Ok(composed) = &result {
+            let sources = Some(sources_hash(lib, &composed.files));
+            if entry.current.is_some() && sources == entry.sources {
+                entry.files = composed.files.clone();
+                entry.diagnostics.clear();
+                return Installed::Unchanged;
+            }
+        }
         let created = result.and_then(|composed| {
             entry.files = composed.files.clone();
             pipeline::create(device, key.spec, &key.defs, &composed, lib, shader_display).map(|p| (p, composed))
         });
         match created {
             Ok((p, composed)) => {
+                entry.sources = Some(sources_hash(lib, &composed.files));
                 entry.current = Some(p);
                 entry.last_good = Some(composed);
                 entry.generation += 1;

@@ -75,6 +75,9 @@ struct InFlight {
     /// No uncaptured wgpu error while recording or submitting it: its
     /// images are real and may be published.
     clean: bool,
+    /// `pass/output` of every output whose pass uses a pipeline swapped in
+    /// since the previous frame.
+    replaced: BTreeSet<String>,
 }
 
 pub struct Daemon {
@@ -465,7 +468,17 @@ impl Daemon {
         let swapped = std::mem::take(&mut self.swapped_since_frame);
         self.set_gpu_errors(&errors, &swapped);
         let reloads = std::mem::take(&mut self.finished_reloads);
-        self.in_flight.push_back(InFlight { pending, reloads, started, final_key, clean });
+        // The outputs of passes whose pipelines this frame is the first to
+        // use: their previous images become the "last good" ones.
+        let replaced = self
+            .session
+            .graph()
+            .passes
+            .iter()
+            .filter(|p| p.pipelines.iter().any(|k| swapped.contains(k)))
+            .flat_map(|p| p.writes().map(|h| self.session.graph().resource(h).name.clone()))
+            .collect();
+        self.in_flight.push_back(InFlight { pending, reloads, started, final_key, clean, replaced });
     }
 
     /// Turns the uncaptured wgpu errors of the newest frame into
@@ -535,16 +548,19 @@ impl Daemon {
     }
 
     fn publish_frame(&mut self, done: InFlight) {
-        let InFlight { pending, reloads, started, final_key, clean } = done;
+        let InFlight { pending, reloads, started, final_key, clean, replaced } = done;
         let result = pending.finish();
         let render_ms = started.elapsed().as_secs_f64() * 1e3;
         let total: f64 = result.timings.iter().map(|(_, t)| t).sum();
         let mut images = None;
         if clean {
             let mut captures = (*shared::read(&self.shared.captures)).clone();
-            if !reloads.is_empty() {
-                // The frame before a swap is what A/B compares against.
-                shared::write(&self.shared.last_good, Arc::new(captures.clone()));
+            if !replaced.is_empty() {
+                // What a pass showed before its pipelines changed is what
+                // A/B compares against; other passes keep theirs.
+                let mut last_good = (*shared::read(&self.shared.last_good)).clone();
+                last_good.extend(replaced.iter().filter_map(|k| captures.get(k).map(|c| (k.clone(), c.clone()))));
+                shared::write(&self.shared.last_good, Arc::new(last_good));
             }
             let this_frame: BTreeMap<String, Arc<_>> = result.captures.into_iter().map(|c| (c.key(), Arc::new(c))).collect();
             captures.extend(this_frame.iter().map(|(k, c)| (k.clone(), c.clone())));
