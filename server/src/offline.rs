@@ -91,7 +91,8 @@ pub struct FrameReport {
 pub struct PassReport {
     #[serde(flatten)]
     pub pass: PassSummary,
-    pub time_ms: f64,
+    /// `null` without timestamp queries (only the frame total is known).
+    pub time_ms: Option<f64>,
     pub outputs: Vec<OutputReport>,
 }
 
@@ -151,7 +152,7 @@ pub fn render(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
             let npy = write(format!("{}.{}.npy", t.pass, t.output), npy(t))?;
             outputs.push(OutputReport::Tensor { name: t.output.clone(), layout: t.layout.clone(), stats: t.stats.clone(), npy });
         }
-        let time_ms = result.timings.iter().find(|(n, _)| *n == pass.name).map_or(0.0, |(_, t)| *t);
+        let time_ms = result.timings.iter().find(|(n, _)| *n == pass.name).map(|(_, t)| *t);
         passes.push(PassReport { pass, time_ms, outputs });
     }
     let (width, height) = (session.scene().width, session.scene().height);
@@ -162,7 +163,7 @@ pub fn render(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
         width,
         height,
         timing: result.timing.to_owned(),
-        total_ms: result.timings.iter().map(|(_, t)| t).sum(),
+        total_ms: result.total_ms,
         passes,
         culled,
         nan: result.nan.clone(),

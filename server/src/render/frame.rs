@@ -64,8 +64,13 @@ const MAP_FAILED: u8 = 2;
 /// A frame's results once every readback has landed.
 pub struct FrameResult {
     pub frame: u64,
-    /// Per pass, in execution order: (name, milliseconds).
+    /// Per pass, in execution order: (name, milliseconds). Empty without
+    /// timestamp queries: one clock around the whole frame cannot say how
+    /// it splits between passes.
     pub timings: Vec<(String, f64)>,
+    /// The whole frame: the passes' sum (`gpu`), or the wall clock from
+    /// recording to the readbacks landing (`cpu`).
+    pub total_ms: f64,
     /// `gpu` when from timestamp queries, `cpu` otherwise.
     pub timing: &'static str,
     pub captures: Vec<CapturedImage>,
@@ -299,30 +304,24 @@ impl PendingFrame {
             drop(mapped);
             c.buffer.unmap();
         }
-        let (timings, timing) = match &self.timestamps {
+        let (timings, total_ms, timing) = match &self.timestamps {
             Some((buf, state, period)) if state.load(Ordering::Acquire) == MAP_OK && buf.slice(..).get_mapped_range().is_ok() => {
                 let mapped = buf.slice(..).get_mapped_range().expect("checked in the guard");
                 let stamps: Vec<u64> = mapped.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes"))).collect();
                 drop(mapped);
                 buf.unmap();
-                let t = self
+                let t: Vec<(String, f64)> = self
                     .passes
                     .iter()
                     .enumerate()
                     .map(|(i, n)| (n.clone(), stamps[i * 2 + 1].saturating_sub(stamps[i * 2]) as f64 * f64::from(*period) / 1e6))
                     .collect();
-                (t, "gpu")
+                let total = t.iter().map(|(_, ms)| ms).sum();
+                (t, total, "gpu")
             }
-            _ => {
-                // No timestamp queries: only the whole frame's CPU-side time
-                // is known; spread evenly it would be a lie, so report the
-                // frame total on the first pass and zero elsewhere.
-                let total = self.submitted.elapsed().as_secs_f64() * 1e3 + self.cpu_record_ms;
-                let t = self.passes.iter().enumerate().map(|(i, n)| (n.clone(), if i == 0 { total } else { 0.0 })).collect();
-                (t, "cpu")
-            }
+            _ => (Vec::new(), self.submitted.elapsed().as_secs_f64() * 1e3 + self.cpu_record_ms, "cpu"),
         };
         let nan = nan_origin(&self.passes, &self.io, &captures, &tensors);
-        FrameResult { frame: self.frame, timings, timing, captures, tensors, skipped: self.skipped, nan }
+        FrameResult { frame: self.frame, timings, total_ms, timing, captures, tensors, skipped: self.skipped, nan }
     }
 }

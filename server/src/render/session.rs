@@ -365,6 +365,31 @@ mod tests {
         crate::scene::load_with(&scenes, &Overrides::from([("post.two_triangles".to_owned(), Value::Bool(two_triangles))])).unwrap()
     }
 
+    /// With timestamp queries every pass has a time and they add up to the
+    /// frame; without them only the frame's wall clock is known, and no
+    /// pass is given a time it did not measure.
+    #[test]
+    fn without_timestamp_queries_only_the_frame_total_is_reported() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+        let gpu = crate::gpu::open().unwrap_or_else(|e| panic!("a GPU device (lavapipe will do): {e}"));
+        let mut s = Session::new(gpu, &root, library::read_tree(&root).unwrap(), &pattern(false));
+        assert_eq!(s.install_missing(), vec![]);
+        if s.gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) {
+            let pending = s.submit(Some(&BTreeSet::new()), 0.0);
+            let r = s.wait(pending);
+            assert_eq!(r.timing, "gpu");
+            let names: Vec<&str> = r.timings.iter().map(|(n, _)| n.as_str()).collect();
+            assert_eq!(names, ["test_pattern", "tonemap"]);
+            assert_eq!(r.total_ms, r.timings.iter().map(|(_, t)| t).sum::<f64>());
+        }
+        s.gpu.features.remove(wgpu::Features::TIMESTAMP_QUERY);
+        let pending = s.submit(Some(&BTreeSet::new()), 0.0);
+        let r = s.wait(pending);
+        assert_eq!(r.timing, "cpu");
+        assert_eq!(r.timings, vec![], "no pass gets a time it did not measure");
+        assert!(r.total_ms > 0.0, "the frame's wall clock is reported");
+    }
+
     /// Culled permutations are neither reported nor rebuilt: a change to a
     /// file they were built from drops them, and switching back builds
     /// them again from the sources of the day.

@@ -551,7 +551,7 @@ impl Daemon {
         let InFlight { pending, reloads, started, final_key, clean, replaced } = done;
         let result = pending.finish();
         let render_ms = started.elapsed().as_secs_f64() * 1e3;
-        let total: f64 = result.timings.iter().map(|(_, t)| t).sum();
+        let total = result.total_ms;
         let mut images = None;
         if clean {
             let mut captures = (*shared::read(&self.shared.captures)).clone();
