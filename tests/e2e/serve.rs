@@ -356,3 +356,21 @@ fn last_good_images_are_kept_per_pass_and_replaced_only_by_a_real_change() {
     assert!(o.succeeded);
     assert_eq!(last_good(&s), Some(true), "still tonemap's own last good image");
 }
+
+/// A glTF's external `.bin` is a scene input like the glTF itself.
+#[test]
+fn an_edit_to_a_meshs_external_buffer_reloads_the_scene() {
+    let p = Project::copy_of_repo("serve-mesh-bin");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/minimal.toml"]);
+    s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
+    let bin = "scenes/meshes/torus_knot.bin";
+    let good = std::fs::read(p.path(bin)).unwrap();
+    p.save_by_rename(bin, &good[..good.len() / 2]);
+    let diagnostic = s.wait_for("the truncated buffer reported", LIMIT, || {
+        let d = s.get_json("/api/diagnostics");
+        d["diagnostics"].as_array()?.iter().find(|d| d["message"].as_str().is_some_and(|m| m.contains("byteLength"))).cloned()
+    });
+    assert!(diagnostic["message"].as_str().unwrap().contains("buffers[0]"), "{diagnostic}");
+    p.save_by_rename(bin, &good);
+    s.wait_for("the diagnostic to clear", LIMIT, || s.get_json("/api/diagnostics")["diagnostics"].as_array()?.is_empty().then_some(()));
+}
