@@ -45,6 +45,7 @@ const state = {
   status: null,
   frame: null, // newest `frame` event
   shownFrame: null, // frame number of the image in #frame
+  nan: null, // the newest NaN report (`/api/nan`)
   fps: 0,
   totalMs: null,
   timing: '',
@@ -282,16 +283,21 @@ function applyPasses(passes) {
   return true;
 }
 
-/** Once passes are known, inspect the final output: a debugger that opens
- * on an empty canvas wastes the user's first click. The final output is
- * written by the last pass that runs (passes come in execution order). */
+/** Once captures are known, inspect the final output (the capture marked
+ * `final`): a debugger that opens on an empty canvas wastes the user's
+ * first click. */
 function autoInspect(force = false) {
   if (inspector.target && !force) return;
-  const running = state.passes.filter((p) => (p.status === 'ok' || p.status === 'stale') && p.writes?.length);
+  const final = state.captures.find((c) => c.final);
+  if (final) {
+    inspector.inspect(final.pass, final.output);
+    return;
+  }
+  // Before the first capture list: the last pass that writes an image.
+  const images = (p) => (p.writes || []).filter((w) => w.kind !== 'buffer');
+  const running = state.passes.filter((p) => (p.status === 'ok' || p.status === 'stale') && images(p).length);
   const last = running[running.length - 1];
-  if (!last) return;
-  const captured = state.captures.find((c) => c.pass === last.name);
-  inspector.inspect(last.name, captured ? captured.output : last.writes[0].name);
+  if (last) inspector.inspect(last.name, images(last)[0].name);
 }
 
 function applyDiagnostics(list) {
@@ -322,7 +328,10 @@ const refetchDiagnostics = latestOnly(
 );
 const loadCaptures = latestOnly(api.captures, fetched('captures', applyCaptures), fetchFailed('captures'));
 
+const refetchNan = latestOnly(() => api.getJson('/api/nan'), fetched('nan', (r) => applyNan(r?.report)), fetchFailed('nan'));
+
 const resyncAll = coalesce(() => {
+  refetchNan();
   refetchStatus();
   refetchPasses();
   refetchPipelines();
@@ -446,6 +455,9 @@ function onEvent(ev) {
     case 'error':
       notify('server', `server: ${ev.message}`, 'error', 20000);
       break;
+    case 'nan':
+      applyNan(ev.report);
+      break;
     default:
       // A newer server may send events this page does not know: ignore.
       break;
@@ -461,6 +473,52 @@ function onBinary(hdr, bytes) {
 
 // Clicking the live frame inspects the final output.
 $('frame').addEventListener('click', () => autoInspect(true));
+
+// ---- NaN origin ----------------------------------------------------------
+// A traced frame names the pass that first made a NaN/Inf; one click opens
+// that output at that pixel with the NaN overlay on. Test hooks:
+// #nan-notice[data-pass][data-output], #nan-open, #trace.
+
+function applyNan(report) {
+  state.nan = report ?? null;
+  const box = $('nan-notice');
+  const o = report?.origin;
+  box.hidden = !o;
+  if (!o) {
+    delete box.dataset.pass;
+    delete box.dataset.output;
+    return;
+  }
+  box.dataset.pass = o.pass;
+  box.dataset.output = o.output;
+  const others = (report.outputs || []).length;
+  $('nan-text').textContent =
+    `NaN/Inf first made by ${o.pass}/${o.output} at (${o.pixel[0]}, ${o.pixel[1]}): ${o.nan} NaN, ${o.inf} Inf` +
+    ` · ${others} output${others === 1 ? '' : 's'} affected · frame ${report.frame}`;
+}
+
+$('nan-open').addEventListener('click', async () => {
+  const o = state.nan?.origin;
+  if (!o) return;
+  tensors.hide();
+  $('inspector').hidden = false;
+  const overlay = $('overlay-nan');
+  if (!overlay.checked) {
+    overlay.checked = true;
+    overlay.dispatchEvent(new Event('change'));
+  }
+  await inspector.inspect(o.pass, o.output);
+  inspector.goTo(o.pixel[0], o.pixel[1]);
+});
+
+$('trace').addEventListener('click', async () => {
+  try {
+    const response = await fetch('/api/frame/trace', { method: 'POST' });
+    if (!response.ok) throw new Error(`${response.status} ${response.statusText}`);
+  } catch (err) {
+    notify('trace', `trace request failed: ${errorText(err)}`, 'error', 10000);
+  }
+});
 
 // ---- rebuild button ------------------------------------------------------
 

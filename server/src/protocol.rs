@@ -6,6 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::diag::Diagnostic;
+use crate::render::frame::NanOrigin;
 use crate::render::pipelines::{PipelineSummary, Status as PipelineStatus};
 use crate::render::session::{PassState, PassSummary};
 use crate::scene::overrides::{Control, Overrides, Value as OverrideValue};
@@ -192,6 +193,31 @@ pub enum ServerEvent {
     /// The scene's live controls and the overrides set on top of the file
     /// (also `GET /api/controls`), after any change to either.
     Controls(ControlsReport),
+    /// A traced frame's NaN report (also `GET /api/nan`); `null` once a
+    /// later frame is clean again.
+    Nan { report: Option<NanReport> },
+}
+
+/// Where a NaN or Inf started, from a frame that captured every output.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NanReport {
+    /// The traced frame.
+    pub frame: u64,
+    /// `auto` (the HDR frame held NaN/Inf) or `request` (`POST /api/frame/trace`).
+    pub trigger: String,
+    /// The first pass whose output holds a NaN/Inf none of its inputs held;
+    /// `null` for a clean frame.
+    pub origin: Option<NanOrigin>,
+    /// Every output of the frame holding NaN or Inf, in pass order.
+    pub outputs: Vec<NanCount>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NanCount {
+    pub pass: String,
+    pub output: String,
+    pub nan: u64,
+    pub inf: u64,
 }
 
 /// `GET /api/controls`: what the browser's scene panel shows.

@@ -107,7 +107,7 @@ async fn page_shows_frame_and_errors_at_their_line_and_clears_them() {
     until(&c, &s, "a streamed capture in the inspector", "window.loupe.state.inspector.streamedLoads >= 1 && window.loupe.state.inspector.output === 'color'").await;
     let alpha = c.execute("return window.loupe.valueAt(480, 270)[3];", vec![]).await.unwrap();
     assert_eq!(alpha, 1.0, "the streamed final image is opaque");
-    let page = c.execute("const s = window.loupe.state; return [s.protocol, s.problems, document.querySelectorAll('#notices .notice').length];", vec![]).await.unwrap();
+    let page = c.execute("const s = window.loupe.state; return [s.protocol, s.problems, document.querySelectorAll('#notices .notice:not([hidden])').length];", vec![]).await.unwrap();
     assert_eq!(page, serde_json::json!([2, [], 0]), "the page speaks the server's protocol, without problems or notices");
 
     // Break the shader as vim saves it.
@@ -307,5 +307,40 @@ async fn an_srgb_output_looks_in_the_inspector_as_in_the_live_frame() {
         differing += usize::from(live.iter().any(|v| *v != live[0]));
     }
     assert!(differing > 0, "the samples include coloured pixels, not only greys: {compared}");
+    c.close().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_nan_made_by_a_pass_is_named_live_and_opened_at_its_pixel() {
+    let p = Project::copy_of_repo("browser-nan");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/minimal.toml"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    assert_eq!(c.execute("return document.querySelector('#nan-notice').hidden;", vec![]).await.unwrap(), true, "a clean frame shows no NaN notice");
+
+    // `view.params.w` is always 0: a runtime divide by zero in lighting.
+    const LIGHTING: &str = "shaders/passes/lighting.wgsl";
+    let good = p.read(LIGHTING);
+    let broken = good.replace("    return vec4(color, 1.0);\n}", "    return vec4(color / view.params.w, 1.0);\n}");
+    assert_ne!(broken, good, "the edit applies");
+    p.save_by_rename(LIGHTING, &broken);
+    let pass = until(&c, &s, "the NaN notice naming a pass", "!document.querySelector('#nan-notice').hidden && document.querySelector('#nan-notice').dataset.pass").await;
+    assert_eq!(pass, "lighting", "the pass that divides by zero, not one it flowed into");
+    let text = c.find(Locator::Css("#nan-text")).await.unwrap().text().await.unwrap();
+    assert!(text.contains("lighting/color"), "{text}");
+
+    // One click: that output, at that pixel, with the NaN overlay.
+    c.find(Locator::Css("#nan-open")).await.unwrap().click().await.unwrap();
+    until(&c, &s, "the inspector on lighting/color", "window.loupe.state.inspector.pass === 'lighting' && window.loupe.state.inspector.output === 'color'").await;
+    let at = c.execute("return window.loupe.state.nan.origin.pixel;", vec![]).await.unwrap();
+    let (x, y) = (at[0].as_u64().unwrap(), at[1].as_u64().unwrap());
+    let v = until(&c, &s, "the value there", &format!("window.loupe.valueText({x}, {y})")).await;
+    assert!(v.as_array().unwrap()[..3].iter().any(|c| c == "NaN" || c == "Infinity" || c == "-Infinity"), "the pixel named holds the bad value: {v}");
+    assert_eq!(c.execute("return document.querySelector('#overlay-nan').checked;", vec![]).await.unwrap(), true);
+
+    // The fix clears it.
+    p.save_by_rename(LIGHTING, &good);
+    until(&c, &s, "the notice to clear", "document.querySelector('#nan-notice').hidden").await;
     c.close().await.unwrap();
 }

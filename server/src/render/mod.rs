@@ -18,8 +18,16 @@ use crate::scene::Scene;
 use graph::{Graph, GraphBuilder};
 use passes::*;
 
+/// What a frame is built for beyond the scene.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct FrameOptions {
+    /// Count NaN/Inf texels of the HDR frame every frame (`nan_watch`): the
+    /// daemon's cue to trace a frame.
+    pub nan_watch: bool,
+}
+
 /// Assembles the frame from the scene: only what the scene calls for.
-pub fn build_graph(scene: &Scene) -> Graph {
+pub fn build_graph(scene: &Scene, options: FrameOptions) -> Graph {
     let mut g = GraphBuilder::new();
     let (hdr, gbuffer) = if scene.is_empty() {
         for pass in ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes"] {
@@ -38,6 +46,7 @@ pub fn build_graph(scene: &Scene) -> Graph {
     let adapted = auto_exposure::auto_exposure(&mut g, scene, hdr);
     let exposed = exposure::exposure(&mut g, scene, hdr, adapted);
     let ldr = tonemap::tonemap(&mut g, scene, exposed);
+    let watch = options.nan_watch.then(|| nan_watch::nan_watch(&mut g, scene, exposed));
     let debug = match &gbuffer {
         Some((gb, depth)) => debug_view::debug_view(&mut g, scene, gb, *depth),
         None => {
@@ -51,5 +60,8 @@ pub fn build_graph(scene: &Scene) -> Graph {
         g.output(d);
     }
     g.output(ldr);
+    if let Some(w) = watch {
+        g.output(w);
+    }
     g.build()
 }

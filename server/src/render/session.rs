@@ -18,6 +18,7 @@ use super::graph::{Graph, PassKind};
 use super::pipelines::{self, Installed, PipelineCache, PipelineSummary, Status};
 use super::pool::ResourcePool;
 use super::resource::{Lifetime, PipelineKey, ResourceDesc, TensorLayout};
+use super::FrameOptions;
 use super::scene_gpu::SceneGpu;
 use crate::diag::Diagnostic;
 use crate::gpu::Gpu;
@@ -92,13 +93,15 @@ pub struct Session {
     cache: PipelineCache,
     pool: ResourcePool,
     frame: u64,
+    options: FrameOptions,
 }
 
 impl Session {
     pub fn new(gpu: Gpu, shader_root: &Path, lib: Library, loaded: &Loaded) -> Self {
         let scene_gpu = SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes);
         Session {
-            graph: super::build_graph(&loaded.scene),
+            graph: super::build_graph(&loaded.scene, FrameOptions::default()),
+            options: FrameOptions::default(),
             scene: loaded.scene.clone(),
             meshes: loaded.meshes.clone(),
             scene_gpu,
@@ -109,6 +112,13 @@ impl Session {
             frame: 0,
             gpu,
         }
+    }
+
+    /// Builds frames with `options` from now on.
+    pub fn with_options(mut self, options: FrameOptions) -> Self {
+        self.options = options;
+        self.graph = super::build_graph(&self.scene, options);
+        self
     }
 
     pub fn gpu(&self) -> &Gpu {
@@ -149,7 +159,7 @@ impl Session {
         self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &loaded.scene, &loaded.meshes);
         self.scene = loaded.scene.clone();
         self.meshes = loaded.meshes.clone();
-        self.graph = super::build_graph(&self.scene);
+        self.graph = super::build_graph(&self.scene, self.options);
         let wanted = self.wanted();
         let unused: Vec<PipelineKey> = self.cache.entries.keys().filter(|k| !wanted.contains(*k)).cloned().collect();
         for k in unused.iter().take(unused.len().saturating_sub(KEPT_UNUSED)) {

@@ -16,9 +16,11 @@ use super::inbox::Inbox;
 use super::shared::{self, FrameImages, Shared};
 use crate::diag::{Code, Diagnostic, Location, Severity};
 use crate::gpu::{self, Gpu};
-use crate::protocol::{self, ControlsReport, PassInfo, PassStatus, PassTiming, ReloadTimings, ServerEvent, Status};
+use crate::protocol::{self, ControlsReport, NanCount, NanReport, PassInfo, PassStatus, PassTiming, ReloadTimings, ServerEvent, Status};
 use crate::gpu::pipeline::PipelineSpec;
-use crate::render::frame::PendingFrame;
+use crate::render::frame::{FrameResult, PendingFrame};
+use crate::render::FrameOptions;
+use crate::render::passes::nan_watch;
 use crate::render::passes;
 use crate::render::pipelines::Installed;
 use crate::render::resource::PipelineKey;
@@ -78,6 +80,8 @@ struct InFlight {
     /// `pass/output` of every output whose pass uses a pipeline swapped in
     /// since the previous frame.
     replaced: BTreeSet<String>,
+    /// Why this frame captured every output, when it did.
+    trace: Option<&'static str>,
 }
 
 pub struct Daemon {
@@ -122,6 +126,13 @@ pub struct Daemon {
     destroy_requested: bool,
     /// When the newest frame was submitted: the next one's time step.
     last_frame: Option<Instant>,
+    /// The next frame captures every output, for this reason (`auto`,
+    /// `request`), to find where a NaN/Inf started.
+    trace_next: Option<&'static str>,
+    /// Sources or the scene changed since the last trace: a NaN now may
+    /// start elsewhere.
+    trace_stale: bool,
+    nan_report: Option<NanReport>,
 }
 
 impl Daemon {
@@ -142,7 +153,7 @@ impl Daemon {
             .expect("compile worker threads");
         let timing = if gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) { "gpu" } else { "cpu" };
         Daemon {
-            session: Session::new(gpu, &config.shader_root, lib, &loaded),
+            session: Session::new(gpu, &config.shader_root, lib, &loaded).with_options(FrameOptions { nan_watch: true }),
             config,
             file_errors: BTreeMap::new(),
             scene_files: loaded.files,
@@ -166,6 +177,9 @@ impl Daemon {
             device_resets: 0,
             destroy_requested: false,
             last_frame: None,
+            trace_next: None,
+            trace_stale: false,
+            nan_report: None,
         }
     }
 
@@ -253,6 +267,10 @@ impl Daemon {
                 self.gpu().device.destroy();
                 self.session.poll();
             }
+            Event::Trace => {
+                self.trace_next = Some("request");
+                self.dirty = true;
+            }
             Event::Shutdown => {}
         }
     }
@@ -316,6 +334,7 @@ impl Daemon {
     }
 
     fn install_scene(&mut self, l: scene::Loaded) {
+        self.trace_stale = true;
         self.session.set_scene(&l);
         self.scene_files = l.files;
         self.scene_error = None;
@@ -442,6 +461,7 @@ impl Daemon {
             // Announced with the first frame that shows it (`publish_frame`).
             let timings = ReloadTimings { watch_ms: r.watch_ms, compose_ms: r.compose_ms, pipeline_ms: r.pipeline_ms, render_ms: 0.0 };
             self.finished_reloads.push(Succeeded { id, files: r.files, pipelines: r.pipelines, timings });
+            self.trace_stale = true;
         } else {
             self.shared.publish(ServerEvent::ReloadFailed { id, files: r.files, pipelines: r.pipelines, diagnostics: r.diagnostics });
         }
@@ -460,7 +480,10 @@ impl Daemon {
         let final_key = self.session.graph().final_name();
         let mut capture: BTreeSet<String> = self.subscriptions.values().flatten().cloned().collect();
         capture.extend(final_key.clone());
-        let pending = self.session.submit(Some(&capture), dt);
+        capture.insert(nan_watch::OUTPUT.to_owned());
+        // A traced frame captures every output.
+        let trace = self.trace_next.take();
+        let pending = self.session.submit(if trace.is_some() { None } else { Some(&capture) }, dt);
         // wgpu reports invalid frame commands on this thread, while the
         // frame is recorded and submitted: they belong to this frame.
         let errors = self.session.take_uncaptured();
@@ -478,7 +501,7 @@ impl Daemon {
             .filter(|p| p.pipelines.iter().any(|k| swapped.contains(k)))
             .flat_map(|p| p.writes().map(|h| self.session.graph().resource(h).name.clone()))
             .collect();
-        self.in_flight.push_back(InFlight { pending, reloads, started, final_key, clean, replaced });
+        self.in_flight.push_back(InFlight { pending, reloads, started, final_key, clean, replaced, trace });
     }
 
     /// Turns the uncaptured wgpu errors of the newest frame into
@@ -540,6 +563,47 @@ impl Daemon {
         (!files.is_empty()).then(|| files.into_iter().collect())
     }
 
+    /// Traces a frame when the NaN watch sees a NaN/Inf that no current
+    /// report explains; publishes a traced frame's report; clears it once
+    /// a frame is clean.
+    fn follow_nan(&mut self, result: &FrameResult, trace: Option<&'static str>) {
+        if let Some(trigger) = trace {
+            let outputs = result
+                .captures
+                .iter()
+                .filter(|c| c.stats.has_non_finite())
+                .map(|c| NanCount { pass: c.pass.clone(), output: c.output.clone(), nan: c.stats.nan, inf: c.stats.inf })
+                .chain(result.tensors.iter().filter(|t| t.stats.has_non_finite()).map(|t| NanCount {
+                    pass: t.pass.clone(),
+                    output: t.output.clone(),
+                    nan: t.stats.nan,
+                    inf: t.stats.inf,
+                }))
+                .collect();
+            let report = NanReport { frame: result.frame, trigger: trigger.to_owned(), origin: result.nan.clone(), outputs };
+            self.trace_stale = false;
+            self.set_nan_report(Some(report));
+            return;
+        }
+        let Some(counts) = result.tensors.iter().find(|t| t.key() == nan_watch::OUTPUT) else { return };
+        let bad = counts.data.iter().any(|n| *n > 0.0);
+        let explained = self.nan_report.as_ref().is_some_and(|r| r.origin.is_some()) && !self.trace_stale;
+        if bad && !explained && self.trace_next.is_none() {
+            self.trace_next = Some("auto");
+            self.dirty = true;
+        } else if !bad && self.nan_report.as_ref().is_some_and(|r| r.frame < result.frame) {
+            self.set_nan_report(None);
+        }
+    }
+
+    fn set_nan_report(&mut self, report: Option<NanReport>) {
+        if report != self.nan_report {
+            shared::write(&self.shared.nan, report.clone());
+            self.shared.publish(ServerEvent::Nan { report: report.clone() });
+            self.nan_report = report;
+        }
+    }
+
     fn collect_frames(&mut self) {
         while self.in_flight.front().is_some_and(|f| f.pending.ready()) {
             let done = self.in_flight.pop_front().expect("checked");
@@ -548,8 +612,11 @@ impl Daemon {
     }
 
     fn publish_frame(&mut self, done: InFlight) {
-        let InFlight { pending, reloads, started, final_key, clean, replaced } = done;
+        let InFlight { pending, reloads, started, final_key, clean, replaced, trace } = done;
         let result = pending.finish();
+        if clean {
+            self.follow_nan(&result, trace);
+        }
         let render_ms = started.elapsed().as_secs_f64() * 1e3;
         let total = result.total_ms;
         let mut images = None;

@@ -32,6 +32,9 @@ pub enum Event {
     /// Debug API only (`--debug-api`): destroy the device for real, to
     /// exercise recovery.
     LoseDevice,
+    /// Capture every output of the next frame and report where a NaN/Inf
+    /// started (`POST /api/frame/trace`).
+    Trace,
     /// Stop the daemon: the HTTP side is shutting down.
     Shutdown,
 }

@@ -35,6 +35,7 @@ pub enum Command {
     Rebuild,
     Scene(SceneCommand),
     LoseDevice,
+    Trace,
 }
 
 impl Command {
@@ -43,13 +44,14 @@ impl Command {
             Command::Rebuild => Event::Rebuild,
             Command::Scene(c) => Event::Scene(c),
             Command::LoseDevice => Event::LoseDevice,
+            Command::Trace => Event::Trace,
         }
     }
 }
 
 /// The events [`Command::into_event`] makes: counted while they wait.
 fn is_command(event: &Event) -> bool {
-    matches!(event, Event::Rebuild | Event::Scene(_) | Event::LoseDevice)
+    matches!(event, Event::Rebuild | Event::Scene(_) | Event::LoseDevice | Event::Trace)
 }
 
 #[derive(Debug, thiserror::Error)]

@@ -34,6 +34,7 @@ passes![
     exposure,
     tonemap,
     debug_view,
+    nan_watch,
 ];
 
 /// The spec named `name`.
@@ -103,9 +104,12 @@ mod tests {
                 for v in *values {
                     let overrides = Overrides::from([((*key).to_owned(), v.clone())]);
                     let loaded = crate::scene::load_with(&path, &overrides).unwrap_or_else(|d| panic!("{d}"));
-                    for k in crate::render::build_graph(&loaded.scene).pipelines() {
-                        assert!(specs().any(|s| std::ptr::eq(s, k.spec)), "{} is built by a frame but not listed for loupe check", k.label());
-                        used.insert(k.spec.name);
+                    for nan_watch in [false, true] {
+                        let options = crate::render::FrameOptions { nan_watch };
+                        for k in crate::render::build_graph(&loaded.scene, options).pipelines() {
+                            assert!(specs().any(|s| std::ptr::eq(s, k.spec)), "{} is built by a frame but not listed for loupe check", k.label());
+                            used.insert(k.spec.name);
+                        }
                     }
                 }
             }

@@ -182,6 +182,17 @@ pub(super) async fn save_scene(State(st): State<Arc<AppState>>) -> Response {
     to_daemon(&st, Command::Scene(SceneCommand::Save))
 }
 
+/// `POST /api/frame/trace`: capture every output of the next frame and
+/// report where a NaN/Inf started.
+pub(super) async fn trace(State(st): State<Arc<AppState>>) -> Response {
+    to_daemon(&st, Command::Trace)
+}
+
+/// `GET /api/nan`: the newest NaN report, or `null`.
+pub(super) async fn nan(State(st): State<Arc<AppState>>) -> Response {
+    json(&serde_json::json!({ "report": read(&st.shared.nan) }))
+}
+
 /// Debug API only: the render thread destroys its device, which is then
 /// lost and recovered as if the driver had lost it.
 pub(super) async fn lose_device(State(st): State<Arc<AppState>>) -> Response {

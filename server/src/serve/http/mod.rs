@@ -128,6 +128,8 @@ fn build(shared: Arc<Shared>, allowed_hosts: Vec<String>) -> (Router, watch::Sen
         .route("/api/captures", get(api::captures))
         .route("/api/captures/{pass}/{file}", get(api::capture))
         .route("/api/tensors", get(tensors::list))
+        .route("/api/nan", get(api::nan))
+        .route("/api/frame/trace", post(api::trace))
         .route("/api/tensors/{pass}/{file}", get(tensors::tensor))
         .route("/api/sources/{*path}", get(sources::source))
         .route("/api/reload", post(api::reload))
