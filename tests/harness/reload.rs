@@ -40,8 +40,9 @@ pub fn colour(i: usize) -> [f32; 3] {
     [c(37 * i), c(53 * i + 11), c(71 * i + 29)]
 }
 
-/// Linear to sRGB-encoded, as an `…Srgb` target stores a value (and as
-/// captures of one report it).
+/// Linear to sRGB-encoded, as an `…Srgb` target stores a value. Captures
+/// report linear values, so colours are compared encoded: one step of the
+/// stored byte is 1/255 there.
 pub fn srgb(v: f32) -> f32 {
     if v <= 0.003_130_8 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
 }
@@ -184,7 +185,7 @@ impl SoakReport {
     /// writes an sRGB target, whose capture reports the stored, encoded
     /// values (8 bits: within 1.5/255 per channel).
     pub fn final_matches(&self) -> bool {
-        self.final_colour.iter().zip(self.final_pixel).all(|(want, got)| (srgb(*want) - got).abs() < 1.5 / 255.0)
+        self.final_colour.iter().zip(self.final_pixel).all(|(want, got)| (srgb(*want) - srgb(got)).abs() < 1.5 / 255.0)
     }
 
     pub fn rss_max_kib(&self) -> u64 {

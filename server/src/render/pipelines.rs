@@ -14,15 +14,24 @@ use crate::diag::Diagnostic;
 use crate::gpu::{self, pipeline::{self, Pipeline}};
 use crate::shader::{Compose, Composed, Library, NagaOil};
 
+/// A composed module and the content of the sources it was composed from.
+pub struct Compiled {
+    pub composed: Composed,
+    /// Taken when composing, from the same version of the sources: a save
+    /// landing before the module is installed must not pass for it.
+    pub sources: blake3::Hash,
+}
+
 /// Composes and validates the shader of pipeline `key`, which lives at
 /// `display` in `lib`. Runs on any thread; a missing file and a compiler
 /// panic come back as diagnostics like any other error.
-pub fn compose(lib: &Library, key: &PipelineKey, display: &str) -> Result<Composed, Vec<Diagnostic>> {
+pub fn compose(lib: &Library, key: &PipelineKey, display: &str) -> Result<Compiled, Vec<Diagnostic>> {
     let Some(file) = lib.get(display) else {
         return Err(vec![pipeline::missing_shader(key.spec.name, display)]);
     };
     let caps = gpu::capabilities_without_device();
     crate::shader::guard::guarded(display, "the WGSL compiler", || NagaOil.compose(lib, file, &key.defs, caps))
+        .map(|composed| Compiled { sources: sources_hash(lib, &composed.files), composed })
 }
 
 pub struct Entry {
@@ -105,7 +114,7 @@ impl PipelineCache {
         &mut self,
         device: &wgpu::Device,
         key: &PipelineKey,
-        result: Result<Composed, Vec<Diagnostic>>,
+        result: Result<Compiled, Vec<Diagnostic>>,
         lib: &Library,
         shader_display: &str,
     ) -> Installed {
@@ -117,21 +126,20 @@ impl PipelineCache {
             files: vec![shader_display.to_owned()],
             sources: None,
         });
-        if let Ok(composed) = &result {
-            let sources = Some(sources_hash(lib, &composed.files));
-            if entry.current.is_some() && sources == entry.sources {
-                entry.files = composed.files.clone();
+        if let Ok(c) = &result {
+            if entry.current.is_some() && Some(c.sources) == entry.sources {
+                entry.files = c.composed.files.clone();
                 entry.diagnostics.clear();
                 return Installed::Unchanged;
             }
         }
-        let created = result.and_then(|composed| {
+        let created = result.and_then(|Compiled { composed, sources }| {
             entry.files = composed.files.clone();
-            pipeline::create(device, key.spec, &key.defs, &composed, lib, shader_display).map(|p| (p, composed))
+            pipeline::create(device, key.spec, &key.defs, &composed, lib, shader_display).map(|p| (p, composed, sources))
         });
         match created {
-            Ok((p, composed)) => {
-                entry.sources = Some(sources_hash(lib, &composed.files));
+            Ok((p, composed, sources)) => {
+                entry.sources = Some(sources);
                 entry.current = Some(p);
                 entry.last_good = Some(composed);
                 entry.generation += 1;

@@ -15,7 +15,7 @@ use serde::Serialize;
 
 use super::frame::{self, FrameInputs, FrameResult, PendingFrame};
 use super::graph::{Graph, PassKind};
-use super::pipelines::{self, Installed, PipelineCache, PipelineSummary, Status};
+use super::pipelines::{self, Compiled, Installed, PipelineCache, PipelineSummary, Status};
 use super::pool::ResourcePool;
 use super::resource::{Lifetime, PipelineKey, ResourceDesc, TensorLayout};
 use super::FrameOptions;
@@ -25,7 +25,7 @@ use crate::gpu::Gpu;
 use crate::gpu::pipeline::PipelineSpec;
 use crate::mesh::MeshData;
 use crate::scene::{Loaded, Scene};
-use crate::shader::{Composed, Library, library};
+use crate::shader::{Library, library};
 
 /// How a pass stands this frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -220,7 +220,7 @@ impl Session {
 
     /// Composing `key` as a job for any thread: it holds this version of
     /// the sources.
-    pub fn compose_job(&self, key: &PipelineKey) -> impl FnOnce() -> Result<Composed, Vec<Diagnostic>> + Send + 'static {
+    pub fn compose_job(&self, key: &PipelineKey) -> impl FnOnce() -> Result<Compiled, Vec<Diagnostic>> + Send + 'static {
         let lib = self.lib.clone();
         let key = key.clone();
         let display = self.shader_display(key.spec);
@@ -229,7 +229,7 @@ impl Session {
 
     /// Creates the pipeline from a compile result and swaps it in when it
     /// built (on this thread: it owns the device).
-    pub fn install(&mut self, key: &PipelineKey, result: Result<Composed, Vec<Diagnostic>>) -> Installed {
+    pub fn install(&mut self, key: &PipelineKey, result: Result<Compiled, Vec<Diagnostic>>) -> Installed {
         let display = self.shader_display(key.spec);
         self.cache.install(&self.gpu.device, key, result, &self.lib, &display)
     }
@@ -398,6 +398,28 @@ mod tests {
         assert_eq!(r.timing, "cpu");
         assert_eq!(r.timings, vec![], "no pass gets a time it did not measure");
         assert!(r.total_ms > 0.0, "the frame's wall clock is reported");
+    }
+
+    /// A module composed before a save and installed after it is that old
+    /// version: the compile of the saved file still swaps in.
+    #[test]
+    fn a_compile_from_older_sources_does_not_pass_for_the_newer_ones() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+        let gpu = crate::gpu::open().unwrap_or_else(|e| panic!("a GPU device (lavapipe will do): {e}"));
+        let mut s = Session::new(gpu, &root, library::read_tree(&root).unwrap(), &pattern(false));
+        let key = s.wanted().into_iter().find(|k| k.spec.name == "post.tonemap").unwrap();
+        let before_save = s.compose_job(&key);
+        let mut lib = (**s.library()).clone();
+        let display = s.shader_display(key.spec);
+        let text = lib.get(&display).unwrap().text.replace("let c = max(", "let c = 0.5 * max(");
+        let path = lib.get(&display).unwrap().path.clone();
+        lib.upsert(crate::shader::SourceFile::from_bytes(&path, display.clone(), text.into_bytes()).unwrap());
+        s.apply_sources(lib);
+        assert_eq!(s.install(&key, before_save()), Installed::Swapped);
+        let after_save = s.compose_job(&key);
+        assert_eq!(s.install(&key, after_save()), Installed::Swapped, "the saved version is new");
+        let again = s.compose_job(&key);
+        assert_eq!(s.install(&key, again()), Installed::Unchanged, "the same sources again change nothing");
     }
 
     /// Culled permutations are neither reported nor rebuilt: a change to a

@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use crate::diag::Diagnostic;
 use crate::render::resource::PipelineKey;
-use crate::shader::Composed;
+use crate::render::pipelines::Compiled;
 
 pub enum Event {
     /// Debounced, content-checked changes from the watcher.
@@ -77,6 +77,6 @@ pub struct CompileResult {
     /// Which reload this belongs to.
     pub reload: u64,
     pub key: PipelineKey,
-    pub result: Result<Composed, Vec<Diagnostic>>,
+    pub result: Result<Compiled, Vec<Diagnostic>>,
     pub compose_ms: f64,
 }
