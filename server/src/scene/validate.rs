@@ -381,6 +381,7 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
 /// is an error at the key, a value of the wrong type or out of range an
 /// error at the value; then the ordered pairs are checked.
 fn settings(c: &Checker, scene: &mut Scene) -> Checked<()> {
+    // SETTINGS lists each table's entries together.
     let mut tables: Vec<&str> = SETTINGS.iter().map(|s| s.split().0).collect();
     tables.dedup();
     let root = c.doc.as_table();
@@ -405,7 +406,7 @@ fn settings(c: &Checker, scene: &mut Scene) -> Checked<()> {
     }
     for (low, high) in settings::ORDERED {
         let (Some(lo), Some(hi)) = (settings::find(low), settings::find(high)) else { continue };
-        let (a, b) = (number((lo.get)(scene)), number((hi.get)(scene)));
+        let (Some(a), Some(b)) = (settings::number(&(lo.get)(scene)), settings::number(&(hi.get)(scene))) else { continue };
         if a < b {
             continue;
         }
@@ -422,11 +423,6 @@ fn settings(c: &Checker, scene: &mut Scene) -> Checked<()> {
 fn segs(s: &settings::Setting) -> [Seg; 2] {
     let (table, key) = s.split();
     [Seg::Key(table), Seg::Key(key)]
-}
-
-/// A setting's value as the typed field holds it (f32 prints as written).
-fn number(v: Value) -> f32 {
-    settings::number(&v).map_or(f32::NAN, |f| f as f32)
 }
 
 /// A TOML value as an override carries it; other kinds of value are
