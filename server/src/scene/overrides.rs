@@ -182,7 +182,7 @@ pub fn controls(scene: &Scene) -> Vec<Control> {
             path: format!("lights[{i}].intensity"),
             label: format!("Light {i} ({kind}) intensity"),
             kind: ControlKind::Slider { min: 0.0, max: 100.0, step: 0.1 },
-            value: Value::Float(f64::from(l.intensity)),
+            value: settings::float(l.intensity),
             affects: &["lighting", "volumes"],
         });
     }

@@ -132,11 +132,15 @@ impl Typed for u32 {
     }
 }
 
+/// The shortest decimal that reads back as `f`, so a control shows 0.1 as
+/// written, not 0.10000000149011612.
+pub fn float(f: f32) -> Value {
+    Value::Float(f.to_string().parse().unwrap_or(f64::from(f)))
+}
+
 impl Typed for f32 {
-    /// The shortest decimal that reads back as this f32, so a control shows
-    /// 0.1 as written, not 0.10000000149011612.
     fn to_value(&self) -> Value {
-        Value::Float(self.to_string().parse().unwrap_or(f64::from(*self)))
+        float(*self)
     }
     fn from_value(v: &Value) -> Option<Self> {
         number(v).map(|f| f as f32)

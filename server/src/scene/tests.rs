@@ -255,6 +255,13 @@ fn controls_are_the_table_entries_the_scene_shows() {
 }
 
 #[test]
+fn control_values_read_as_written() {
+    let scene = parse("s.toml", "[post]\nexposure_ev = 0.3\n\n[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1.2\n").unwrap();
+    let value = |p: &str| controls(&scene).into_iter().find(|c| c.path == p).unwrap().value;
+    assert_eq!((value("post.exposure_ev"), value("lights[0].intensity")), (Value::Float(0.3), Value::Float(1.2)));
+}
+
+#[test]
 fn overrides_of_settings_are_checked_by_the_table() {
     for (path, value, message) in [
         ("post.exposure_ev", Value::Float(30.0), "post.exposure_ev: must be between -24 and 24, not 30"),
