@@ -59,6 +59,12 @@ export async function getText(url) {
   return response.text();
 }
 
+/** The body as an ArrayBuffer (raw `.f32` data). */
+export async function getBytes(url) {
+  const response = await request(url, 'application/octet-stream');
+  return response.arrayBuffer();
+}
+
 export const status = () => getJson('/api/status');
 export const passes = () => getJson('/api/passes').then(unwrap('passes'));
 export const pipelines = () => getJson('/api/pipelines').then(unwrap('pipelines'));

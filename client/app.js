@@ -28,6 +28,7 @@ import { PassList } from './passes.js';
 import { DiagnosticsPanel } from './diagnostics.js';
 import { Inspector } from './inspector.js';
 import { LiveFrame } from './live.js';
+import { TensorView } from './tensor.js';
 import { ControlsPanel } from './controls.js';
 import * as tex from './texture.js';
 import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
@@ -233,7 +234,18 @@ const live = new LiveFrame($('frame'), $('frame-info'), $('frame-empty'), (frame
 });
 
 const passList = new PassList($('passes'), $('passes-total'), (pass, output) => {
-  inspector.inspect(pass, output);
+  const info = state.passes.find((p) => p.name === pass)?.writes?.find((w) => w.name === output);
+  if (info?.kind === 'buffer') {
+    // Buffers are tensors, not images: the tensor view takes the
+    // inspector's place until a texture is picked again.
+    $('inspector').hidden = true;
+    tensors.show(pass, output);
+    passList.select(pass);
+  } else {
+    tensors.hide();
+    $('inspector').hidden = false;
+    inspector.inspect(pass, output);
+  }
 });
 
 const diagnostics = new DiagnosticsPanel($('diagnostics'), $('diag-count'), (path) => api.source(path));
@@ -246,6 +258,13 @@ const inspector = new Inspector({
   // The inspector streams exact floats of what it shows.
   subscribeOnly: (wanted) => conn?.subscribeOnly(wanted, 'f32'),
   awaitCapture,
+});
+
+const tensors = new TensorView((wanted) => conn?.subscribeOnly(wanted, 'f32'));
+$('tensor-close').addEventListener('click', () => {
+  tensors.hide();
+  $('inspector').hidden = false;
+  autoInspect(true);
 });
 
 /** Returns whether the pass structure changed (not just the times). */
@@ -396,6 +415,7 @@ function onEvent(ev) {
       }
       for (const w of [...frameWaiters]) w(true);
       inspector.onFrame();
+      tensors.onFrame();
       break;
     case 'passes':
       // Sent when the pass list or a status changed; a new structure can

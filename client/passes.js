@@ -165,7 +165,9 @@ export class PassList {
                   },
                 },
                 o.name,
-                el('span', { class: 'chip-meta' }, ` ${o.format} ${o.width}×${o.height}`),
+                el('span', { class: 'chip-meta' }, o.kind === 'buffer' && Array.isArray(o.shape)
+                  ? ` ${o.format} [${o.shape.map((d) => d[1]).join('×')}]${o.history ? ' history' : ''}`
+                  : ` ${o.format} ${o.width}×${o.height}`),
               ),
             ),
           )

@@ -72,10 +72,16 @@ struct SceneArgs {
     root: PathBuf,
 }
 
+/// A path given relative to the project root, as every subcommand reads
+/// `--scene` (absolute paths stand as they are).
+fn under_root(root: &std::path::Path, path: &std::path::Path) -> PathBuf {
+    if path.is_absolute() { path.to_owned() } else { root.join(path) }
+}
+
 impl SceneArgs {
     fn job(&self) -> offline::Job {
         offline::Job {
-            scene: self.scene.clone(),
+            scene: under_root(&self.root, &self.scene),
             shader_root: self.root.join("shaders"),
             size: self.size,
             overrides: self.set.iter().cloned().collect(),
@@ -260,7 +266,7 @@ fn run_bench(args: BenchArgs) -> ExitCode {
         v.sort();
         v
     } else {
-        args.scenes.clone()
+        args.scenes.iter().map(|s| under_root(&args.root, s)).collect()
     };
     for scene in scenes {
         let job = offline::Job { scene, shader_root: args.root.join("shaders"), size: Some(args.size), overrides: Default::default() };
@@ -288,7 +294,7 @@ fn run_bench(args: BenchArgs) -> ExitCode {
 
 fn run_serve(args: ServeArgs) -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    let scene = if args.scene.is_absolute() { args.scene.clone() } else { args.root.join(&args.scene) };
+    let scene = under_root(&args.root, &args.scene);
     if !scene.is_file() {
         eprintln!("loupe serve: scene `{}` does not exist", scene.display());
         return ExitCode::from(exit::USAGE);

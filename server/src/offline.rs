@@ -11,13 +11,11 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::diag::Diagnostic;
-use crate::gpu::{self, Gpu, pipeline};
-use crate::render::capture::ImageStats;
-use crate::render::frame::{self, FrameResult, NanOrigin, TexturePool};
-use crate::render::graph::{Graph, PipelineKey};
-use crate::render::pipelines::{self, PipelineCache};
-use crate::render::scene_gpu::SceneGpu;
-use crate::render::{self};
+use crate::gpu;
+use crate::render::capture::{CapturedTensor, ImageStats, TensorStats};
+use crate::render::frame::{FrameResult, NanOrigin};
+use crate::render::resource::TensorLayout;
+use crate::render::session::{PassState, PassSummary, Session};
 use crate::scene::{self, overrides::Overrides};
 use crate::shader::library;
 
@@ -41,77 +39,33 @@ pub struct Job {
     pub overrides: Overrides,
 }
 
-/// A device with the job's scene loaded and its pipelines built.
-pub struct Prepared {
-    pub gpu: Gpu,
-    pub scene_display: String,
-    /// The output size the scene renders at (after `Job::size`).
-    pub size: (u32, u32),
-    pub graph: Graph,
-    pub scene_gpu: SceneGpu,
-    pub pipelines: BTreeMap<PipelineKey, pipeline::Pipeline>,
-    pub pool: TexturePool,
-}
+/// Offline frames are a fixed time apart, so temporal passes (auto
+/// exposure) give the same result on every run and machine.
+pub const FRAME_DT: f32 = 1.0 / 30.0;
 
-/// Opens the device, loads the scene (with overrides and size applied),
-/// builds the graph and every pipeline it needs.
-pub fn prepare(job: &Job) -> Result<Prepared, OfflineError> {
+/// Opens the device, loads the scene (with overrides and size applied)
+/// and builds every pipeline its graph needs.
+pub fn prepare(job: &Job) -> Result<Session, OfflineError> {
     let mut loaded = scene::load_with(&job.scene, &job.overrides).map_err(|d| OfflineError::Input(vec![d]))?;
     if let Some((w, h)) = job.size {
         loaded.scene.width = w;
         loaded.scene.height = h;
     }
     let gpu = gpu::open()?;
-    let graph = render::build_graph(&loaded.scene, 1);
     let lib = library::read_tree(&job.shader_root).map_err(OfflineError::Io)?;
-    let mut cache = PipelineCache::default();
-    let mut errors = Vec::new();
-    for key in graph.pipelines() {
-        let spec = pipeline::spec(key.spec).expect("keys come from specs");
-        let display = library::display_path(&job.shader_root.join(spec.shader));
-        cache.install(&gpu.device, &key, pipelines::compose(&lib, &key, &display), &lib, &display);
-        errors.extend(cache.entries[&key].diagnostics.iter().cloned());
-    }
+    let mut session = Session::new(gpu, &job.shader_root, lib, &loaded);
+    let errors = session.install_missing();
     if !errors.is_empty() {
         return Err(OfflineError::Input(errors));
     }
-    let scene_gpu = SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes);
-    Ok(Prepared {
-        scene_display: library::display_path(&job.scene),
-        size: (loaded.scene.width, loaded.scene.height),
-        graph,
-        scene_gpu,
-        pipelines: cache.live(),
-        pool: TexturePool::default(),
-        gpu,
-    })
+    Ok(session)
 }
 
-impl Prepared {
-    /// Renders one frame and waits for it. `capture`: `None` captures every
-    /// output; otherwise the named ones.
-    pub fn frame(&mut self, capture: Option<&BTreeSet<String>>, n: u64) -> FrameResult {
-        let pending = frame::submit(
-            &self.gpu.device,
-            &self.gpu.queue,
-            self.gpu.features,
-            &self.scene_gpu,
-            &self.graph,
-            &mut self.pool,
-            &self.pipelines,
-            capture,
-            n,
-        );
-        while !pending.ready() {
-            let _ = self.gpu.device.poll(wgpu::PollType::wait_indefinitely());
-        }
-        pending.finish()
-    }
-
-    /// Errors wgpu reported outside any error scope since the last call.
-    pub fn uncaptured(&self) -> Vec<String> {
-        std::mem::take(&mut *self.gpu.uncaptured.lock().unwrap_or_else(|e| e.into_inner()))
-    }
+/// Renders one frame and waits for it. `capture`: `None` captures every
+/// output; otherwise the named ones.
+pub fn frame(session: &mut Session, capture: Option<&BTreeSet<String>>) -> FrameResult {
+    let pending = session.submit(capture, FRAME_DT);
+    session.wait(pending)
 }
 
 #[derive(Debug, Serialize)]
@@ -132,25 +86,36 @@ pub struct FrameReport {
     pub gpu_errors: Vec<String>,
 }
 
+/// A live pass: the session's summary, its time and what was written.
 #[derive(Debug, Serialize)]
 pub struct PassReport {
-    pub name: String,
-    pub time_ms: f64,
-    pub pipelines: Vec<String>,
-    pub reads: Vec<String>,
+    #[serde(flatten)]
+    pub pass: PassSummary,
+    /// `null` without timestamp queries (only the frame total is known).
+    pub time_ms: Option<f64>,
     pub outputs: Vec<OutputReport>,
 }
 
 #[derive(Debug, Serialize)]
-pub struct OutputReport {
-    pub name: String,
-    pub format: String,
-    pub width: u32,
-    pub height: u32,
-    pub stats: ImageStats,
-    /// Files written, relative to the output directory.
-    pub png: String,
-    pub exr: String,
+#[serde(untagged)]
+pub enum OutputReport {
+    Image {
+        name: String,
+        format: String,
+        width: u32,
+        height: u32,
+        stats: ImageStats,
+        /// Files written, relative to the output directory.
+        png: String,
+        exr: String,
+    },
+    Tensor {
+        name: String,
+        layout: TensorLayout,
+        stats: TensorStats,
+        /// A NumPy array of f32, relative to the output directory.
+        npy: String,
+    },
 }
 
 #[derive(Debug, Serialize)]
@@ -160,44 +125,67 @@ pub struct CulledReport {
 }
 
 /// Renders `job` once and writes `<pass>.<output>.png` and `.exr` for every
-/// output into `out`; returns the report (the caller writes it as JSON).
+/// texture and `.npy` for every buffer into `out`; returns the report (the
+/// caller writes it as JSON).
 pub fn render(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
-    let mut p = prepare(job)?;
-    let result = p.frame(None, 1);
+    let mut session = prepare(job)?;
+    let result = frame(&mut session, None);
     std::fs::create_dir_all(out).map_err(|e| OfflineError::Io(format!("cannot create {}: {e}", out.display())))?;
+    let write = |name: String, bytes: Vec<u8>| {
+        std::fs::write(out.join(&name), bytes).map_err(|e| OfflineError::Io(format!("cannot write {name}: {e}"))).map(|()| name)
+    };
     let mut passes = Vec::new();
-    for pass in &p.graph.passes {
+    let mut culled = Vec::new();
+    for pass in session.passes() {
+        if pass.status == PassState::Culled {
+            culled.push(CulledReport { name: pass.name, reason: pass.reason.unwrap_or_default() });
+            continue;
+        }
         let mut outputs = Vec::new();
         for c in result.captures.iter().filter(|c| c.pass == pass.name) {
             let stem = format!("{}.{}", c.pass, c.output);
-            let write = |name: String, bytes: Vec<u8>| {
-                std::fs::write(out.join(&name), bytes).map_err(|e| OfflineError::Io(format!("cannot write {name}: {e}"))).map(|()| name)
-            };
             let png = write(format!("{stem}.png"), c.to_png())?;
             let exr = write(format!("{stem}.exr"), c.to_exr().map_err(OfflineError::Io)?)?;
-            outputs.push(OutputReport { name: c.output.clone(), format: c.format.clone(), width: c.width, height: c.height, stats: c.stats.clone(), png, exr });
+            outputs.push(OutputReport::Image { name: c.output.clone(), format: c.format.clone(), width: c.width, height: c.height, stats: c.stats.clone(), png, exr });
         }
-        passes.push(PassReport {
-            name: pass.name.clone(),
-            time_ms: result.timings.iter().find(|(n, _)| *n == pass.name).map_or(0.0, |(_, t)| *t),
-            pipelines: pass.pipelines.iter().map(PipelineKey::label).collect(),
-            reads: pass.reads.iter().map(|h| p.graph.texture(*h).name.clone()).collect(),
-            outputs,
-        });
+        for t in result.tensors.iter().filter(|t| t.pass == pass.name) {
+            let npy = write(format!("{}.{}.npy", t.pass, t.output), npy(t))?;
+            outputs.push(OutputReport::Tensor { name: t.output.clone(), layout: t.layout.clone(), stats: t.stats.clone(), npy });
+        }
+        let time_ms = result.timings.iter().find(|(n, _)| *n == pass.name).map(|(_, t)| *t);
+        passes.push(PassReport { pass, time_ms, outputs });
     }
+    let (width, height) = (session.scene().width, session.scene().height);
     Ok(FrameReport {
-        scene: p.scene_display.clone(),
-        adapter: p.gpu.adapter_name(),
-        cpu_adapter: p.gpu.is_cpu(),
-        width: p.size.0,
-        height: p.size.1,
+        scene: library::display_path(&job.scene),
+        adapter: session.gpu().adapter_name(),
+        cpu_adapter: session.gpu().is_cpu(),
+        width,
+        height,
         timing: result.timing.to_owned(),
-        total_ms: result.timings.iter().map(|(_, t)| t).sum(),
+        total_ms: result.total_ms,
         passes,
-        culled: p.graph.culled.iter().map(|c| CulledReport { name: c.name.clone(), reason: c.reason.clone() }).collect(),
+        culled,
         nan: result.nan.clone(),
-        gpu_errors: p.uncaptured(),
+        gpu_errors: session.take_uncaptured(),
     })
+}
+
+/// A tensor as a NumPy `.npy` (version 1.0, little-endian f32, C order),
+/// which every array tool reads.
+fn npy(t: &CapturedTensor) -> Vec<u8> {
+    let shape: Vec<String> = t.layout.dims.iter().map(|(_, n)| n.to_string()).collect();
+    let shape = if shape.len() == 1 { format!("({},)", shape[0]) } else { format!("({})", shape.join(", ")) };
+    let mut header = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': {shape}, }}");
+    // Magic (6) + version (2) + length (2) + header + newline: a multiple of 64.
+    let pad = (64 - (10 + header.len() + 1) % 64) % 64;
+    header.push_str(&" ".repeat(pad));
+    header.push('\n');
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(&t.raw_f32());
+    out
 }
 
 /// Per-pass times and capture overhead of one scene.
@@ -224,21 +212,20 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 pub fn bench(job: &Job, frames: u32) -> Result<BenchReport, OfflineError> {
-    let mut p = prepare(job)?;
-    let final_name = p.graph.final_output().map(|h| p.graph.texture(h).name.clone());
+    let mut session = prepare(job)?;
     let none = BTreeSet::new();
-    let fin: BTreeSet<String> = final_name.into_iter().collect();
+    let fin: BTreeSet<String> = session.graph().final_name().into_iter().collect();
     // Warm up: first use compiles driver-side state and allocates targets.
-    for i in 0..3 {
-        p.frame(None, i);
+    for _ in 0..3 {
+        frame(&mut session, None);
     }
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let (mut t_none, mut t_final, mut t_all) = (Vec::new(), Vec::new(), Vec::new());
     let mut timing = String::new();
-    for i in 0..frames {
+    for _ in 0..frames {
         for (set, times) in [(Some(&none), &mut t_none), (Some(&fin), &mut t_final), (None, &mut t_all)] {
             let start = Instant::now();
-            let r = p.frame(set, u64::from(i));
+            let r = frame(&mut session, set);
             times.push(start.elapsed().as_secs_f64() * 1e3);
             if set.is_some_and(BTreeSet::is_empty) {
                 timing = r.timing.to_owned();
@@ -248,12 +235,12 @@ pub fn bench(job: &Job, frames: u32) -> Result<BenchReport, OfflineError> {
             }
         }
     }
-    let order: Vec<String> = p.graph.passes.iter().map(|x| x.name.clone()).collect();
+    let order: Vec<String> = session.graph().passes.iter().map(|x| x.name.clone()).collect();
     Ok(BenchReport {
-        scene: p.scene_display.clone(),
-        adapter: p.gpu.adapter_name(),
-        width: p.size.0,
-        height: p.size.1,
+        scene: library::display_path(&job.scene),
+        adapter: session.gpu().adapter_name(),
+        width: session.scene().width,
+        height: session.scene().height,
         frames,
         timing,
         passes: order.into_iter().map(|n| (n.clone(), median(per_pass.remove(&n).unwrap_or_default()))).collect(),

@@ -6,6 +6,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::diag::Diagnostic;
+use crate::render::pipelines::{PipelineSummary, Status as PipelineStatus};
+use crate::render::session::{PassState, PassSummary};
 use crate::scene::overrides::{Control, Overrides, Value as OverrideValue};
 
 pub const VERSION: u32 = 2;
@@ -47,18 +49,30 @@ pub enum PassStatus {
     Culled,
 }
 
+/// One output of a pass: a texture, or a buffer read as a tensor.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct OutputInfo {
     pub name: String,
+    /// `texture` or `buffer`.
+    pub kind: String,
+    /// A texture's format (`Rgba16Float`), a buffer's element type (`u32`).
     pub format: String,
+    /// A texture's size; for a buffer, its element count and 1.
     pub width: u32,
     pub height: u32,
+    /// A buffer's dimensions, outermost first: `[["bin", 256]]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shape: Option<Vec<(String, u32)>>,
+    /// Kept across frames (a history resource).
+    pub history: bool,
 }
 
 /// One node of the render graph, `GET /api/passes`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PassInfo {
     pub name: String,
+    /// `raster`, `compute` or `copy`; `null` when culled.
+    pub kind: Option<String>,
     pub status: PassStatus,
     /// Why it is culled or failed.
     pub reason: Option<String>,
@@ -73,6 +87,38 @@ pub struct PassInfo {
 }
 
 impl PassInfo {
+    pub fn new(p: PassSummary, time_ms: Option<f64>, timing: &str) -> Self {
+        PassInfo {
+            name: p.name,
+            kind: p.kind.map(|k| format!("{k:?}").to_lowercase()),
+            status: match p.status {
+                PassState::Ok => PassStatus::Ok,
+                PassState::Stale => PassStatus::Stale,
+                PassState::Failed => PassStatus::Failed,
+                PassState::Culled => PassStatus::Culled,
+            },
+            reason: p.reason,
+            pipelines: p.pipelines,
+            reads: p.reads,
+            writes: p
+                .writes
+                .into_iter()
+                .map(|o| OutputInfo {
+                    name: o.name,
+                    kind: o.kind.to_owned(),
+                    format: o.format,
+                    width: o.width,
+                    height: o.height,
+                    shape: o.tensor.map(|t| t.dims.iter().map(|(n, s)| ((*n).to_owned(), *s)).collect()),
+                    history: o.history,
+                })
+                .collect(),
+            time_ms,
+            timing: timing.to_owned(),
+            diagnostics: p.diagnostics,
+        }
+    }
+
     /// The same pass without its per-frame time: what a `passes` event
     /// announces a change of (times travel in `frame` events).
     pub fn shape(&self) -> PassInfo {
@@ -89,6 +135,17 @@ pub struct PipelineInfo {
     /// Increases each time a new version is swapped in.
     pub generation: u64,
     pub files: Vec<String>,
+}
+
+impl From<PipelineSummary> for PipelineInfo {
+    fn from(p: PipelineSummary) -> Self {
+        let status = match p.status {
+            PipelineStatus::Ok => PassStatus::Ok,
+            PipelineStatus::Stale => PassStatus::Stale,
+            PipelineStatus::Failed => PassStatus::Failed,
+        };
+        PipelineInfo { name: p.name, shader: p.shader, defs: p.defs, status, generation: p.generation, files: p.files }
+    }
 }
 
 /// `GET /api/diagnostics`

@@ -230,3 +230,83 @@ async fn any_pass_output_is_inspectable_with_exact_values() {
     assert!(d > 0.0 && d < 1.0, "depth {d}");
     c.close().await.unwrap();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_auto_exposure_histogram_is_a_plot_with_its_gpu_time() {
+    let p = Project::copy_of_repo("browser-tensor");
+    p.write("scenes/auto.toml", "[output]\nwidth = 320\nheight = 180\n\n[post]\nauto_exposure = true\n");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/auto.toml"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    // The compute pass is listed with its GPU time, and its buffer output.
+    let row = "#passes li[data-pass=\"exposure_histogram\"][data-status=\"ok\"]";
+    until(&c, &s, "the histogram pass timed", &format!("document.querySelector('{row} .pass-time .ms')?.textContent.match(/[0-9]/)")).await;
+    let chip = format!("{row} .chip[data-output=\"histogram\"]");
+    let meta = until(&c, &s, "the histogram chip", &format!("document.querySelector('{chip}')?.textContent")).await;
+    assert!(meta.as_str().unwrap().contains("u32 [256]"), "the chip says what the buffer is: {meta}");
+    c.find(Locator::Css(&chip)).await.unwrap().click().await.unwrap();
+
+    until(&c, &s, "the tensor view with 256 bars", "!document.querySelector('#tensor-panel').hidden && document.querySelector('#tensor-plot').dataset.bars === '256'").await;
+    assert_eq!(c.execute("return document.querySelector('#inspector').hidden;", vec![]).await.unwrap(), true, "the tensor view takes the inspector's place");
+    let shape = c.find(Locator::Css("#tensor-shape")).await.unwrap().text().await.unwrap();
+    assert!(shape.contains("[bin 256] u32"), "{shape}");
+    // The plot reads the captured values: hovering the fullest bin shows
+    // its exact count, and the counts add up to every pixel.
+    let values = c
+        .execute_async(
+            "fetch('/api/tensors/exposure_histogram/histogram.f32').then(r => r.arrayBuffer()).then(b => arguments[0](Array.from(new Float32Array(b))));",
+            vec![],
+        )
+        .await
+        .unwrap();
+    let values: Vec<f64> = values.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    assert_eq!(values.iter().sum::<f64>(), 320.0 * 180.0, "every pixel metered once");
+    let (top, count) = values.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).unwrap();
+    let hover = format!(
+        "const c = document.querySelector('#tensor-plot'); const r = c.getBoundingClientRect();
+         c.dispatchEvent(new MouseEvent('mousemove', {{ clientX: r.left + ({top} + 0.5) * r.width / 256, clientY: r.top + r.height / 2 }}));
+         return document.querySelector('#tensor-readout').textContent;"
+    );
+    let readout = c.execute(&hover, vec![]).await.unwrap();
+    assert_eq!(readout, format!("[{top}] = {count}"), "the readout under the mouse is the captured value");
+    c.close().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_srgb_output_looks_in_the_inspector_as_in_the_live_frame() {
+    let p = Project::copy_of_repo("browser-srgb");
+    let s = Server::start(&p.root, &["--render", "on-change"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "a frame", "document.querySelector('#frame').complete && Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    // The inspector opens on the final output, tonemap/color (Rgba8UnormSrgb).
+    let loaded = c.execute_async("window.loupe.inspect('tonemap', 'color').then(arguments[0]);", vec![]).await.unwrap();
+    assert_eq!(loaded, true);
+    // The live frame's pixels as the browser decodes its PNG, against what
+    // the inspector displays at the same pixels (linear floats, encoded).
+    let compared = c
+        .execute(
+            "const img = document.querySelector('#frame');
+             const cv = document.createElement('canvas'); cv.width = img.naturalWidth; cv.height = img.naturalHeight;
+             const g = cv.getContext('2d'); g.drawImage(img, 0, 0);
+             const out = [];
+             for (const fx of [0.05, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95]) for (const fy of [0.1, 0.5, 0.9]) {
+               const x = Math.floor(fx * cv.width), y = Math.floor(fy * cv.height);
+               out.push([x, y, Array.from(g.getImageData(x, y, 1, 1).data).slice(0, 3), window.loupe.displayedAt(x, y, 'a').slice(0, 3)]);
+             }
+             return out;",
+            vec![],
+        )
+        .await
+        .unwrap();
+    let mut differing = 0;
+    for sample in compared.as_array().unwrap() {
+        let live: Vec<i64> = sample[2].as_array().unwrap().iter().map(|v| v.as_i64().unwrap()).collect();
+        let shown: Vec<i64> = sample[3].as_array().unwrap().iter().map(|v| v.as_i64().unwrap()).collect();
+        assert!(live.iter().zip(&shown).all(|(a, b)| (a - b).abs() <= 1), "pixel ({}, {}): live {live:?}, inspector {shown:?}", sample[0], sample[1]);
+        differing += usize::from(live.iter().any(|v| *v != live[0]));
+    }
+    assert!(differing > 0, "the samples include coloured pixels, not only greys: {compared}");
+    c.close().await.unwrap();
+}

@@ -66,10 +66,22 @@ fn showcase_renders_every_pass() {
     let r = report.expect("report.json written");
     assert_eq!(
         names(&r["passes"]),
-        ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes", "exposure", "tonemap", "debug_view"],
+        ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes", "exposure_histogram", "exposure_adapt", "exposure", "tonemap", "debug_view"],
         "{r}"
     );
     assert_eq!(names(&r["culled"]), ["test_pattern"]);
+    // Auto exposure: compute passes whose buffers are written as tensors.
+    let pass = |name: &str| r["passes"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap().clone();
+    assert_eq!(pass("exposure_histogram")["kind"], "compute");
+    assert_eq!(pass("exposure")["pipelines"], serde_json::json!(["post.exposure[AUTO_EXPOSURE]"]));
+    let histogram = &pass("exposure_histogram")["outputs"][0];
+    assert_eq!(histogram["layout"]["dims"], serde_json::json!([["bin", 256]]), "{histogram}");
+    let bins = npy_f32(&p.path(&format!("out/{}", histogram["npy"].as_str().unwrap())));
+    assert_eq!(bins.len(), 256);
+    assert_eq!(bins.iter().sum::<f32>(), 96.0 * 54.0, "every pixel metered once");
+    let state = &pass("exposure_adapt")["outputs"][0];
+    let ev = npy_f32(&p.path(&format!("out/{}", state["npy"].as_str().unwrap())));
+    assert!(ev[0].is_finite() && ev[0] == ev[1] && ev[3] == 1.0, "the first frame starts at its target: {ev:?}");
     let pipelines: Vec<&str> = r["passes"].as_array().unwrap().iter().flat_map(|p| p["pipelines"].as_array().unwrap()).map(|v| v.as_str().unwrap()).collect();
     assert!(pipelines.contains(&"lighting.deferred[LIGHT_RECT,MEDIA_SHADOWS,SHADOWS]"), "{pipelines:?}");
     assert!(pipelines.contains(&"volumes.raymarch[SHADOWS,VOLUME_ANALYTIC]"), "{pipelines:?}");
@@ -81,6 +93,17 @@ fn showcase_renders_every_pass() {
     // Four point-light cube faces + directional + spot: 8 shadow layers.
     let shadows = &r["passes"].as_array().unwrap()[0]["outputs"][0];
     assert_eq!(shadows["height"].as_u64(), Some(1024 * 8), "layers stack vertically: {shadows}");
+}
+
+/// The values of a little-endian f32 `.npy` file, read by its header.
+fn npy_f32(path: &std::path::Path) -> Vec<f32> {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00", "npy magic and version 1.0");
+    let header_len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let header = std::str::from_utf8(&bytes[10..10 + header_len]).unwrap();
+    assert!(header.contains("'descr': '<f4'"), "{header}");
+    assert_eq!((10 + header_len) % 64, 0, "data is aligned");
+    bytes[10 + header_len..].chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect()
 }
 
 #[test]
@@ -115,4 +138,17 @@ fn bad_scenes_are_diagnosed_at_their_line() {
     run.code(1).stderr_has("scenes/bad.toml:4:8").stderr_has("does not exist");
     let run = p.run(&["render", "--scene", "scenes/minimal.toml", "--out", "out", "--size", "0x10"]);
     run.code(2).stderr_has("outside");
+}
+
+#[test]
+fn render_and_bench_read_the_scene_under_root_as_serve_does() {
+    let p = Project::copy_of_repo("render-root");
+    let elsewhere = Project::empty("render-root-cwd");
+    let root = p.root.to_str().unwrap();
+    let out = elsewhere.path("out");
+    let run = loupe_tests::loupe(&elsewhere.root, &["render", "--root", root, "--scene", "scenes/pattern.toml", "--size", "32x18", "--out", out.to_str().unwrap()]);
+    run.code(0);
+    assert!(out.join("report.json").is_file());
+    let run = loupe_tests::loupe(&elsewhere.root, &["bench", "--root", root, "--size", "32x18", "--frames", "1", "scenes/pattern.toml"]);
+    run.code(0).stdout_has("scenes/pattern.toml");
 }

@@ -318,3 +318,59 @@ fn soak_edit_break_fix_cycles() {
     assert!(r.final_matches(), "final colour {:?} (sRGB-encoded), pixel {:?}", r.final_colour.map(reload::srgb), r.final_pixel);
     assert!(r.rss_max_kib() <= RSS_BOUND_MIB * 1024, "VmRSS {:?} KiB over {RSS_BOUND_MIB} MiB", r.rss);
 }
+
+/// What A/B compares against: the image a pass showed before its own
+/// pipelines last really changed.
+#[test]
+fn last_good_images_are_kept_per_pass_and_replaced_only_by_a_real_change() {
+    let p = Project::copy_of_repo("serve-last-good");
+    let s = Server::start(&p.root, &["--render", "on-change"]);
+    s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
+    let first = s.capture_f32(reload::FINAL).unwrap();
+    // Whether there is a last good image, and whether it is the first one
+    // (images are compared, not printed: they are large).
+    let last_good = |s: &Server| -> Option<bool> {
+        let (status, body) = s.get(&format!("/api/captures/{}.f32?version=last_good", reload::FINAL));
+        let data: Vec<f32> = body.chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect();
+        (status == 200).then(|| data == first.data)
+    };
+    assert_eq!(last_good(&s), None, "nothing has changed yet");
+    let mut d = Driver::new(&p, &s);
+
+    // A rebuild compiles the same sources again: nothing is replaced.
+    let (code, _) = s.post("/api/reload");
+    assert_eq!(code, 202);
+    let done = d.ws.event("reload_succeeded", LIMIT, |_| true);
+    d.ws.event("frame", LIMIT, |v| v["reloads"].as_array().is_some_and(|r| r.contains(&done["id"])));
+    assert_eq!(last_good(&s), None, "a rebuild of unchanged sources keeps no last good image");
+
+    // A real change to tonemap: the image before it is tonemap's last good.
+    let good = p.read(reload::TONEMAP);
+    let o = d.save(reload::TONEMAP, &reload::constant_colour(&good, reload::colour(1))).expect("the reload finished");
+    assert!(o.succeeded);
+    assert_eq!(last_good(&s), Some(true), "tonemap's image before the change");
+
+    // A change to another pass leaves tonemap's last good image alone.
+    let pattern = p.read("shaders/passes/test_pattern.wgsl").replace("rgb * 0.75", "rgb * 0.5");
+    let o = d.save("shaders/passes/test_pattern.wgsl", &pattern).expect("the reload finished");
+    assert!(o.succeeded);
+    assert_eq!(last_good(&s), Some(true), "still tonemap's own last good image");
+}
+
+/// A glTF's external `.bin` is a scene input like the glTF itself.
+#[test]
+fn an_edit_to_a_meshs_external_buffer_reloads_the_scene() {
+    let p = Project::copy_of_repo("serve-mesh-bin");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/minimal.toml"]);
+    s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
+    let bin = "scenes/meshes/torus_knot.bin";
+    let good = std::fs::read(p.path(bin)).unwrap();
+    p.save_by_rename(bin, &good[..good.len() / 2]);
+    let diagnostic = s.wait_for("the truncated buffer reported", LIMIT, || {
+        let d = s.get_json("/api/diagnostics");
+        d["diagnostics"].as_array()?.iter().find(|d| d["message"].as_str().is_some_and(|m| m.contains("byteLength"))).cloned()
+    });
+    assert!(diagnostic["message"].as_str().unwrap().contains("buffers[0]"), "{diagnostic}");
+    p.save_by_rename(bin, &good);
+    s.wait_for("the diagnostic to clear", LIMIT, || s.get_json("/api/diagnostics")["diagnostics"].as_array()?.is_empty().then_some(()));
+}

@@ -9,7 +9,6 @@ mod report;
 pub use report::{CheckReport, ModuleKind, ModuleResult};
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::panic::AssertUnwindSafe;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -17,7 +16,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::diag::{Code, Diagnostic, Location, Severity, SourceFiles};
-use crate::gpu::{self, Gpu, pipeline::{self, PipelineSpec}};
+use crate::gpu::{self, pipeline::{self, PipelineSpec}};
 use crate::shader::{Compose, Composed, Library, NagaOil, ShaderDefs, SourceFile, defs_key, library};
 
 /// naga's parser and validator recurse on nested expressions; a worker stack
@@ -160,7 +159,7 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     // A shader tree that holds some of the renderer's shaders must hold all
     // of them; a tree with none is someone else's WGSL, checked as sources.
     let renderer_tree = !specs_by_file.is_empty() && opts.paths.iter().any(|p| canon(p) == shader_root);
-    for spec in pipeline::SPECS {
+    for spec in crate::render::passes::specs() {
         if renderer_tree && !specs_by_file.values().flatten().any(|s| s.name == spec.name) {
             let wanted = opts.shader_root.join(spec.shader);
             report.general.push(
@@ -177,10 +176,9 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
                 report.adapter = Some(gpu.adapter_name());
                 for c in &checked {
                     for (spec, defs, composed) in &c.composed {
-                        let result = std::panic::catch_unwind(AssertUnwindSafe(|| {
-                            create_checked(&gpu, spec, defs, composed, &lib, &c.display)
-                        }))
-                        .unwrap_or_else(|p| Err(vec![panic_diagnostic(&c.display, p, "wgpu")]));
+                        let result = crate::shader::guard::guarded(&c.display, "wgpu", || {
+                            pipeline::create(&gpu.device, spec, defs, composed, &lib, &c.display).map(|_| ())
+                        });
                         match result {
                             Ok(()) => modules.get_mut(&c.display).expect("inserted").pipelines += 1,
                             Err(ds) => {
@@ -206,10 +204,6 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     Ok((report, files))
 }
 
-fn create_checked(gpu: &Gpu, spec: &PipelineSpec, defs: &ShaderDefs, composed: &Composed, lib: &Library, display: &str) -> Result<(), Vec<Diagnostic>> {
-    pipeline::create(&gpu.device, spec, defs, composed, lib, display).map(|_| ())
-}
-
 /// Pipeline specs by the display path of the shader file they build from.
 fn specs_by_display(lib: &Library, shader_root: &Path) -> BTreeMap<String, Vec<&'static PipelineSpec>> {
     let mut out: BTreeMap<String, Vec<&'static PipelineSpec>> = BTreeMap::new();
@@ -217,7 +211,7 @@ fn specs_by_display(lib: &Library, shader_root: &Path) -> BTreeMap<String, Vec<&
         let canon = f.path.canonicalize().unwrap_or_else(|_| f.path.clone());
         let Ok(rel) = canon.strip_prefix(shader_root) else { continue };
         let rel = rel.to_string_lossy().replace('\\', "/");
-        for spec in pipeline::SPECS.iter().filter(|s| s.shader == rel) {
+        for spec in crate::render::passes::specs().filter(|s| s.shader == rel) {
             out.entry(f.display.clone()).or_default().push(spec);
         }
     }
@@ -300,19 +294,7 @@ fn check_file(
 /// Runs one compile step, turning a panic inside naga or naga_oil into a
 /// diagnostic so the other files are still checked.
 fn guarded<T>(display: &str, f: impl FnOnce() -> Result<T, Vec<Diagnostic>>) -> Result<T, Vec<Diagnostic>> {
-    std::panic::catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|p| Err(vec![panic_diagnostic(display, p, "the WGSL compiler")]))
-}
-
-fn panic_diagnostic(display: &str, payload: Box<dyn std::any::Any + Send>, who: &str) -> Diagnostic {
-    let msg = payload
-        .downcast_ref::<String>()
-        .cloned()
-        .or_else(|| payload.downcast_ref::<&str>().map(|s| (*s).to_owned()))
-        .unwrap_or_else(|| "unknown panic".to_owned());
-    Diagnostic::error(Code::CompilerPanic, format!("{who} crashed on this file"))
-        .at(Location::file_start(display))
-        .with_note(format!("panic: {msg}"))
-        .with_note("this is a bug in the compiler, not necessarily in your shader; the other files were still checked")
+    crate::shader::guard::guarded(display, "the WGSL compiler", f)
 }
 
 /// Silences the default panic message while compile steps run: a panic

@@ -1,6 +1,7 @@
 //! Pipeline specs and creation. The renderer and `loupe check` build every
-//! pipeline through `create`, from the same `PipelineSpec`, so the check
-//! gate creates exactly what the renderer creates.
+//! pipeline through `create`, from the same `PipelineSpec`s (declared by
+//! the pass modules, listed in `render::passes::SPECS`), so the check gate
+//! creates exactly what the renderer creates.
 
 use std::borrow::Cow;
 use std::sync::Arc;
@@ -14,6 +15,10 @@ use crate::shader::{Composed, Library, ShaderDefs};
 pub const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// The final displayable output.
 pub const LDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+/// The def that draws a fullscreen pass as two triangles (six vertices)
+/// instead of one (three), to compare their cost.
+pub const TWO_TRIANGLES: &str = "TWO_TRIANGLES";
 
 #[derive(Debug, Clone, Copy)]
 pub enum Stages {
@@ -54,16 +59,36 @@ pub enum When {
     NotDef(&'static str),
 }
 
+/// One resource of a bind group, by the name the pass binds it with: a
+/// pass supplies `("shadow_map", view)` pairs and never counts positions.
+#[derive(Debug, Clone, Copy)]
+pub struct Binding {
+    pub name: &'static str,
+    pub entry: wgpu::BindGroupLayoutEntry,
+}
+
 #[derive(Debug, Clone, Copy)]
 pub struct Group {
     /// The `@group(N)` it binds to. Two groups may share an index when
     /// their conditions exclude each other.
     pub index: u32,
     pub when: When,
-    pub entries: &'static [wgpu::BindGroupLayoutEntry],
+    pub entries: &'static [Binding],
 }
 
 impl Group {
+    pub const fn always(index: u32, entries: &'static [Binding]) -> Group {
+        Group { index, when: When::Always, entries }
+    }
+
+    pub const fn when(index: u32, def: &'static str, entries: &'static [Binding]) -> Group {
+        Group { index, when: When::Def(def), entries }
+    }
+
+    pub const fn unless(index: u32, def: &'static str, entries: &'static [Binding]) -> Group {
+        Group { index, when: When::NotDef(def), entries }
+    }
+
     pub fn active(&self, defs: &ShaderDefs) -> bool {
         match self.when {
             When::Always => true,
@@ -73,16 +98,9 @@ impl Group {
     }
 }
 
-const fn always(index: u32, entries: &'static [wgpu::BindGroupLayoutEntry]) -> Group {
-    Group { index, when: When::Always, entries }
-}
-
-const fn when(index: u32, def: &'static str, entries: &'static [wgpu::BindGroupLayoutEntry]) -> Group {
-    Group { index, when: When::Def(def), entries }
-}
-
-/// Everything needed to build one pipeline, independent of any scene.
-#[derive(Debug, Clone, Copy)]
+/// Everything needed to build one pipeline, independent of any scene. Each
+/// pass module declares its own; `render::passes::SPECS` lists them all.
+#[derive(Debug)]
 pub struct PipelineSpec {
     /// Stable id, used in the API and reports: `post.tonemap`.
     pub name: &'static str,
@@ -105,12 +123,21 @@ impl PipelineSpec {
             .collect()
     }
 
-    /// The bind group layout entries of each group index for `defs`; `None`
-    /// where the permutation binds nothing.
-    pub fn layout(&self, defs: &ShaderDefs) -> Vec<Option<&'static [wgpu::BindGroupLayoutEntry]>> {
+    /// The bindings of each group index for `defs`; `None` where the
+    /// permutation binds nothing.
+    pub fn layout(&self, defs: &ShaderDefs) -> Vec<Option<&'static [Binding]>> {
         let active: Vec<&Group> = self.groups.iter().filter(|g| g.active(defs)).collect();
         let count = active.iter().map(|g| g.index + 1).max().unwrap_or(0);
         (0..count).map(|i| active.iter().find(|g| g.index == i).map(|g| g.entries)).collect()
+    }
+
+    /// The entry points the pipeline runs.
+    pub fn entry_points(&self) -> Vec<&'static str> {
+        match self.stages {
+            Stages::Fullscreen { fragment, .. } => vec!["vs_fullscreen", fragment],
+            Stages::Mesh { vertex, fragment, .. } => [Some(vertex), fragment].into_iter().flatten().collect(),
+            Stages::Compute { entry } => vec![entry],
+        }
     }
 
     /// The entry point wgpu errors are reported at.
@@ -123,53 +150,65 @@ impl PipelineSpec {
     }
 }
 
-const FRAG: wgpu::ShaderStages = wgpu::ShaderStages::FRAGMENT;
-const VERT: wgpu::ShaderStages = wgpu::ShaderStages::VERTEX;
-const ALL: wgpu::ShaderStages = wgpu::ShaderStages::VERTEX_FRAGMENT.union(wgpu::ShaderStages::COMPUTE);
+pub const FRAG: wgpu::ShaderStages = wgpu::ShaderStages::FRAGMENT;
+pub const VERT: wgpu::ShaderStages = wgpu::ShaderStages::VERTEX;
+pub const COMPUTE: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
+pub const ALL: wgpu::ShaderStages = wgpu::ShaderStages::VERTEX_FRAGMENT.union(wgpu::ShaderStages::COMPUTE);
+
+const fn buffer(name: &'static str, binding: u32, visibility: wgpu::ShaderStages, ty: wgpu::BufferBindingType, size: u64) -> Binding {
+    Binding {
+        name,
+        entry: wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: std::num::NonZeroU64::new(size) },
+            count: None,
+        },
+    }
+}
 
 /// A uniform buffer of exactly `size` bytes. The size is part of the
 /// layout, so a shader struct of another size is an error naming the
 /// binding (wgpu would otherwise only fail the frame that binds it).
-pub const fn uniform(binding: u32, visibility: wgpu::ShaderStages, size: u64) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: std::num::NonZeroU64::new(size),
-        },
-        count: None,
-    }
+pub const fn uniform(name: &'static str, binding: u32, visibility: wgpu::ShaderStages, size: u64) -> Binding {
+    buffer(name, binding, visibility, wgpu::BufferBindingType::Uniform, size)
 }
 
 /// A read-only storage buffer (arrays of objects, lights, media).
-pub const fn storage(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: true }, has_dynamic_offset: false, min_binding_size: None },
-        count: None,
-    }
+pub const fn storage(name: &'static str, binding: u32, visibility: wgpu::ShaderStages) -> Binding {
+    buffer(name, binding, visibility, wgpu::BufferBindingType::Storage { read_only: true }, 0)
+}
+
+/// A read-write storage buffer, for compute passes.
+pub const fn storage_rw(name: &'static str, binding: u32) -> Binding {
+    buffer(name, binding, COMPUTE, wgpu::BufferBindingType::Storage { read_only: false }, 0)
 }
 
 /// An unfilterable f32 texture read with `textureLoad`: exact values, any
 /// float format, no sampler.
-pub const fn texture(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    image(binding, wgpu::TextureSampleType::Float { filterable: false }, wgpu::TextureViewDimension::D2)
+pub const fn texture(name: &'static str, binding: u32) -> Binding {
+    image(name, binding, wgpu::TextureSampleType::Float { filterable: false }, wgpu::TextureViewDimension::D2)
 }
 
 /// A depth texture read with `textureLoad`.
-pub const fn depth_texture(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    image(binding, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2)
+pub const fn depth_texture(name: &'static str, binding: u32) -> Binding {
+    image(name, binding, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2)
 }
 
-const fn image(binding: u32, sample_type: wgpu::TextureSampleType, view_dimension: wgpu::TextureViewDimension) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: FRAG.union(wgpu::ShaderStages::COMPUTE),
-        ty: wgpu::BindingType::Texture { sample_type, view_dimension, multisampled: false },
-        count: None,
+/// A depth array texture (shadow maps) read with `textureLoad`.
+pub const fn depth_array(name: &'static str, binding: u32) -> Binding {
+    image(name, binding, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2Array)
+}
+
+const fn image(name: &'static str, binding: u32, sample_type: wgpu::TextureSampleType, view_dimension: wgpu::TextureViewDimension) -> Binding {
+    Binding {
+        name,
+        entry: wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: FRAG.union(COMPUTE),
+            ty: wgpu::BindingType::Texture { sample_type, view_dimension, multisampled: false },
+            count: None,
+        },
     }
 }
 
@@ -180,99 +219,9 @@ pub mod sizes {
     pub const VEC4: u64 = 16;
 }
 
-const VIEW: wgpu::BindGroupLayoutEntry = uniform(0, ALL, sizes::VIEW);
-const SHADOWS: Group = when(
-    1,
-    "SHADOWS",
-    &[image(0, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2Array), storage(1, FRAG)],
-);
-const MEDIA: &[wgpu::BindGroupLayoutEntry] = &[storage(0, FRAG)];
-const HDR1: &[wgpu::TextureFormat] = &[HDR];
-const LDR1: &[wgpu::TextureFormat] = &[LDR];
-
-/// Every pipeline the renderer can build.
-pub const SPECS: &[PipelineSpec] = &[
-    PipelineSpec {
-        name: "debug.test_pattern",
-        shader: "passes/test_pattern.wgsl",
-        stages: Stages::Fullscreen { fragment: "fs_main", targets: HDR1 },
-        groups: &[always(0, &[uniform(0, FRAG, sizes::VEC4)])],
-        defs: &["TWO_TRIANGLES"],
-    },
-    PipelineSpec {
-        name: "geometry.shadow",
-        shader: "geometry/shadow.wgsl",
-        stages: Stages::Mesh { vertex: "vs_main", fragment: None, targets: &[], depth: Depth::Biased },
-        groups: &[always(0, &[uniform(0, VERT, sizes::MAT4), storage(1, VERT)])],
-        defs: &[],
-    },
-    PipelineSpec {
-        name: "geometry.depth",
-        shader: "geometry/depth.wgsl",
-        stages: Stages::Mesh { vertex: "vs_main", fragment: None, targets: &[], depth: Depth::Write },
-        groups: &[always(0, &[VIEW, storage(1, VERT)])],
-        defs: &[],
-    },
-    PipelineSpec {
-        name: "geometry.gbuffer",
-        shader: "geometry/gbuffer.wgsl",
-        stages: Stages::Mesh { vertex: "vs_main", fragment: Some("fs_main"), targets: &[HDR, HDR, HDR], depth: Depth::Equal },
-        groups: &[always(0, &[VIEW, storage(1, ALL), storage(2, FRAG)])],
-        defs: &[],
-    },
-    PipelineSpec {
-        name: "lighting.deferred",
-        shader: "passes/lighting.wgsl",
-        stages: Stages::Fullscreen { fragment: "fs_main", targets: HDR1 },
-        groups: &[
-            always(0, &[VIEW, storage(1, FRAG), texture(2), texture(3), texture(4), depth_texture(5)]),
-            SHADOWS,
-            when(2, "LIGHT_RECT", &[texture(0), texture(1)]),
-            when(3, "MEDIA_SHADOWS", MEDIA),
-        ],
-        defs: &["TWO_TRIANGLES", "SHADOWS", "LIGHT_RECT", "MEDIA_SHADOWS"],
-    },
-    PipelineSpec {
-        name: "volumes.raymarch",
-        shader: "passes/volumes.wgsl",
-        stages: Stages::Fullscreen { fragment: "fs_main", targets: &[HDR, HDR] },
-        groups: &[always(0, &[VIEW, storage(1, FRAG), texture(2), depth_texture(3)]), SHADOWS, always(3, MEDIA)],
-        defs: &["TWO_TRIANGLES", "SHADOWS", "VOLUME_ANALYTIC"],
-    },
-    PipelineSpec {
-        name: "post.exposure",
-        shader: "post/exposure.wgsl",
-        stages: Stages::Fullscreen { fragment: "fs_main", targets: HDR1 },
-        groups: &[always(0, &[uniform(0, FRAG, sizes::VEC4), texture(1)])],
-        defs: &["TWO_TRIANGLES"],
-    },
-    PipelineSpec {
-        name: "post.tonemap",
-        shader: "post/tonemap.wgsl",
-        stages: Stages::Fullscreen { fragment: "fs_main", targets: LDR1 },
-        groups: &[always(0, &[texture(0)])],
-        defs: &["TWO_TRIANGLES", "TONEMAP_REINHARD"],
-    },
-    PipelineSpec {
-        name: "post.debug_view",
-        shader: "post/debug_view.wgsl",
-        stages: Stages::Fullscreen { fragment: "fs_main", targets: LDR1 },
-        groups: &[
-            always(0, &[uniform(0, FRAG, sizes::VEC4)]),
-            Group { index: 1, when: When::NotDef("DEBUG_DEPTH"), entries: &[texture(0)] },
-            when(1, "DEBUG_DEPTH", &[depth_texture(0)]),
-        ],
-        defs: &["TWO_TRIANGLES", "DEBUG_DEPTH"],
-    },
-];
-
 /// The error for a pipeline whose shader file is not there.
 pub fn missing_shader(spec: &str, display: &str) -> Diagnostic {
     Diagnostic::error(Code::Io, format!("pipeline `{spec}` needs `{display}`, which does not exist"))
-}
-
-pub fn spec(name: &str) -> Option<&'static PipelineSpec> {
-    SPECS.iter().find(|s| s.name == name)
 }
 
 /// A created pipeline, shared so a frame in flight keeps its pipeline alive
@@ -307,7 +256,12 @@ pub fn create(
     let layouts: Vec<Option<wgpu::BindGroupLayout>> = spec
         .layout(defs)
         .into_iter()
-        .map(|entries| entries.map(|entries| device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(spec.name), entries })))
+        .map(|bindings| {
+            bindings.map(|bindings| {
+                let entries: Vec<wgpu::BindGroupLayoutEntry> = bindings.iter().map(|b| b.entry).collect();
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(spec.name), entries: &entries })
+            })
+        })
         .collect();
     let layout_refs: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(Option::as_ref).collect();
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -425,19 +379,24 @@ fn check_bindings(spec: &PipelineSpec, defs: &ShaderDefs, composed: &Composed, l
     let mut out = Vec::new();
     for (handle, var) in module.global_variables.iter() {
         let Some(rb) = &var.binding else { continue };
-        let used = (0..module.entry_points.len()).any(|i| !composed.info.get_entry_point(i)[handle].is_empty());
+        let entries = spec.entry_points();
+        let used = module
+            .entry_points
+            .iter()
+            .enumerate()
+            .any(|(i, ep)| entries.contains(&ep.name.as_str()) && !composed.info.get_entry_point(i)[handle].is_empty());
         if !used {
-            continue; // declared but unused by every entry point: wgpu ignores it too
+            continue; // unused by this pipeline's entry points: wgpu ignores it too
         }
         let name = var.name.clone().unwrap_or_default();
         let expected = layout
             .get(rb.group as usize)
             .copied()
             .flatten()
-            .and_then(|g| g.iter().find(|e| e.binding == rb.binding));
+            .and_then(|g| g.iter().find(|b| b.entry.binding == rb.binding));
         let problem = match expected {
             None => Some(format!("the renderer binds nothing at @group({}) @binding({})", rb.group, rb.binding)),
-            Some(entry) => incompatibility(module, var, &entry.ty),
+            Some(b) => incompatibility(module, var, &b.entry.ty),
         };
         if let Some(problem) = problem {
             let g = format!("@group({})", rb.group);
@@ -518,11 +477,11 @@ fn describe_binding(ty: &wgpu::BindingType) -> String {
     }
 }
 
-fn describe_layout(layout: &[Option<&[wgpu::BindGroupLayoutEntry]>]) -> String {
+fn describe_layout(layout: &[Option<&[Binding]>]) -> String {
     let mut parts = Vec::new();
     for (g, entries) in layout.iter().enumerate() {
-        for e in entries.iter().copied().flatten() {
-            parts.push(format!("@group({g}) @binding({}) {}", e.binding, describe_binding(&e.ty)));
+        for b in entries.iter().copied().flatten() {
+            parts.push(format!("@group({g}) @binding({}) {} `{}`", b.entry.binding, describe_binding(&b.entry.ty), b.name));
         }
     }
     parts.join("; ")

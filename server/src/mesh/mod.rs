@@ -5,6 +5,7 @@
 //! user wrote (the .gltf, at the element at fault), and no input, however
 //! broken or large, panics or exhausts memory: sizes are capped.
 
+mod dependencies;
 mod glb;
 mod import;
 mod json_path;
@@ -15,6 +16,7 @@ mod uri;
 #[cfg(test)]
 mod tests;
 
+pub use dependencies::external_buffers;
 pub use import::load_gltf;
 pub use shapes::{cube, plane, sphere};
 

@@ -4,6 +4,8 @@
 
 use serde::Serialize;
 
+use super::resource::{Element, TensorLayout};
+
 /// One pass output of one frame, exactly as the pass wrote it.
 #[derive(Debug, Clone)]
 pub struct CapturedImage {
@@ -83,10 +85,11 @@ enum Kind {
     F16,
     F32,
     Unorm8,
-    /// 8-bit sRGB-encoded values: reported as stored (encoded), since that
-    /// is what the pass wrote and what a PNG shows.
+    /// 8-bit sRGB-encoded colour: decoded to linear on readback, as a
+    /// shader sampling the texture sees it (alpha stays linear).
     Srgb8,
-    Bgra8Unorm,
+    /// 8-bit BGRA, swizzled to RGBA; `srgb` decodes as `Srgb8` does.
+    Bgra8 { srgb: bool },
 }
 
 impl Layout {
@@ -104,7 +107,8 @@ impl Layout {
             F::Rg8Unorm => (2, 1, Kind::Unorm8),
             F::Rgba8Unorm => (4, 1, Kind::Unorm8),
             F::Rgba8UnormSrgb => (4, 1, Kind::Srgb8),
-            F::Bgra8Unorm | F::Bgra8UnormSrgb => (4, 1, Kind::Bgra8Unorm),
+            F::Bgra8Unorm => (4, 1, Kind::Bgra8 { srgb: false }),
+            F::Bgra8UnormSrgb => (4, 1, Kind::Bgra8 { srgb: true }),
             _ => return None,
         };
         Some(Layout { channels, bytes_per_channel, kind })
@@ -125,19 +129,17 @@ impl Layout {
                 *v = match self.kind {
                     Kind::F16 => half::f16::from_le_bytes([b[0], b[1]]).to_f32(),
                     Kind::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-                    Kind::Unorm8 | Kind::Srgb8 | Kind::Bgra8Unorm => f32::from(b[0]) / 255.0,
+                    Kind::Unorm8 | Kind::Bgra8 { srgb: false } => f32::from(b[0]) / 255.0,
+                    Kind::Srgb8 | Kind::Bgra8 { srgb: true } if c < 3 => srgb_to_linear(f32::from(b[0]) / 255.0),
+                    Kind::Srgb8 | Kind::Bgra8 { srgb: true } => f32::from(b[0]) / 255.0,
                 };
             }
-            if matches!(self.kind, Kind::Bgra8Unorm) {
+            if matches!(self.kind, Kind::Bgra8 { .. }) {
                 px.swap(0, 2);
             }
             out.extend_from_slice(&px);
         }
         out
-    }
-
-    pub fn is_display_encoded(&self) -> bool {
-        matches!(self.kind, Kind::Srgb8)
     }
 }
 
@@ -161,14 +163,10 @@ impl CapturedImage {
         format!("{}/{}", self.pass, self.output)
     }
 
-    fn display_encoded(&self) -> bool {
-        self.format.ends_with("Srgb")
-    }
-
     /// An 8-bit sRGB PNG for display: linear values are clamped to [0, 1]
-    /// and encoded; NaN shows as magenta so it is never mistaken for black.
+    /// and encoded (for an sRGB texture, that gives back its stored bytes);
+    /// NaN shows as magenta so it is never mistaken for black.
     pub fn to_png(&self) -> Vec<u8> {
-        let encoded = self.display_encoded();
         let mut rgba = Vec::with_capacity(self.data.len());
         for px in self.data.chunks_exact(4) {
             if px.iter().any(|v| !v.is_finite()) {
@@ -177,7 +175,7 @@ impl CapturedImage {
             }
             for (c, &v) in px.iter().enumerate() {
                 let v = v.clamp(0.0, 1.0);
-                let v = if encoded || c == 3 { v } else { linear_to_srgb(v) };
+                let v = if c == 3 { v } else { linear_to_srgb(v) };
                 rgba.push((v * 255.0 + 0.5) as u8);
             }
         }
@@ -226,6 +224,93 @@ impl CapturedImage {
     }
 }
 
+/// One buffer of one frame, read as the tensor its layout describes: any
+/// number of channels, converted to f32, with the statistics images get.
+#[derive(Debug, Clone)]
+pub struct CapturedTensor {
+    pub pass: String,
+    pub output: String,
+    pub frame: u64,
+    pub layout: TensorLayout,
+    /// Every element in layout order, as f32 (u32 and f16 converted).
+    pub data: Vec<f32>,
+    pub stats: TensorStats,
+}
+
+#[derive(Debug, Clone, Default, Serialize, PartialEq)]
+pub struct TensorStats {
+    pub nan: u64,
+    pub inf: u64,
+    pub negative: u64,
+    /// Per channel (the innermost dimension), over finite values only.
+    pub min: Vec<f32>,
+    pub max: Vec<f32>,
+    pub mean: Vec<f32>,
+    /// The flat index of the first NaN or Inf.
+    pub first_nan: Option<u64>,
+}
+
+impl TensorStats {
+    pub fn of(data: &[f32], channels: usize) -> Self {
+        let channels = channels.max(1);
+        let mut s = TensorStats { min: vec![f32::INFINITY; channels], max: vec![f32::NEG_INFINITY; channels], ..Default::default() };
+        let mut sum = vec![0f64; channels];
+        let mut count = vec![0u64; channels];
+        for (i, &v) in data.iter().enumerate() {
+            let c = i % channels;
+            if !v.is_finite() {
+                if v.is_nan() { s.nan += 1 } else { s.inf += 1 }
+                s.first_nan.get_or_insert(i as u64);
+                continue;
+            }
+            s.negative += u64::from(v < 0.0);
+            s.min[c] = s.min[c].min(v);
+            s.max[c] = s.max[c].max(v);
+            sum[c] += f64::from(v);
+            count[c] += 1;
+        }
+        s.mean = sum.iter().zip(&count).map(|(s, n)| if *n == 0 { 0.0 } else { (s / *n as f64) as f32 }).collect();
+        for c in 0..channels {
+            if count[c] == 0 {
+                (s.min[c], s.max[c]) = (0.0, 0.0);
+            }
+        }
+        s
+    }
+
+    pub fn has_non_finite(&self) -> bool {
+        self.nan + self.inf > 0
+    }
+}
+
+impl CapturedTensor {
+    /// Reads `bytes` (tightly packed, little-endian) as `layout` says.
+    pub fn new(pass: &str, output: &str, frame: u64, layout: TensorLayout, bytes: &[u8]) -> Self {
+        let n = layout.len() as usize;
+        let data: Vec<f32> = match layout.element {
+            Element::F32 => bytes.chunks_exact(4).take(n).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect(),
+            Element::U32 => bytes.chunks_exact(4).take(n).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32).collect(),
+            Element::F16 => bytes.chunks_exact(2).take(n).map(|b| half::f16::from_le_bytes([b[0], b[1]]).to_f32()).collect(),
+        };
+        let stats = TensorStats::of(&data, layout.channels());
+        CapturedTensor { pass: pass.to_owned(), output: output.to_owned(), frame, layout, data, stats }
+    }
+
+    pub fn key(&self) -> String {
+        format!("{}/{}", self.pass, self.output)
+    }
+
+    /// Raw little-endian f32, in layout order.
+    pub fn raw_f32(&self) -> Vec<u8> {
+        self.data.iter().flat_map(|v| v.to_le_bytes()).collect()
+    }
+}
+
+/// The sRGB transfer function's inverse, exactly as the spec writes it.
+pub fn srgb_to_linear(v: f32) -> f32 {
+    if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
+}
+
 pub fn linear_to_srgb(v: f32) -> f32 {
     if v <= 0.003_130_8 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
 }
@@ -247,6 +332,49 @@ mod tests {
         assert_eq!(s.first_nan, Some([1, 0]));
         assert_eq!(s.min[0], 0.25);
         assert_eq!(s.max[1], 2.0);
+    }
+
+    #[test]
+    fn tensors_read_every_element_type_with_per_channel_stats() {
+        let layout = TensorLayout::new(&[("x", 3), ("c", 2)], Element::F32);
+        let values = [1.0f32, -2.0, f32::NAN, 4.0, 3.0, f32::INFINITY];
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let t = CapturedTensor::new("p", "t", 1, layout, &bytes);
+        assert_eq!((t.stats.nan, t.stats.inf, t.stats.negative), (1, 1, 1));
+        assert_eq!(t.stats.first_nan, Some(2));
+        assert_eq!((t.stats.min.clone(), t.stats.max.clone()), (vec![1.0, -2.0], vec![3.0, 4.0]));
+        assert_eq!(t.stats.mean, vec![2.0, 1.0]);
+
+        let u: Vec<u8> = [7u32, 0, 3_000_000].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let t = CapturedTensor::new("p", "h", 1, TensorLayout::new(&[("bin", 3)], Element::U32), &u);
+        assert_eq!(t.data, [7.0, 0.0, 3_000_000.0]);
+        let h: Vec<u8> = [0.5f32, 65504.0].iter().flat_map(|v| half::f16::from_f32(*v).to_le_bytes()).collect();
+        let t = CapturedTensor::new("p", "f", 1, TensorLayout::new(&[("x", 2)], Element::F16), &h);
+        assert_eq!(t.data, [0.5, 65504.0]);
+    }
+
+    #[test]
+    fn srgb_texels_read_back_linear_and_their_png_is_the_stored_bytes() {
+        let bytes: Vec<u8> = (0..=255u8).flat_map(|b| [b, b, 255 - b, b]).collect();
+        for format in [wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::TextureFormat::Bgra8UnormSrgb] {
+            let data = Layout::of(format).unwrap().to_rgba_f32(&bytes);
+            for (b, px) in (0..=255u8).zip(data.chunks_exact(4)) {
+                let lin = |b: u8| srgb_to_linear(f32::from(b) / 255.0);
+                let (r, bl) = if format == wgpu::TextureFormat::Rgba8UnormSrgb { (b, 255 - b) } else { (255 - b, b) };
+                assert_eq!(px, [lin(r), lin(b), lin(bl), f32::from(b) / 255.0], "{format:?} byte {b}");
+            }
+            let img = CapturedImage::new("p", "o", 1, 256, 1, format, data);
+            let png = image::load_from_memory(&img.to_png()).unwrap().to_rgba8();
+            let swizzled: Vec<u8> = if format == wgpu::TextureFormat::Bgra8UnormSrgb {
+                bytes.chunks_exact(4).flat_map(|p| [p[2], p[1], p[0], p[3]]).collect()
+            } else {
+                bytes.clone()
+            };
+            assert_eq!(png.into_raw(), swizzled, "{format:?}: the PNG shows what the texture stores");
+        }
+        // The decode is the sRGB curve, not a plain /255: mid-grey 188 is
+        // linear 0.5 (to 3 digits).
+        assert!((srgb_to_linear(188.0 / 255.0) - 0.5029).abs() < 1e-3);
     }
 
     #[test]

@@ -1,84 +1,68 @@
-//! The render graph: passes declare what they read and write; the graph
-//! orders them, culls every pass whose outputs the frame does not need, and
-//! says why. Effects are free functions that take the builder and input
-//! handles and return output handles.
+//! The render graph: passes declare the resources they create, read and
+//! write, and how (`Access`); the graph orders them, derives every
+//! resource's usage flags, culls every pass whose outputs the frame does
+//! not need, and says why. Effects are free functions that take the
+//! builder and input handles and return output handles
+//! (`render::passes`), raster, compute and copy passes alike.
 //!
 //! Architecture Invariant: a culled pass has no pipeline compiled for it.
 //! The set of pipelines to build is derived from the live passes only.
 
 use std::collections::BTreeSet;
 
-use crate::gpu::pipeline::PipelineSpec;
-use crate::shader::ShaderDefs;
-
-/// A texture produced by one pass and read by others.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct Handle(pub(crate) usize);
-
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub struct TextureDesc {
-    /// `pass/output`, the name captures and the UI use.
-    pub name: String,
-    pub format: wgpu::TextureFormat,
-    pub width: u32,
-    pub height: u32,
-    /// Array layers (shadow maps hold one or six per light).
-    pub layers: u32,
-    /// Viewed as an array texture even with one layer.
-    pub array: bool,
-}
-
-/// An output a pass declares: its name within the pass, format and size.
-pub struct Target {
-    pub output: &'static str,
-    pub format: wgpu::TextureFormat,
-    pub width: u32,
-    pub height: u32,
-    pub layers: u32,
-    pub array: bool,
-}
-
-impl Target {
-    pub fn new(output: &'static str, format: wgpu::TextureFormat, width: u32, height: u32) -> Self {
-        Target { output, format, width, height, layers: 1, array: false }
-    }
-
-    /// An array texture of `layers` layers.
-    pub fn layers(self, layers: u32) -> Self {
-        Target { layers, array: true, ..self }
-    }
-}
-
-/// Which pipeline a pass uses, with the defs this frame needs.
-#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct PipelineKey {
-    pub spec: &'static str,
-    pub defs: ShaderDefs,
-}
-
-impl PipelineKey {
-    pub fn new(spec: &PipelineSpec, defs: impl IntoIterator<Item = &'static str>) -> Self {
-        PipelineKey { spec: spec.name, defs: defs.into_iter().map(str::to_owned).collect() }
-    }
-
-    pub fn label(&self) -> String {
-        if self.defs.is_empty() {
-            self.spec.to_owned()
-        } else {
-            format!("{}[{}]", self.spec, crate::shader::defs_key(&self.defs))
-        }
-    }
-}
+use super::context::PassContext;
+use super::resource::{Access, Handle, Lifetime, PipelineKey, ResourceDesc};
 
 /// What a pass does when the frame runs: bound to its resolved inputs.
-pub type Execute = Box<dyn Fn(&mut super::frame::PassContext<'_>) + Send + Sync>;
+pub type Execute = Box<dyn Fn(&mut PassContext<'_>) + Send + Sync>;
+
+/// What kind of GPU work a pass records; every kind gets timestamps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PassKind {
+    Raster,
+    Compute,
+    Copy,
+}
+
+/// A resource as the graph knows it.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Resource {
+    /// `pass/output`, the name captures and the UI use.
+    pub name: String,
+    pub desc: ResourceDesc,
+    pub lifetime: Lifetime,
+    /// Derived from every access passes declare (plus COPY_SRC, so any
+    /// resource can be captured).
+    pub texture_usage: wgpu::TextureUsages,
+    pub buffer_usage: wgpu::BufferUsages,
+}
+
+impl Resource {
+    /// The part of the name after the pass: `color` of `lighting/color`.
+    pub fn output(&self) -> &str {
+        self.name.rsplit('/').next().unwrap_or(&self.name)
+    }
+}
 
 pub struct PassNode {
     pub name: String,
+    pub kind: PassKind,
     pub pipelines: Vec<PipelineKey>,
-    pub reads: Vec<Handle>,
-    pub writes: Vec<Handle>,
+    pub accesses: Vec<(Handle, Access)>,
     pub execute: Execute,
+}
+
+impl PassNode {
+    pub fn reads(&self) -> impl Iterator<Item = Handle> + '_ {
+        let mut seen = BTreeSet::new();
+        self.accesses.iter().filter(|(_, a)| !a.writes()).map(|(h, _)| *h).filter(move |h| seen.insert(*h))
+    }
+
+    pub fn writes(&self) -> impl Iterator<Item = Handle> + '_ {
+        let mut seen = BTreeSet::new();
+        self.accesses.iter().filter(|(_, a)| a.writes()).map(|(h, _)| *h).filter(move |h| seen.insert(*h))
+    }
 }
 
 /// A pass the scene did not call for, kept so the UI can say why.
@@ -90,10 +74,56 @@ pub struct CulledPass {
 
 #[derive(Default)]
 pub struct GraphBuilder {
-    pub(crate) textures: Vec<TextureDesc>,
-    pub(crate) passes: Vec<PassNode>,
+    resources: Vec<Resource>,
+    passes: Vec<PassNode>,
     culled: Vec<CulledPass>,
     outputs: Vec<Handle>,
+}
+
+/// One pass being declared: what it uses, then `execute`.
+pub struct PassBuilder<'g> {
+    graph: &'g mut GraphBuilder,
+    node: PassNode,
+}
+
+impl PassBuilder<'_> {
+    /// The pipeline this pass uses (a pass may use several).
+    pub fn pipeline(&mut self, key: PipelineKey) -> PipelineKey {
+        self.node.pipelines.push(key.clone());
+        key
+    }
+
+    /// Uses an existing resource as `access` says.
+    pub fn access(&mut self, h: Handle, access: Access) -> Handle {
+        self.node.accesses.push((h, access));
+        h
+    }
+
+    /// A texture read in the shader.
+    pub fn sample(&mut self, h: Handle) -> Handle {
+        self.access(h, Access::Sampled)
+    }
+
+    /// A new resource of this frame, named `pass/output`, first used as
+    /// `access`.
+    pub fn create(&mut self, output: &str, desc: impl Into<ResourceDesc>, access: Access) -> Handle {
+        let h = self.graph.resource(&self.node.name, output, desc.into(), Lifetime::Frame);
+        self.access(h, access)
+    }
+
+    /// A resource kept across frames under `pass/output`: this frame sees
+    /// what the last one left (zeros when new or reset).
+    pub fn history(&mut self, output: &str, desc: impl Into<ResourceDesc>, access: Access) -> Handle {
+        let h = self.graph.resource(&self.node.name, output, desc.into(), Lifetime::History);
+        self.access(h, access)
+    }
+
+    /// Finishes the declaration with what the pass records when it runs.
+    pub fn execute(self, f: impl Fn(&mut PassContext<'_>) + Send + Sync + 'static) {
+        let PassBuilder { graph, mut node } = self;
+        node.execute = Box::new(f);
+        graph.passes.push(node);
+    }
 }
 
 impl GraphBuilder {
@@ -101,30 +131,21 @@ impl GraphBuilder {
         Self::default()
     }
 
-    /// Declares a pass; its outputs are created here and returned in order.
-    pub fn add_pass(
-        &mut self,
-        name: &str,
-        pipelines: Vec<PipelineKey>,
-        reads: &[Handle],
-        writes: Vec<Target>,
-        execute: Execute,
-    ) -> Vec<Handle> {
-        let handles: Vec<Handle> = writes
-            .into_iter()
-            .map(|t| {
-                self.textures.push(TextureDesc { name: format!("{name}/{}", t.output), format: t.format, width: t.width, height: t.height, layers: t.layers, array: t.array });
-                Handle(self.textures.len() - 1)
-            })
-            .collect();
-        self.passes.push(PassNode {
-            name: name.to_owned(),
-            pipelines,
-            reads: reads.to_vec(),
-            writes: handles.clone(),
-            execute,
+    /// Starts declaring pass `name`.
+    pub fn pass(&mut self, name: &str, kind: PassKind) -> PassBuilder<'_> {
+        let node = PassNode { name: name.to_owned(), kind, pipelines: Vec::new(), accesses: Vec::new(), execute: Box::new(|_| {}) };
+        PassBuilder { graph: self, node }
+    }
+
+    fn resource(&mut self, pass: &str, output: &str, desc: ResourceDesc, lifetime: Lifetime) -> Handle {
+        self.resources.push(Resource {
+            name: format!("{pass}/{output}"),
+            desc,
+            lifetime,
+            texture_usage: wgpu::TextureUsages::COPY_SRC,
+            buffer_usage: wgpu::BufferUsages::COPY_SRC,
         });
-        handles
+        Handle(self.resources.len() - 1)
     }
 
     /// Records a pass the scene does not call for, without adding it.
@@ -141,9 +162,9 @@ impl GraphBuilder {
         let mut needed: BTreeSet<Handle> = self.outputs.iter().copied().collect();
         let mut live = vec![false; self.passes.len()];
         for (i, p) in self.passes.iter().enumerate().rev() {
-            if p.writes.iter().any(|w| needed.contains(w)) {
+            if p.writes().any(|w| needed.contains(&w)) {
                 live[i] = true;
-                needed.extend(p.reads.iter().copied());
+                needed.extend(p.reads());
             }
         }
         let mut culled = self.culled;
@@ -155,14 +176,22 @@ impl GraphBuilder {
                 culled.push(CulledPass { name: p.name, reason: "no output of this pass is needed by the frame".into() });
             }
         }
-        Graph { textures: self.textures, passes, culled, outputs: self.outputs }
+        let mut resources = self.resources;
+        for p in &passes {
+            for (h, a) in &p.accesses {
+                let r = &mut resources[h.0];
+                r.texture_usage |= a.texture_usage();
+                r.buffer_usage |= a.buffer_usage();
+            }
+        }
+        Graph { resources, passes, culled, outputs: self.outputs }
     }
 }
 
 /// A built frame: live passes in execution order (declaration order, which
-/// respects reads-after-writes because a handle exists only once written).
+/// respects reads-after-writes because a handle exists only once created).
 pub struct Graph {
-    pub textures: Vec<TextureDesc>,
+    pub resources: Vec<Resource>,
     pub passes: Vec<PassNode>,
     pub culled: Vec<CulledPass>,
     pub outputs: Vec<Handle>,
@@ -174,37 +203,81 @@ impl Graph {
         self.passes.iter().flat_map(|p| p.pipelines.iter().cloned()).collect()
     }
 
-    pub fn texture(&self, h: Handle) -> &TextureDesc {
-        &self.textures[h.0]
+    pub fn resource(&self, h: Handle) -> &Resource {
+        &self.resources[h.0]
+    }
+
+    /// Resources some live pass uses: only these are allocated.
+    pub fn used(&self) -> BTreeSet<Handle> {
+        self.passes.iter().flat_map(|p| p.accesses.iter().map(|(h, _)| *h)).collect()
     }
 
     /// The final image: the first declared output.
     pub fn final_output(&self) -> Option<Handle> {
         self.outputs.first().copied()
     }
+
+    /// `pass/output` of the final image.
+    pub fn final_name(&self) -> Option<String> {
+        self.final_output().map(|h| self.resource(h).name.clone())
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn noop() -> Execute {
-        Box::new(|_| {})
-    }
+    use crate::render::resource::{Element, TensorLayout, TextureDesc};
 
     #[test]
     fn passes_whose_outputs_nobody_needs_are_culled_with_a_reason() {
         let mut g = GraphBuilder::new();
-        let f = wgpu::TextureFormat::Rgba16Float;
-        let a = g.add_pass("a", vec![], &[], vec![Target::new("out", f, 4, 4)], noop());
-        let _unused = g.add_pass("debug", vec![], &[a[0]], vec![Target::new("out", f, 4, 4)], noop());
-        let b = g.add_pass("b", vec![], &[a[0]], vec![Target::new("out", f, 4, 4)], noop());
+        let d = TextureDesc::d2(wgpu::TextureFormat::Rgba16Float, 4, 4);
+        let mut p = g.pass("a", PassKind::Raster);
+        let a = p.create("out", d.clone(), Access::ColorTarget);
+        p.execute(|_| {});
+        let mut p = g.pass("debug", PassKind::Raster);
+        p.sample(a);
+        p.create("out", d.clone(), Access::ColorTarget);
+        p.execute(|_| {});
+        let mut p = g.pass("b", PassKind::Raster);
+        p.sample(a);
+        let b = p.create("out", d, Access::ColorTarget);
+        p.execute(|_| {});
         g.cull("volumes", "the scene has no participating media");
-        g.output(b[0]);
+        g.output(b);
         let graph = g.build();
         let live: Vec<_> = graph.passes.iter().map(|p| p.name.as_str()).collect();
         assert_eq!(live, ["a", "b"]);
         let culled: Vec<_> = graph.culled.iter().map(|c| c.name.as_str()).collect();
         assert_eq!(culled, ["volumes", "debug"]);
+    }
+
+    #[test]
+    fn usage_is_derived_from_the_live_passes_accesses() {
+        let mut g = GraphBuilder::new();
+        let d = TextureDesc::d2(wgpu::TextureFormat::Rgba16Float, 4, 4);
+        let mut p = g.pass("render", PassKind::Raster);
+        let color = p.create("color", d, Access::ColorTarget);
+        p.execute(|_| {});
+        let mut p = g.pass("reduce", PassKind::Compute);
+        p.sample(color);
+        let sum = p.create("sum", TensorLayout::new(&[("bin", 8)], Element::U32), Access::StorageWrite);
+        p.execute(|_| {});
+        let mut p = g.pass("state", PassKind::Compute);
+        p.access(sum, Access::StorageRead);
+        let state = p.history("state", TensorLayout::new(&[("v", 4)], Element::F32), Access::StorageWrite);
+        p.execute(|_| {});
+        // A pass nobody needs adds no usage.
+        let mut p = g.pass("unused", PassKind::Copy);
+        p.access(color, Access::CopySrc);
+        p.create("copy", TextureDesc::d2(wgpu::TextureFormat::Rgba16Float, 4, 4), Access::CopyDst);
+        p.execute(|_| {});
+        g.output(state);
+        let graph = g.build();
+        use wgpu::{BufferUsages as B, TextureUsages as T};
+        assert_eq!(graph.resource(color).texture_usage, T::RENDER_ATTACHMENT | T::TEXTURE_BINDING | T::COPY_SRC);
+        assert_eq!(graph.resource(sum).buffer_usage, B::STORAGE | B::COPY_SRC);
+        assert_eq!(graph.resource(state).lifetime, Lifetime::History);
+        assert_eq!(graph.passes.iter().map(|p| p.name.as_str()).collect::<Vec<_>>(), ["render", "reduce", "state"]);
     }
 }

@@ -721,7 +721,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             use crate::gpu::pipeline::texture;
             let bind_layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("ltc test"),
-                entries: &[storage(0, true), storage(1, false), texture(2), texture(3)],
+                entries: &[storage(0, true), storage(1, false), texture("ltc_matrix", 2).entry, texture("ltc_amplitude", 3).entry],
             });
             let layout = gpu.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("ltc test"),

@@ -7,10 +7,11 @@
 
 use std::collections::BTreeMap;
 
-use super::graph::PipelineKey;
-use crate::diag::{Code, Diagnostic, Location};
+use serde::Serialize;
+
+use super::resource::PipelineKey;
+use crate::diag::Diagnostic;
 use crate::gpu::{self, pipeline::{self, Pipeline}};
-use crate::protocol::{PassStatus, PipelineInfo};
 use crate::shader::{Compose, Composed, Library, NagaOil};
 
 /// Composes and validates the shader of pipeline `key`, which lives at
@@ -18,12 +19,10 @@ use crate::shader::{Compose, Composed, Library, NagaOil};
 /// panic come back as diagnostics like any other error.
 pub fn compose(lib: &Library, key: &PipelineKey, display: &str) -> Result<Composed, Vec<Diagnostic>> {
     let Some(file) = lib.get(display) else {
-        return Err(vec![pipeline::missing_shader(key.spec, display)]);
+        return Err(vec![pipeline::missing_shader(key.spec.name, display)]);
     };
     let caps = gpu::capabilities_without_device();
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| NagaOil.compose(lib, file, &key.defs, caps))).unwrap_or_else(|_| {
-        Err(vec![Diagnostic::error(Code::CompilerPanic, "the WGSL compiler crashed on this file").at(Location::file_start(display))])
-    })
+    crate::shader::guard::guarded(display, "the WGSL compiler", || NagaOil.compose(lib, file, &key.defs, caps))
 }
 
 pub struct Entry {
@@ -34,16 +33,44 @@ pub struct Entry {
     pub diagnostics: Vec<Diagnostic>,
     /// Files the newest attempt was composed from.
     pub files: Vec<String>,
+    /// The content of the files `current` was built from: a compile of the
+    /// same content changes nothing.
+    sources: Option<blake3::Hash>,
+}
+
+/// How a pipeline stands, worst last.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Status {
+    /// Its current version renders.
+    Ok,
+    /// Its newest source failed; the last good pipeline still renders.
+    Stale,
+    /// It has never built: it does not render.
+    Failed,
 }
 
 impl Entry {
-    pub fn status(&self) -> PassStatus {
+    pub fn status(&self) -> Status {
         match (&self.current, self.diagnostics.is_empty()) {
-            (Some(_), true) => PassStatus::Ok,
-            (Some(_), false) => PassStatus::Stale,
-            (None, _) => PassStatus::Failed,
+            (Some(_), true) => Status::Ok,
+            (Some(_), false) => Status::Stale,
+            (None, _) => Status::Failed,
         }
     }
+}
+
+/// One pipeline as reports show it.
+#[derive(Debug, Clone, Serialize)]
+pub struct PipelineSummary {
+    /// `spec[DEFS]`.
+    pub name: String,
+    pub shader: String,
+    pub defs: String,
+    pub status: Status,
+    /// Increases each time a new version is swapped in.
+    pub generation: u64,
+    pub files: Vec<String>,
 }
 
 #[derive(Default)]
@@ -55,8 +82,20 @@ pub struct PipelineCache {
 #[derive(Debug, PartialEq, Eq)]
 pub enum Installed {
     Swapped,
+    /// It built from the same sources as the current pipeline, which stays.
+    Unchanged,
     KeptLastGood,
     Failed,
+}
+
+/// The content of `files` as the library holds them.
+fn sources_hash(lib: &Library, files: &[String]) -> blake3::Hash {
+    let mut h = blake3::Hasher::new();
+    for f in files {
+        h.update(f.as_bytes());
+        h.update(lib.get(f).map_or(&[0u8; 32], |s| s.hash.as_bytes()));
+    }
+    h.finalize()
 }
 
 impl PipelineCache {
@@ -76,14 +115,23 @@ impl PipelineCache {
             generation: 0,
             diagnostics: Vec::new(),
             files: vec![shader_display.to_owned()],
+            sources: None,
         });
-        let spec = pipeline::spec(key.spec).expect("keys come from specs");
+        if let Ok(composed) = &result {
+            let sources = Some(sources_hash(lib, &composed.files));
+            if entry.current.is_some() && sources == entry.sources {
+                entry.files = composed.files.clone();
+                entry.diagnostics.clear();
+                return Installed::Unchanged;
+            }
+        }
         let created = result.and_then(|composed| {
             entry.files = composed.files.clone();
-            pipeline::create(device, spec, &key.defs, &composed, lib, shader_display).map(|p| (p, composed))
+            pipeline::create(device, key.spec, &key.defs, &composed, lib, shader_display).map(|p| (p, composed))
         });
         match created {
             Ok((p, composed)) => {
+                entry.sources = Some(sources_hash(lib, &composed.files));
                 entry.current = Some(p);
                 entry.last_good = Some(composed);
                 entry.generation += 1;
@@ -103,9 +151,8 @@ impl PipelineCache {
         for (key, entry) in &mut self.entries {
             entry.current = None;
             let Some(composed) = &entry.last_good else { continue };
-            let spec = pipeline::spec(key.spec).expect("keys come from specs");
             let display = entry.files.last().cloned().unwrap_or_default();
-            match pipeline::create(device, spec, &key.defs, composed, lib, &display) {
+            match pipeline::create(device, key.spec, &key.defs, composed, lib, &display) {
                 Ok(p) => entry.current = Some(p),
                 Err(d) => problems.extend(d),
             }
@@ -117,10 +164,12 @@ impl PipelineCache {
         self.entries.iter().filter_map(|(k, e)| e.current.clone().map(|p| (k.clone(), p))).collect()
     }
 
-    pub fn info(&self) -> Vec<PipelineInfo> {
+    /// The entries `keep` selects, as reports show them.
+    pub fn summaries_of(&self, keep: impl Fn(&PipelineKey) -> bool) -> Vec<PipelineSummary> {
         self.entries
             .iter()
-            .map(|(k, e)| PipelineInfo {
+            .filter(|(k, _)| keep(k))
+            .map(|(k, e)| PipelineSummary {
                 name: k.label(),
                 shader: e.files.last().cloned().unwrap_or_default(),
                 defs: crate::shader::defs_key(&k.defs),
@@ -131,11 +180,13 @@ impl PipelineCache {
             .collect()
     }
 
-    pub fn diagnostics(&self) -> Vec<Diagnostic> {
+    /// The diagnostics of the entries `keep` selects, each once.
+    pub fn diagnostics_of(&self, keep: impl Fn(&PipelineKey) -> bool) -> Vec<Diagnostic> {
         let mut seen = std::collections::BTreeSet::new();
         self.entries
-            .values()
-            .flat_map(|e| e.diagnostics.iter())
+            .iter()
+            .filter(|(k, _)| keep(k))
+            .flat_map(|(_, e)| e.diagnostics.iter())
             .filter(|d| seen.insert(d.to_string()))
             .cloned()
             .collect()

@@ -168,6 +168,7 @@ pub fn load_with(path: &Path, overrides: &overrides::Overrides) -> Result<Loaded
         let mesh_path = dir.join(name);
         let mesh_display = crate::shader::library::display_path(&mesh_path);
         files.push(mesh_path.clone());
+        files.extend(crate::mesh::external_buffers(&mesh_path));
         if !mesh_path.exists() {
             return Err(Diagnostic::error(Code::Scene, format!("mesh file `{mesh_display}` does not exist"))
                 .with_label(at.clone(), "referenced here", true));

@@ -8,16 +8,22 @@
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender};
+use std::sync::mpsc::{RecvTimeoutError, Sender};
 use std::time::{Duration, Instant};
 
 use super::event::{CompileResult, Event, FileBatch, FileChange, SceneCommand};
+use super::inbox::Inbox;
 use super::shared::{self, FrameImages, Shared};
 use crate::diag::{Code, Diagnostic, Location, Severity};
-use crate::gpu::{self, Gpu, pipeline};
+use crate::gpu::{self, Gpu};
 use crate::protocol::{self, ControlsReport, PassInfo, PassStatus, PassTiming, ReloadTimings, ServerEvent, Status};
-use crate::render::{self, frame, graph::{Graph, PipelineKey}, pipelines::{self, Installed, PipelineCache}, scene_gpu::SceneGpu};
-use crate::scene::{self, Scene, overrides::Overrides};
+use crate::gpu::pipeline::PipelineSpec;
+use crate::render::frame::PendingFrame;
+use crate::render::passes;
+use crate::render::pipelines::Installed;
+use crate::render::resource::PipelineKey;
+use crate::render::session::{PassState, Session};
+use crate::scene::{self, overrides::Overrides};
 use crate::shader::{Library, SourceFile, library};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -60,7 +66,7 @@ struct Succeeded {
 
 /// A submitted frame on its way back.
 struct InFlight {
-    pending: frame::PendingFrame,
+    pending: PendingFrame,
     /// The reloads this frame is the first to show.
     reloads: Vec<Succeeded>,
     started: Instant,
@@ -69,31 +75,24 @@ struct InFlight {
     /// No uncaptured wgpu error while recording or submitting it: its
     /// images are real and may be published.
     clean: bool,
+    /// `pass/output` of every output whose pass uses a pipeline swapped in
+    /// since the previous frame.
+    replaced: BTreeSet<String>,
 }
 
 pub struct Daemon {
-    gpu: Gpu,
+    /// The device, sources, scene, graph, pipelines and resources.
+    session: Session,
     config: Config,
-    lib: Arc<Library>,
     /// Files that failed to load, by display path: their last good content
-    /// stays in `lib` meanwhile.
+    /// stays in the session's library meanwhile.
     file_errors: BTreeMap<String, Diagnostic>,
-    scene: Scene,
     /// The scene file and the meshes it references: a change to any
     /// reloads the scene.
     scene_files: Vec<PathBuf>,
-    scene_gpu: SceneGpu,
-    /// Kept to rebuild `scene_gpu` on a new device.
-    meshes: BTreeMap<String, Arc<crate::mesh::MeshData>>,
     scene_error: Option<Diagnostic>,
     /// Live values from the browser on top of the scene file.
     overrides: Overrides,
-    /// The graph of the newest frame (rebuilt once per frame and when the
-    /// scene changes); everything else reads this one.
-    graph: Graph,
-    cache: PipelineCache,
-    pool: frame::TexturePool,
-    frame: u64,
     shared: Arc<Shared>,
     events: Sender<Event>,
     workers: Arc<rayon::ThreadPool>,
@@ -121,7 +120,8 @@ pub struct Daemon {
     /// The debug API asked for the device to be destroyed; its loss is on
     /// its way.
     destroy_requested: bool,
-    last_frame: Instant,
+    /// When the newest frame was submitted: the next one's time step.
+    last_frame: Option<Instant>,
 }
 
 impl Daemon {
@@ -134,30 +134,20 @@ impl Daemon {
                 (scene::Loaded { scene: empty, meshes: Default::default(), files: vec![config.scene_path.clone()] }, Some(d))
             }
         };
-        let scene_gpu = SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes);
         let workers = rayon::ThreadPoolBuilder::new()
             .num_threads(2)
             .stack_size(256 << 20)
             .thread_name(|i| format!("loupe-compile-{i}"))
             .build()
             .expect("compile worker threads");
-        let graph = Self::graph_for(&loaded.scene, 0);
         let timing = if gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) { "gpu" } else { "cpu" };
         Daemon {
-            gpu,
+            session: Session::new(gpu, &config.shader_root, lib, &loaded),
             config,
-            lib: Arc::new(lib),
             file_errors: BTreeMap::new(),
-            scene: loaded.scene,
             scene_files: loaded.files,
-            meshes: loaded.meshes,
-            scene_gpu,
             scene_error,
             overrides: Overrides::new(),
-            graph,
-            cache: PipelineCache::default(),
-            pool: Default::default(),
-            frame: 0,
             shared,
             events,
             workers: Arc::new(workers),
@@ -175,27 +165,18 @@ impl Daemon {
             last_timing: timing.to_owned(),
             device_resets: 0,
             destroy_requested: false,
-            last_frame: Instant::now(),
+            last_frame: None,
         }
     }
 
-    /// The one place the render graph is built.
-    fn graph_for(scene: &Scene, frame: u64) -> Graph {
-        render::build_graph(scene, frame)
-    }
-
-    /// The one place a frame is recorded and submitted: `self.graph`,
-    /// capturing the outputs named in `capture`.
-    fn submit(&mut self, capture: &BTreeSet<String>) -> frame::PendingFrame {
-        let live = self.cache.live();
-        let g = &self.gpu;
-        frame::submit(&g.device, &g.queue, g.features, &self.scene_gpu, &self.graph, &mut self.pool, &live, Some(capture), self.frame)
+    fn gpu(&self) -> &Gpu {
+        self.session.gpu()
     }
 
     /// Runs until `Shutdown` or until every sender is gone.
-    pub fn run(mut self, rx: Receiver<Event>) {
+    pub fn run(mut self, rx: Inbox) {
         self.install_lost_callback();
-        let keys = self.graph_pipelines();
+        let keys = self.session.wanted();
         self.start_reload(keys, Vec::new(), 0.0);
         self.publish_state();
         self.publish_controls();
@@ -216,7 +197,7 @@ impl Daemon {
                 Err(RecvTimeoutError::Timeout) => {}
                 Err(RecvTimeoutError::Disconnected) => break,
             }
-            let _ = self.gpu.device.poll(wgpu::PollType::Poll);
+            self.session.poll();
             self.collect_frames();
             if self.wants_frame() && self.until_due(interval).is_zero() && self.can_render() {
                 self.render();
@@ -231,7 +212,10 @@ impl Daemon {
     /// How long until the next frame is due: at once when a reload is
     /// waiting to be shown (the frame-rate cap does not delay a swap).
     fn until_due(&self, interval: Duration) -> Duration {
-        if self.finished_reloads.is_empty() { interval.saturating_sub(self.last_frame.elapsed()) } else { Duration::ZERO }
+        match self.last_frame {
+            Some(at) if self.finished_reloads.is_empty() => interval.saturating_sub(at.elapsed()),
+            _ => Duration::ZERO,
+        }
     }
 
     /// Frames render while shaders compile, except when that would show a
@@ -239,7 +223,7 @@ impl Daemon {
     /// or a pass whose first pipeline is still compiling.
     fn can_render(&self) -> bool {
         let half_applied = self.reloads.values().any(|r| {
-            r.swapped_any || r.pending.iter().any(|k| self.cache.entries.get(k).is_none_or(|e| e.current.is_none()))
+            r.swapped_any || r.pending.iter().any(|k| self.session.pipelines().entries.get(k).is_none_or(|e| e.current.is_none()))
         });
         self.in_flight.len() < 2 && !half_applied && !self.destroy_requested
     }
@@ -250,7 +234,7 @@ impl Daemon {
             Event::CompileFinished(r) => self.compile_finished(r),
             Event::Scene(cmd) => self.scene_command(cmd),
             Event::Rebuild => {
-                let keys = self.cache.entries.keys().cloned().chain(self.graph_pipelines()).collect();
+                let keys = self.session.wanted();
                 self.start_reload(keys, Vec::new(), 0.0);
             }
             Event::Subscriptions { client, outputs } => {
@@ -266,24 +250,16 @@ impl Daemon {
             Event::LoseDevice => {
                 log::warn!("destroying the device on request (debug API)");
                 self.destroy_requested = true;
-                self.gpu.device.destroy();
-                let _ = self.gpu.device.poll(wgpu::PollType::Poll);
+                self.gpu().device.destroy();
+                self.session.poll();
             }
             Event::Shutdown => {}
         }
     }
 
-    fn shader_display(&self, spec: &pipeline::PipelineSpec) -> String {
-        library::display_path(&self.config.shader_root.join(spec.shader))
-    }
-
-    fn graph_pipelines(&self) -> BTreeSet<PipelineKey> {
-        self.graph.pipelines()
-    }
-
     fn files_changed(&mut self, batch: FileBatch) {
         let watch_ms = batch.ready.duration_since(batch.first_event).as_secs_f64() * 1e3;
-        let mut lib = (*self.lib).clone();
+        let mut lib = (**self.session.library()).clone();
         let mut touched = BTreeSet::new();
         let mut scene_changed = false;
         for change in &batch.changes {
@@ -316,24 +292,16 @@ impl Daemon {
                 }
             }
         }
-        self.lib = Arc::new(lib);
+        self.session.apply_sources(lib);
         if scene_changed {
             self.reload_scene();
         }
         // Exactly the pipelines whose sources depend on a touched file, plus
         // any the (new) graph needs that were never built.
-        let affected: BTreeSet<String> = touched.iter().flat_map(|d| self.lib.dependents(d)).collect();
-        let mut keys: BTreeSet<PipelineKey> = self
-            .cache
-            .entries
-            .iter()
-            .filter(|(k, e)| {
-                let own = pipeline::spec(k.spec).map(|s| self.shader_display(s));
-                e.files.iter().any(|f| affected.contains(f)) || own.is_some_and(|o| affected.contains(&o))
-            })
-            .map(|(k, _)| k.clone())
-            .collect();
-        keys.extend(self.graph_pipelines().into_iter().filter(|k| !self.cache.entries.contains_key(k)));
+        let lib = self.session.library().clone();
+        let affected: BTreeSet<String> = touched.iter().flat_map(|d| lib.dependents(d)).collect();
+        let mut keys = self.session.built_from(&affected);
+        keys.extend(self.session.missing());
         self.start_reload(keys, touched.into_iter().collect(), watch_ms);
     }
 
@@ -348,12 +316,9 @@ impl Daemon {
     }
 
     fn install_scene(&mut self, l: scene::Loaded) {
-        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &l.scene, &l.meshes);
-        self.scene = l.scene;
+        self.session.set_scene(&l);
         self.scene_files = l.files;
-        self.meshes = l.meshes;
         self.scene_error = None;
-        self.graph = Self::graph_for(&self.scene, self.frame);
     }
 
     /// Live overrides: a value that makes the scene invalid is refused with
@@ -387,7 +352,7 @@ impl Daemon {
                 self.overrides = overrides;
                 self.install_scene(l);
                 self.dirty = true;
-                let keys = self.graph_pipelines().into_iter().filter(|k| !self.cache.entries.contains_key(k)).collect();
+                let keys = self.session.missing();
                 self.start_reload(keys, vec![display], 0.0);
             }
             Err(d) => self.shared.publish(ServerEvent::Error { message: format!("override refused: {d}") }),
@@ -398,7 +363,7 @@ impl Daemon {
     fn publish_controls(&self) {
         let report = ControlsReport {
             scene: library::display_path(&self.config.scene_path),
-            controls: scene::overrides::controls(&self.scene),
+            controls: scene::overrides::controls(self.session.scene()),
             overrides: self.overrides.clone(),
         };
         shared::write(&self.shared.controls, report.clone());
@@ -421,33 +386,34 @@ impl Daemon {
             swapped_any: false,
         };
         self.reloads.insert(id, reload);
+        let lib = self.session.library().clone();
         for key in keys {
-            let spec = pipeline::spec(key.spec).expect("keys come from specs");
-            let display = self.shader_display(spec);
-            let lib = self.lib.clone();
+            let display = self.session.shader_display(key.spec);
             let tx = self.events.clone();
+            // A file that failed to load fails every pipeline built from it,
+            // even while its last good content is still in the library.
             let file_error = self.file_errors.values().find(|d| {
                 d.file().is_some_and(|f| f == display || lib.get(&display).is_some_and(|s| lib.dependencies(s).is_ok_and(|deps| deps.iter().any(|x| x.display == f))))
             }).cloned();
+            let compose = self.session.compose_job(&key);
             self.workers.spawn(move || {
                 let start = Instant::now();
                 let result = match file_error {
                     Some(d) => Err(vec![d]),
-                    None => pipelines::compose(&lib, &key, &display),
+                    None => compose(),
                 };
                 let compose_ms = start.elapsed().as_secs_f64() * 1e3;
-                let _ = tx.send(Event::CompileFinished(CompileResult { reload: id, pipeline: key.spec.to_owned(), defs: key.defs, result, compose_ms }));
+                let _ = tx.send(Event::CompileFinished(CompileResult { reload: id, key, result, compose_ms }));
             });
         }
         self.maybe_finish_reload(id);
     }
 
     fn compile_finished(&mut self, r: CompileResult) {
-        let key = PipelineKey { spec: pipeline::spec(&r.pipeline).expect("sent from a spec").name, defs: r.defs };
-        let display = self.shader_display(pipeline::spec(key.spec).expect("spec"));
+        let key = r.key;
         let start = Instant::now();
         // Creation under an error scope; wgpu errors keep the old pipeline.
-        let installed = self.cache.install(&self.gpu.device, &key, r.result, &self.lib, &display);
+        let installed = self.session.install(&key, r.result);
         let pipeline_ms = start.elapsed().as_secs_f64() * 1e3;
         if installed == Installed::Swapped {
             self.swapped_since_frame.insert(key.clone());
@@ -459,7 +425,7 @@ impl Daemon {
             if installed == Installed::Swapped {
                 reload.swapped_any = true;
             } else {
-                reload.diagnostics.extend(self.cache.entries[&key].diagnostics.iter().cloned());
+                reload.diagnostics.extend(self.session.pipelines().entries[&key].diagnostics.iter().cloned());
             }
         }
         self.maybe_finish_reload(r.reload);
@@ -483,25 +449,36 @@ impl Daemon {
         self.publish_state();
     }
 
+    /// The one place a frame is submitted.
     fn render(&mut self) {
-        self.frame += 1;
-        self.last_frame = Instant::now();
+        let started = Instant::now();
+        // Real time drives temporal passes, capped so a stall (a long
+        // compile, a paused on-change session) does not jump them.
+        let dt = self.last_frame.map_or(0.0, |t| t.elapsed().as_secs_f32().min(0.25));
+        self.last_frame = Some(started);
         self.dirty = false;
-        self.graph = Self::graph_for(&self.scene, self.frame);
-        self.pool.retain(&self.graph);
-        let final_key = self.graph.final_output().map(|h| frame::capture_name(&self.graph, h));
+        let final_key = self.session.graph().final_name();
         let mut capture: BTreeSet<String> = self.subscriptions.values().flatten().cloned().collect();
         capture.extend(final_key.clone());
-        let started = Instant::now();
-        let pending = self.submit(&capture);
+        let pending = self.session.submit(Some(&capture), dt);
         // wgpu reports invalid frame commands on this thread, while the
         // frame is recorded and submitted: they belong to this frame.
-        let errors: Vec<String> = std::mem::take(&mut *self.gpu.uncaptured.lock().unwrap_or_else(|e| e.into_inner()));
+        let errors = self.session.take_uncaptured();
         let clean = errors.is_empty();
         let swapped = std::mem::take(&mut self.swapped_since_frame);
         self.set_gpu_errors(&errors, &swapped);
         let reloads = std::mem::take(&mut self.finished_reloads);
-        self.in_flight.push_back(InFlight { pending, reloads, started, final_key, clean });
+        // The outputs of passes whose pipelines this frame is the first to
+        // use: their previous images become the "last good" ones.
+        let replaced = self
+            .session
+            .graph()
+            .passes
+            .iter()
+            .filter(|p| p.pipelines.iter().any(|k| swapped.contains(k)))
+            .flat_map(|p| p.writes().map(|h| self.session.graph().resource(h).name.clone()))
+            .collect();
+        self.in_flight.push_back(InFlight { pending, reloads, started, final_key, clean, replaced });
     }
 
     /// Turns the uncaptured wgpu errors of the newest frame into
@@ -524,7 +501,7 @@ impl Daemon {
                 .cloned()
                 .or_else(|| self.files_named_in(text))
                 .or_else(|| {
-                    let files: BTreeSet<String> = swapped.iter().filter_map(|k| pipeline::spec(k.spec)).map(|s| self.shader_display(s)).collect();
+                    let files: BTreeSet<String> = swapped.iter().map(|k| self.session.shader_display(k.spec)).collect();
                     (self.gpu_errors.is_empty() && !files.is_empty()).then(|| files.into_iter().collect())
                 })
                 .unwrap_or_default();
@@ -542,7 +519,7 @@ impl Daemon {
         self.gpu_error_files = files_by_message;
         if diagnostics != self.gpu_errors {
             for d in &diagnostics {
-                log::error!("frame {}: {d}", self.frame);
+                log::error!("frame {}: {d}", self.session.frame());
             }
             self.gpu_errors = diagnostics;
             self.publish_state();
@@ -554,11 +531,11 @@ impl Daemon {
     fn files_named_in(&self, text: &str) -> Option<Vec<String>> {
         let mut files = BTreeSet::new();
         for label in text.split("label = '").skip(1).filter_map(|rest| rest.split('\'').next()) {
-            let specs: Vec<&pipeline::PipelineSpec> = match self.graph.passes.iter().find(|p| p.name == label) {
-                Some(pass) => pass.pipelines.iter().filter_map(|k| pipeline::spec(k.spec)).collect(),
-                None => pipeline::spec(label).into_iter().collect(),
+            let specs: Vec<&PipelineSpec> = match self.session.graph().passes.iter().find(|p| p.name == label) {
+                Some(pass) => pass.pipelines.iter().map(|k| k.spec).collect(),
+                None => passes::spec(label).into_iter().collect(),
             };
-            files.extend(specs.into_iter().map(|s| self.shader_display(s)));
+            files.extend(specs.into_iter().map(|s| self.session.shader_display(s)));
         }
         (!files.is_empty()).then(|| files.into_iter().collect())
     }
@@ -571,20 +548,26 @@ impl Daemon {
     }
 
     fn publish_frame(&mut self, done: InFlight) {
-        let InFlight { pending, reloads, started, final_key, clean } = done;
+        let InFlight { pending, reloads, started, final_key, clean, replaced } = done;
         let result = pending.finish();
         let render_ms = started.elapsed().as_secs_f64() * 1e3;
-        let total: f64 = result.timings.iter().map(|(_, t)| t).sum();
+        let total = result.total_ms;
         let mut images = None;
         if clean {
             let mut captures = (*shared::read(&self.shared.captures)).clone();
-            if !reloads.is_empty() {
-                // The frame before a swap is what A/B compares against.
-                shared::write(&self.shared.last_good, Arc::new(captures.clone()));
+            if !replaced.is_empty() {
+                // What a pass showed before its pipelines changed is what
+                // A/B compares against; other passes keep theirs.
+                let mut last_good = (*shared::read(&self.shared.last_good)).clone();
+                last_good.extend(replaced.iter().filter_map(|k| captures.get(k).map(|c| (k.clone(), c.clone()))));
+                shared::write(&self.shared.last_good, Arc::new(last_good));
             }
             let this_frame: BTreeMap<String, Arc<_>> = result.captures.into_iter().map(|c| (c.key(), Arc::new(c))).collect();
             captures.extend(this_frame.iter().map(|(k, c)| (k.clone(), c.clone())));
             shared::write(&self.shared.captures, Arc::new(captures));
+            let mut tensors = (*shared::read(&self.shared.tensors)).clone();
+            tensors.extend(result.tensors.into_iter().map(|t| (t.key(), Arc::new(t))));
+            shared::write(&self.shared.tensors, Arc::new(tensors));
             images = Some(FrameImages::new(result.frame, final_key, this_frame));
         }
         self.last_timings = result.timings;
@@ -617,45 +600,15 @@ impl Daemon {
     /// Writes the pass list snapshot (with the newest times) and announces
     /// it in a `passes` event only when something but the times changed.
     fn publish_passes(&mut self) {
-        let graph = &self.graph;
-        let mut passes: Vec<PassInfo> = graph
-            .passes
-            .iter()
+        let passes: Vec<PassInfo> = self
+            .session
+            .passes()
+            .into_iter()
             .map(|p| {
-                let entries: Vec<_> = p.pipelines.iter().filter_map(|k| self.cache.entries.get(k)).collect();
-                let status = entries.iter().map(|e| e.status()).max_by_key(|s| match s {
-                    PassStatus::Ok => 0,
-                    PassStatus::Stale => 1,
-                    PassStatus::Failed => 2,
-                    PassStatus::Culled => 3,
-                }).unwrap_or(if p.pipelines.is_empty() { PassStatus::Ok } else { PassStatus::Failed });
-                PassInfo {
-                    name: p.name.clone(),
-                    status,
-                    reason: (status == PassStatus::Failed).then(|| "its pipeline has never built".to_owned()),
-                    pipelines: p.pipelines.iter().map(PipelineKey::label).collect(),
-                    reads: p.reads.iter().map(|h| graph.texture(*h).name.clone()).collect(),
-                    writes: p.writes.iter().map(|h| {
-                        let t = graph.texture(*h);
-                        protocol::OutputInfo { name: t.name.rsplit('/').next().unwrap_or("").to_owned(), format: format!("{:?}", t.format), width: t.width, height: t.height }
-                    }).collect(),
-                    time_ms: self.last_timings.iter().find(|(n, _)| *n == p.name).map(|(_, t)| *t),
-                    timing: self.last_timing.clone(),
-                    diagnostics: entries.iter().map(|e| e.diagnostics.len()).sum(),
-                }
+                let time_ms = (p.status != PassState::Culled).then(|| self.last_timings.iter().find(|(n, _)| *n == p.name).map(|(_, t)| *t)).flatten();
+                PassInfo::new(p, time_ms, &self.last_timing)
             })
             .collect();
-        passes.extend(graph.culled.iter().map(|c| PassInfo {
-            name: c.name.clone(),
-            status: PassStatus::Culled,
-            reason: Some(c.reason.clone()),
-            pipelines: Vec::new(),
-            reads: Vec::new(),
-            writes: Vec::new(),
-            time_ms: None,
-            timing: self.last_timing.clone(),
-            diagnostics: 0,
-        }));
         shared::write(&self.shared.passes, passes.clone());
         let shape: Vec<PassInfo> = passes.iter().map(PassInfo::shape).collect();
         if self.announced_passes.as_ref() != Some(&shape) {
@@ -665,7 +618,7 @@ impl Daemon {
     }
 
     fn diagnostics(&self) -> Vec<Diagnostic> {
-        let mut all = self.cache.diagnostics();
+        let mut all = self.session.pipeline_diagnostics();
         for d in self.file_errors.values().chain(self.scene_error.iter()).chain(self.gpu_errors.iter()) {
             if !all.iter().any(|x| x.to_string() == d.to_string()) {
                 all.push(d.clone());
@@ -676,15 +629,16 @@ impl Daemon {
 
     fn publish_state(&mut self) {
         let diagnostics = self.diagnostics();
-        let infos = self.cache.info();
+        let infos: Vec<protocol::PipelineInfo> = self.session.pipeline_summaries().into_iter().map(Into::into).collect();
         let count = |s: PassStatus| infos.iter().filter(|i| i.status == s).count();
+        let gpu = self.gpu();
         let status = Status {
             protocol: protocol::VERSION,
             version: env!("CARGO_PKG_VERSION").to_owned(),
-            adapter: self.gpu.adapter_name(),
-            cpu_adapter: self.gpu.is_cpu(),
-            features: format!("{:?}", self.gpu.features).split(" | ").map(str::to_owned).collect(),
-            degraded: self.gpu.degraded.clone(),
+            adapter: gpu.adapter_name(),
+            cpu_adapter: gpu.is_cpu(),
+            features: format!("{:?}", gpu.features).split(" | ").map(str::to_owned).collect(),
+            degraded: gpu.degraded.clone(),
             scene: library::display_path(&self.config.scene_path),
             frame: shared::read(&self.shared.status).frame,
             pipelines_ok: count(PassStatus::Ok),
@@ -708,7 +662,7 @@ impl Daemon {
     fn install_lost_callback(&self) {
         let tx = self.events.clone();
         let device = self.device_resets;
-        self.gpu.device.set_device_lost_callback(move |reason, message| {
+        self.gpu().device.set_device_lost_callback(move |reason, message| {
             let _ = tx.send(Event::DeviceLost { device, reason, message });
         });
     }
@@ -735,10 +689,8 @@ impl Daemon {
         log::warn!("device lost: {reason}");
         match gpu::open() {
             Ok(g) => {
-                self.gpu = g;
+                let problems = self.session.replace_device(g);
                 self.device_resets += 1;
-                self.pool = Default::default();
-                self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &self.scene, &self.meshes);
                 // Frames of the old device never come back; the reloads
                 // they were to announce go with the next frame instead.
                 let lost: Vec<Succeeded> = self.in_flight.drain(..).flat_map(|f| f.reloads).collect();
@@ -746,7 +698,6 @@ impl Daemon {
                 self.swapped_since_frame.clear();
                 self.gpu_errors.clear();
                 self.gpu_error_files.clear();
-                let problems = self.cache.recreate_all(&self.gpu.device, &self.lib);
                 self.install_lost_callback();
                 self.shared.publish(ServerEvent::DeviceLost { message: reason, recovered: problems.is_empty() });
                 self.dirty = true;

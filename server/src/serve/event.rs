@@ -7,7 +7,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::diag::Diagnostic;
-use crate::shader::{Composed, ShaderDefs};
+use crate::render::resource::PipelineKey;
+use crate::shader::Composed;
 
 pub enum Event {
     /// Debounced, content-checked changes from the watcher.
@@ -72,8 +73,7 @@ impl FileChange {
 pub struct CompileResult {
     /// Which reload this belongs to.
     pub reload: u64,
-    pub pipeline: String,
-    pub defs: ShaderDefs,
+    pub key: PipelineKey,
     pub result: Result<Composed, Vec<Diagnostic>>,
     pub compose_ms: f64,
 }

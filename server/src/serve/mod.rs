@@ -3,11 +3,12 @@
 //! Three kinds of threads: the render thread (`daemon`, owns the device),
 //! the watcher (`watch`, turns file-system noise into content changes), and
 //! tokio's (`http`, clients). They talk only through `Event`s into the render
-//! thread and `Shared` snapshots out of it.
+//! thread (clients' bounded by `inbox`) and `Shared` snapshots out of it.
 
 pub mod daemon;
 pub mod event;
 pub mod http;
+pub mod inbox;
 pub mod shared;
 pub mod watch;
 
@@ -47,8 +48,8 @@ pub enum ServeError {
 pub fn run(opts: ServeOptions) -> Result<(), ServeError> {
     let shader_root = opts.root.join("shaders");
     let scene_root = opts.root.join("scenes");
-    let (tx, rx) = mpsc::channel::<Event>();
-    let shared = shared::Shared::new(tx.clone(), vec![shader_root.clone(), scene_root.clone()], opts.debug_api);
+    let (tx, clients, inbox) = inbox::open();
+    let shared = shared::Shared::new(clients, vec![shader_root.clone(), scene_root.clone()], opts.debug_api);
 
     // The device is opened on the render thread, which then owns it.
     let (ready_tx, ready_rx) = mpsc::channel();
@@ -63,7 +64,7 @@ pub fn run(opts: ServeOptions) -> Result<(), ServeError> {
                 }
                 eprintln!("loupe: rendering on {}", gpu.adapter_name());
                 let _ = ready_tx.send(Ok(()));
-                Daemon::new(gpu, config, shared_r, tx_r).run(rx);
+                Daemon::new(gpu, config, shared_r, tx_r).run(inbox);
             }
             Err(e) => {
                 let _ = ready_tx.send(Err(e));

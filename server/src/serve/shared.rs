@@ -7,10 +7,10 @@ use std::sync::{Arc, Mutex, OnceLock, RwLock};
 
 use tokio::sync::{broadcast, watch};
 
-use super::event::Event;
+use super::inbox::Clients;
 use crate::diag::Diagnostic;
 use crate::protocol::{ControlsReport, Encoding, PassInfo, PipelineInfo, ServerEvent, Status};
-use crate::render::capture::CapturedImage;
+use crate::render::capture::{CapturedImage, CapturedTensor};
 
 /// How many events a slow WebSocket client may fall behind before it
 /// starts losing (and being told how many it lost).
@@ -23,6 +23,9 @@ pub struct Shared {
     pub diagnostics: RwLock<Vec<Diagnostic>>,
     /// Every captured output of the newest frame, by `pass/output`.
     pub captures: RwLock<Arc<BTreeMap<String, Arc<CapturedImage>>>>,
+    /// Every captured buffer (as a tensor) of the newest frames, by
+    /// `pass/output`.
+    pub tensors: RwLock<Arc<BTreeMap<String, Arc<CapturedTensor>>>>,
     /// The previous good version of each output, kept when a reload swaps a
     /// pipeline, for A/B compares: by `pass/output`.
     pub last_good: RwLock<Arc<BTreeMap<String, Arc<CapturedImage>>>>,
@@ -31,8 +34,8 @@ pub struct Shared {
     /// The newest frame's images: each client always gets the latest, never
     /// a queue of old ones.
     pub frames: watch::Sender<Option<Arc<FrameImages>>>,
-    /// Back to the render thread.
-    pub to_daemon: std::sync::mpsc::Sender<Event>,
+    /// Clients' way back to the render thread (bounded).
+    pub clients: Clients,
     /// Directories whose files may be served as sources (shaders/, scenes/).
     pub source_roots: Vec<PathBuf>,
     /// Whether `/api/debug/*` exists (`loupe serve --debug-api`).
@@ -81,7 +84,7 @@ impl FrameImages {
 }
 
 impl Shared {
-    pub fn new(to_daemon: std::sync::mpsc::Sender<Event>, source_roots: Vec<PathBuf>, debug_api: bool) -> Arc<Self> {
+    pub fn new(clients: Clients, source_roots: Vec<PathBuf>, debug_api: bool) -> Arc<Self> {
         Arc::new(Shared {
             status: RwLock::new(Status::default()),
             passes: RwLock::new(Vec::new()),
@@ -89,9 +92,10 @@ impl Shared {
             diagnostics: RwLock::new(Vec::new()),
             captures: RwLock::new(Arc::new(BTreeMap::new())),
             last_good: RwLock::new(Arc::new(BTreeMap::new())),
+            tensors: RwLock::new(Arc::new(BTreeMap::new())),
             events: broadcast::channel(EVENT_QUEUE).0,
             frames: watch::channel(None).0,
-            to_daemon,
+            clients,
             source_roots,
             debug_api,
             controls: RwLock::new(ControlsReport::default()),

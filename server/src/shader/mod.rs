@@ -1,6 +1,7 @@
 //! WGSL sources → composed, validated naga modules.
 
 pub mod compose;
+pub mod guard;
 pub mod library;
 
 pub use compose::{Compose, Composed, NagaOil, ShaderDefs, defs_key};

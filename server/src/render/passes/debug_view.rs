@@ -1,0 +1,50 @@
+//! One G-buffer channel or the depth as the displayed image.
+
+use super::gbuffer::GBuffer;
+use super::{TWO_TRIANGLES, fullscreen_key, vec4_bytes};
+use crate::gpu::pipeline::{FRAG, Group, LDR, PipelineSpec, Stages, depth_texture, sizes, texture, uniform};
+use crate::render::graph::{GraphBuilder, PassKind};
+use crate::render::resource::{Access, Handle, TextureDesc};
+use crate::scene::{DebugView, Scene};
+
+/// The source is the depth buffer, linearised for display.
+pub const DEBUG_DEPTH: &str = "DEBUG_DEPTH";
+
+pub static DEBUG_VIEW: PipelineSpec = PipelineSpec {
+    name: "post.debug_view",
+    shader: "post/debug_view.wgsl",
+    stages: Stages::Fullscreen { fragment: "fs_main", targets: &[LDR] },
+    groups: &[
+        Group::always(0, &[uniform("debug", 0, FRAG, sizes::VEC4)]),
+        Group::unless(1, DEBUG_DEPTH, &[texture("source", 0)]),
+        Group::when(1, DEBUG_DEPTH, &[depth_texture("source", 0)]),
+    ],
+    defs: &[TWO_TRIANGLES, DEBUG_DEPTH],
+};
+pub const SPECS: &[&PipelineSpec] = &[&DEBUG_VIEW];
+
+pub fn debug_view(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle) -> Option<Handle> {
+    let (source, mode) = match scene.post.debug_view {
+        DebugView::None => {
+            g.cull("debug_view", "post.debug_view is none");
+            return None;
+        }
+        DebugView::Normal => (gb.normal, 0u32),
+        DebugView::Albedo => (gb.albedo, 1),
+        DebugView::Roughness => (gb.material, 2),
+        DebugView::Metallic => (gb.material, 3),
+        DebugView::Depth => (depth, 0),
+    };
+    let (near, far) = (scene.camera.near, scene.camera.far);
+    let mut p = g.pass("debug_view", PassKind::Raster);
+    let key = p.pipeline(fullscreen_key(&DEBUG_VIEW, scene, &[(DEBUG_DEPTH, scene.post.debug_view == DebugView::Depth)]));
+    p.sample(source);
+    let color = p.create("color", TextureDesc::d2(LDR, scene.width, scene.height), Access::ColorTarget);
+    p.execute(move |ctx| {
+        let mut u = vec4_bytes([0.0, near, far, 0.0]);
+        u[0..4].copy_from_slice(&mode.to_le_bytes());
+        let debug = ctx.uniform(&u);
+        ctx.fullscreen(&key, &[color], &[("debug", debug.as_entire_binding()), ("source", ctx.bind(source))]);
+    });
+    Some(color)
+}

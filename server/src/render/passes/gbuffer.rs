@@ -1,0 +1,42 @@
+//! Surface attributes per pixel (layout in `geometry/gbuffer.wgsl`).
+
+use super::VIEW;
+use crate::gpu::pipeline::{ALL, Depth, FRAG, Group, HDR, PipelineSpec, Stages, storage};
+use crate::render::graph::{GraphBuilder, PassKind};
+use crate::render::resource::{Access, Handle, PipelineKey, TextureDesc};
+use crate::scene::Scene;
+
+pub static GBUFFER: PipelineSpec = PipelineSpec {
+    name: "geometry.gbuffer",
+    shader: "geometry/gbuffer.wgsl",
+    stages: Stages::Mesh { vertex: "vs_main", fragment: Some("fs_main"), targets: &[HDR, HDR, HDR], depth: Depth::Equal },
+    groups: &[Group::always(0, &[VIEW, storage("objects", 1, ALL), storage("materials", 2, FRAG)])],
+    defs: &[],
+};
+pub const SPECS: &[&PipelineSpec] = &[&GBUFFER];
+
+pub struct GBuffer {
+    pub normal: Handle,
+    pub albedo: Handle,
+    pub material: Handle,
+}
+
+pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle) -> GBuffer {
+    let d = TextureDesc::d2(HDR, scene.width, scene.height);
+    let mut p = g.pass("gbuffer", PassKind::Raster);
+    let key = p.pipeline(PipelineKey::new(&GBUFFER, &[]));
+    p.access(depth, Access::DepthTest);
+    let gb = GBuffer {
+        normal: p.create("normal", d.clone(), Access::ColorTarget),
+        albedo: p.create("albedo", d.clone(), Access::ColorTarget),
+        material: p.create("material", d, Access::ColorTarget),
+    };
+    let targets = [gb.normal, gb.albedo, gb.material];
+    p.execute(move |ctx| {
+        let s = ctx.scene;
+        let bindings = [("view", s.view.as_entire_binding()), ("objects", s.objects.as_entire_binding()), ("materials", s.materials.as_entire_binding())];
+        let depth = ctx.view(depth);
+        ctx.draw_objects(&key, &bindings, &targets, Some((depth, false)));
+    });
+    gb
+}

@@ -1,0 +1,54 @@
+//! Direct light from every light on the G-buffer, with shadows, rect
+//! lights through LTC, and the media's transmittance toward each light.
+
+use super::gbuffer::GBuffer;
+use super::{LIGHTS, MEDIA, SHADOW_GROUP, SHADOWS, TWO_TRIANGLES, VIEW, fullscreen_key};
+use crate::gpu::pipeline::{Group, HDR, PipelineSpec, Stages, depth_texture, texture};
+use crate::render::graph::{GraphBuilder, PassKind};
+use crate::render::resource::{Access, Handle, TextureDesc};
+use crate::scene::Scene;
+
+/// Rect lights, shaded with the LTC tables.
+pub const LIGHT_RECT: &str = "LIGHT_RECT";
+/// Shadows cast by the participating media onto surfaces.
+pub const MEDIA_SHADOWS: &str = "MEDIA_SHADOWS";
+
+pub static DEFERRED: PipelineSpec = PipelineSpec {
+    name: "lighting.deferred",
+    shader: "passes/lighting.wgsl",
+    stages: Stages::Fullscreen { fragment: "fs_main", targets: &[HDR] },
+    groups: &[
+        Group::always(0, &[VIEW, LIGHTS, texture("gbuffer_normal", 2), texture("gbuffer_albedo", 3), texture("gbuffer_material", 4), depth_texture("depth", 5)]),
+        SHADOW_GROUP,
+        Group::when(2, LIGHT_RECT, &[texture("ltc_matrix", 0), texture("ltc_amplitude", 1)]),
+        Group::when(3, MEDIA_SHADOWS, MEDIA),
+    ],
+    defs: &[TWO_TRIANGLES, SHADOWS, LIGHT_RECT, MEDIA_SHADOWS],
+};
+pub const SPECS: &[&PipelineSpec] = &[&DEFERRED];
+
+pub fn lighting(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle, shadows: Option<Handle>, ltc: Option<[Handle; 2]>) -> Handle {
+    let media = !scene.media.is_empty();
+    let mut p = g.pass("lighting", PassKind::Raster);
+    let key = p.pipeline(fullscreen_key(&DEFERRED, scene, &[(SHADOWS, shadows.is_some()), (LIGHT_RECT, ltc.is_some()), (MEDIA_SHADOWS, media)]));
+    let inputs = [("gbuffer_normal", gb.normal), ("gbuffer_albedo", gb.albedo), ("gbuffer_material", gb.material), ("depth", depth)];
+    for (_, h) in inputs {
+        p.sample(h);
+    }
+    let shadow_maps = shadows.map(|h| p.sample(h));
+    let ltc = ltc.map(|t| t.map(|h| p.sample(h)));
+    let color = p.create("color", TextureDesc::d2(HDR, scene.width, scene.height), Access::ColorTarget);
+    p.execute(move |ctx| {
+        let s = ctx.scene;
+        let mut b = vec![("view", s.view.as_entire_binding()), ("lights", s.lights.as_entire_binding()), ("media", s.media.as_entire_binding())];
+        b.extend(inputs.map(|(name, h)| (name, ctx.bind(h))));
+        if let Some(h) = shadow_maps {
+            b.extend([("shadow_maps", ctx.bind(h)), ("shadow_views", s.shadow_views.as_entire_binding())]);
+        }
+        if let Some([m, a]) = ltc {
+            b.extend([("ltc_matrix", ctx.bind(m)), ("ltc_amplitude", ctx.bind(a))]);
+        }
+        ctx.fullscreen(&key, &[color], &b);
+    });
+    color
+}

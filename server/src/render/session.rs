@@ -1,0 +1,422 @@
+//! A rendering session: one device, the shader library, the scene and its
+//! GPU data, the frame's graph, the pipeline cache and the resource pool.
+//! `loupe serve`'s daemon and `loupe render` / `loupe bench` drive the same
+//! session; they differ only in where compiles run and what they do with
+//! a finished frame.
+//!
+//! Architecture Invariant: the graph is rebuilt exactly when the scene
+//! changes (`set_scene`), and the pipelines to build are derived from it.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use serde::Serialize;
+
+use super::frame::{self, FrameInputs, FrameResult, PendingFrame};
+use super::graph::{Graph, PassKind};
+use super::pipelines::{self, Installed, PipelineCache, PipelineSummary, Status};
+use super::pool::ResourcePool;
+use super::resource::{Lifetime, PipelineKey, ResourceDesc, TensorLayout};
+use super::scene_gpu::SceneGpu;
+use crate::diag::Diagnostic;
+use crate::gpu::Gpu;
+use crate::gpu::pipeline::PipelineSpec;
+use crate::mesh::MeshData;
+use crate::scene::{Loaded, Scene};
+use crate::shader::{Composed, Library, library};
+
+/// How a pass stands this frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PassState {
+    /// Rendering with its current pipelines.
+    Ok,
+    /// Its newest source failed; the last good pipeline still renders.
+    Stale,
+    /// A pipeline has never built: the pass does not render.
+    Failed,
+    /// Not needed by this frame.
+    Culled,
+}
+
+/// One resource a pass writes, as reports describe it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OutputSummary {
+    pub name: String,
+    /// `texture` or `buffer`.
+    pub kind: &'static str,
+    /// The texture format (`Rgba16Float`), or the buffer's element type.
+    pub format: String,
+    /// Texture size; a buffer's element count and 1.
+    pub width: u32,
+    pub height: u32,
+    /// A buffer's tensor layout.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tensor: Option<TensorLayout>,
+    /// Kept across frames.
+    pub history: bool,
+}
+
+/// One pass of the frame, live or culled: the renderer's one description
+/// of a pass, which the daemon maps to the protocol and `loupe render`
+/// writes into its report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PassSummary {
+    pub name: String,
+    /// `None` when culled.
+    pub kind: Option<PassKind>,
+    pub status: PassState,
+    /// Why it is culled or failed.
+    pub reason: Option<String>,
+    pub pipelines: Vec<String>,
+    pub reads: Vec<String>,
+    pub writes: Vec<OutputSummary>,
+    /// Diagnostics of its pipelines.
+    pub diagnostics: usize,
+}
+
+/// Pipelines no longer used by the frame that are kept, in case a setting
+/// switches back.
+const KEPT_UNUSED: usize = 32;
+
+pub struct Session {
+    gpu: Gpu,
+    shader_root: PathBuf,
+    lib: Arc<Library>,
+    scene: Scene,
+    /// Kept to rebuild the scene's GPU data on a new device.
+    meshes: BTreeMap<String, Arc<MeshData>>,
+    scene_gpu: SceneGpu,
+    graph: Graph,
+    cache: PipelineCache,
+    pool: ResourcePool,
+    frame: u64,
+}
+
+impl Session {
+    pub fn new(gpu: Gpu, shader_root: &Path, lib: Library, loaded: &Loaded) -> Self {
+        let scene_gpu = SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes);
+        Session {
+            graph: super::build_graph(&loaded.scene),
+            scene: loaded.scene.clone(),
+            meshes: loaded.meshes.clone(),
+            scene_gpu,
+            shader_root: shader_root.to_owned(),
+            lib: Arc::new(lib),
+            cache: PipelineCache::default(),
+            pool: ResourcePool::default(),
+            frame: 0,
+            gpu,
+        }
+    }
+
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    pub fn graph(&self) -> &Graph {
+        &self.graph
+    }
+
+    pub fn library(&self) -> &Arc<Library> {
+        &self.lib
+    }
+
+    pub fn pipelines(&self) -> &PipelineCache {
+        &self.cache
+    }
+
+    /// The newest frame submitted (0 before the first).
+    pub fn frame(&self) -> u64 {
+        self.frame
+    }
+
+    /// Renders `graph` instead of the scene's own (tests of single passes).
+    #[cfg(test)]
+    pub(crate) fn use_graph(&mut self, graph: Graph) {
+        self.graph = graph;
+    }
+
+    /// Replaces the scene: its GPU data and the graph follow. Pipelines
+    /// the new frame no longer uses are kept (switching back costs
+    /// nothing), at most `KEPT_UNUSED` of them.
+    pub fn set_scene(&mut self, loaded: &Loaded) {
+        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &loaded.scene, &loaded.meshes);
+        self.scene = loaded.scene.clone();
+        self.meshes = loaded.meshes.clone();
+        self.graph = super::build_graph(&self.scene);
+        let wanted = self.wanted();
+        let unused: Vec<PipelineKey> = self.cache.entries.keys().filter(|k| !wanted.contains(*k)).cloned().collect();
+        for k in unused.iter().take(unused.len().saturating_sub(KEPT_UNUSED)) {
+            self.cache.entries.remove(k);
+        }
+    }
+
+    /// A new version of the shader sources; pipelines rebuild only when
+    /// installed.
+    pub fn apply_sources(&mut self, lib: Library) {
+        self.lib = Arc::new(lib);
+    }
+
+    /// Where `spec`'s shader is, as diagnostics show it.
+    pub fn shader_display(&self, spec: &PipelineSpec) -> String {
+        library::display_path(&self.shader_root.join(spec.shader))
+    }
+
+    /// Every pipeline the frame uses.
+    pub fn wanted(&self) -> BTreeSet<PipelineKey> {
+        self.graph.pipelines()
+    }
+
+    /// Pipelines the frame uses that were never installed.
+    pub fn missing(&self) -> BTreeSet<PipelineKey> {
+        self.wanted().into_iter().filter(|k| !self.cache.entries.contains_key(k)).collect()
+    }
+
+    /// The pipelines the frame uses that were built from any of `files`
+    /// (shader displays): what a change to them rebuilds. Pipelines kept
+    /// from earlier frames that were built from them are dropped instead:
+    /// they would be stale, and the frame does not use them.
+    pub fn built_from(&mut self, files: &BTreeSet<String>) -> BTreeSet<PipelineKey> {
+        let wanted = self.wanted();
+        let touched: BTreeSet<PipelineKey> = self
+            .cache
+            .entries
+            .iter()
+            .filter(|(k, e)| e.files.iter().any(|f| files.contains(f)) || files.contains(&self.shader_display(k.spec)))
+            .map(|(k, _)| k.clone())
+            .collect();
+        self.cache.entries.retain(|k, _| wanted.contains(k) || !touched.contains(k));
+        touched.into_iter().filter(|k| wanted.contains(k)).collect()
+    }
+
+    /// The pipelines the frame uses, as reports show them. Pipelines kept
+    /// for quick toggling back are not reported.
+    pub fn pipeline_summaries(&self) -> Vec<PipelineSummary> {
+        let wanted = self.wanted();
+        self.cache.summaries_of(|k| wanted.contains(k))
+    }
+
+    /// Diagnostics of the pipelines the frame uses.
+    pub fn pipeline_diagnostics(&self) -> Vec<Diagnostic> {
+        let wanted = self.wanted();
+        self.cache.diagnostics_of(|k| wanted.contains(k))
+    }
+
+    /// Composing `key` as a job for any thread: it holds this version of
+    /// the sources.
+    pub fn compose_job(&self, key: &PipelineKey) -> impl FnOnce() -> Result<Composed, Vec<Diagnostic>> + Send + 'static {
+        let lib = self.lib.clone();
+        let key = key.clone();
+        let display = self.shader_display(key.spec);
+        move || pipelines::compose(&lib, &key, &display)
+    }
+
+    /// Creates the pipeline from a compile result and swaps it in when it
+    /// built (on this thread: it owns the device).
+    pub fn install(&mut self, key: &PipelineKey, result: Result<Composed, Vec<Diagnostic>>) -> Installed {
+        let display = self.shader_display(key.spec);
+        self.cache.install(&self.gpu.device, key, result, &self.lib, &display)
+    }
+
+    /// Composes and installs every pipeline the frame lacks, here and now;
+    /// returns the diagnostics of those that failed.
+    pub fn install_missing(&mut self) -> Vec<Diagnostic> {
+        let mut errors = Vec::new();
+        for key in self.missing() {
+            let result = self.compose_job(&key)();
+            self.install(&key, result);
+            errors.extend(self.cache.entries[&key].diagnostics.iter().cloned());
+        }
+        errors
+    }
+
+    /// Records and submits the next frame. `capture`: the outputs to read
+    /// back (`None`: all); `dt`: seconds since the previous frame, which
+    /// temporal passes adapt by.
+    pub fn submit(&mut self, capture: Option<&BTreeSet<String>>, dt: f32) -> PendingFrame {
+        self.frame += 1;
+        let live = self.cache.live();
+        let g = &self.gpu;
+        let inputs = FrameInputs {
+            device: &g.device,
+            queue: &g.queue,
+            features: g.features,
+            scene: &self.scene_gpu,
+            graph: &self.graph,
+            pipelines: &live,
+            capture,
+            frame: self.frame,
+            dt,
+        };
+        frame::submit(inputs, &mut self.pool)
+    }
+
+    /// Polls the device without blocking, so readbacks can land.
+    pub fn poll(&self) {
+        let _ = self.gpu.device.poll(wgpu::PollType::Poll);
+    }
+
+    /// Waits for a submitted frame and converts its readbacks.
+    pub fn wait(&self, pending: PendingFrame) -> FrameResult {
+        while !pending.ready() {
+            let _ = self.gpu.device.poll(wgpu::PollType::wait_indefinitely());
+        }
+        pending.finish()
+    }
+
+    /// Forgets every history resource: the next frame starts over.
+    pub fn reset_history(&mut self) {
+        self.pool.reset_history();
+    }
+
+    /// Errors wgpu reported outside any error scope since the last call.
+    pub fn take_uncaptured(&self) -> Vec<String> {
+        std::mem::take(&mut *self.gpu.uncaptured.lock().unwrap_or_else(|e| e.into_inner()))
+    }
+
+    /// Moves to a new device after the old one was lost: GPU data rebuilt,
+    /// every pipeline recreated from its last good module. Returns what
+    /// could not be recreated.
+    pub fn replace_device(&mut self, gpu: Gpu) -> Vec<Diagnostic> {
+        self.gpu = gpu;
+        self.pool = ResourcePool::default();
+        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &self.scene, &self.meshes);
+        self.cache.recreate_all(&self.gpu.device, &self.lib)
+    }
+
+    /// The frame's passes, live ones in execution order, then culled ones.
+    pub fn passes(&self) -> Vec<PassSummary> {
+        let graph = &self.graph;
+        let mut out: Vec<PassSummary> = graph
+            .passes
+            .iter()
+            .map(|p| {
+                let entries: Vec<_> = p.pipelines.iter().map(|k| self.cache.entries.get(k)).collect();
+                let worst = entries.iter().map(|e| e.map_or(Status::Failed, |e| e.status())).max().unwrap_or(Status::Ok);
+                let status = match worst {
+                    Status::Ok => PassState::Ok,
+                    Status::Stale => PassState::Stale,
+                    Status::Failed => PassState::Failed,
+                };
+                PassSummary {
+                    name: p.name.clone(),
+                    kind: Some(p.kind),
+                    status,
+                    reason: (status == PassState::Failed).then(|| "its pipeline has never built".to_owned()),
+                    pipelines: p.pipelines.iter().map(PipelineKey::label).collect(),
+                    reads: p.reads().map(|h| graph.resource(h).name.clone()).collect(),
+                    writes: p.writes().map(|h| output_summary(graph, h)).collect(),
+                    diagnostics: entries.iter().flatten().map(|e| e.diagnostics.len()).sum(),
+                }
+            })
+            .collect();
+        out.extend(graph.culled.iter().map(|c| PassSummary {
+            name: c.name.clone(),
+            kind: None,
+            status: PassState::Culled,
+            reason: Some(c.reason.clone()),
+            pipelines: Vec::new(),
+            reads: Vec::new(),
+            writes: Vec::new(),
+            diagnostics: 0,
+        }));
+        out
+    }
+}
+
+fn output_summary(graph: &Graph, h: super::resource::Handle) -> OutputSummary {
+    let r = graph.resource(h);
+    let history = r.lifetime == Lifetime::History;
+    match &r.desc {
+        ResourceDesc::Texture(d) => OutputSummary {
+            name: r.output().to_owned(),
+            kind: "texture",
+            format: format!("{:?}", d.format),
+            width: d.width,
+            height: d.height,
+            tensor: None,
+            history,
+        },
+        ResourceDesc::Buffer(t) => OutputSummary {
+            name: r.output().to_owned(),
+            kind: "buffer",
+            format: format!("{:?}", t.element).to_lowercase(),
+            width: t.len() as u32,
+            height: 1,
+            tensor: Some(t.clone()),
+            history,
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::overrides::{Overrides, Value};
+
+    fn pattern(two_triangles: bool) -> Loaded {
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/pattern.toml");
+        crate::scene::load_with(&scenes, &Overrides::from([("post.two_triangles".to_owned(), Value::Bool(two_triangles))])).unwrap()
+    }
+
+    /// With timestamp queries every pass has a time and they add up to the
+    /// frame; without them only the frame's wall clock is known, and no
+    /// pass is given a time it did not measure.
+    #[test]
+    fn without_timestamp_queries_only_the_frame_total_is_reported() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+        let gpu = crate::gpu::open().unwrap_or_else(|e| panic!("a GPU device (lavapipe will do): {e}"));
+        let mut s = Session::new(gpu, &root, library::read_tree(&root).unwrap(), &pattern(false));
+        assert_eq!(s.install_missing(), vec![]);
+        if s.gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) {
+            let pending = s.submit(Some(&BTreeSet::new()), 0.0);
+            let r = s.wait(pending);
+            assert_eq!(r.timing, "gpu");
+            let names: Vec<&str> = r.timings.iter().map(|(n, _)| n.as_str()).collect();
+            assert_eq!(names, ["test_pattern", "tonemap"]);
+            assert_eq!(r.total_ms, r.timings.iter().map(|(_, t)| t).sum::<f64>());
+        }
+        s.gpu.features.remove(wgpu::Features::TIMESTAMP_QUERY);
+        let pending = s.submit(Some(&BTreeSet::new()), 0.0);
+        let r = s.wait(pending);
+        assert_eq!(r.timing, "cpu");
+        assert_eq!(r.timings, vec![], "no pass gets a time it did not measure");
+        assert!(r.total_ms > 0.0, "the frame's wall clock is reported");
+    }
+
+    /// Culled permutations are neither reported nor rebuilt: a change to a
+    /// file they were built from drops them, and switching back builds
+    /// them again from the sources of the day.
+    #[test]
+    fn pipelines_the_frame_does_not_use_are_neither_reported_nor_rebuilt() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+        let lib = library::read_tree(&root).unwrap();
+        let gpu = crate::gpu::open().unwrap_or_else(|e| panic!("a GPU device (lavapipe will do): {e}"));
+        let mut s = Session::new(gpu, &root, lib, &pattern(false));
+        assert_eq!(s.install_missing(), vec![]);
+        let one: BTreeSet<String> = s.wanted().iter().map(PipelineKey::label).collect();
+        assert_eq!(one, BTreeSet::from(["debug.test_pattern".to_owned(), "post.tonemap".to_owned()]));
+
+        s.set_scene(&pattern(true));
+        assert_eq!(s.install_missing(), vec![]);
+        let two: BTreeSet<String> = s.wanted().iter().map(PipelineKey::label).collect();
+        let reported: BTreeSet<String> = s.pipeline_summaries().into_iter().map(|p| p.name).collect();
+        assert_eq!(reported, two, "only what the frame uses is reported");
+        assert_eq!(s.pipelines().entries.len(), 4, "the one-triangle pipelines are kept for switching back");
+
+        let fullscreen = BTreeSet::from([library::display_path(&root.join("lib/fullscreen.wgsl"))]);
+        let rebuilt: BTreeSet<String> = s.built_from(&fullscreen).iter().map(PipelineKey::label).collect();
+        assert_eq!(rebuilt, two, "a change rebuilds only what the frame uses");
+        assert_eq!(s.pipelines().entries.len(), 2, "the unused ones built from the changed file are dropped");
+
+        s.set_scene(&pattern(false));
+        let missing: BTreeSet<String> = s.missing().iter().map(PipelineKey::label).collect();
+        assert_eq!(missing, one, "switching back builds them again");
+    }
+}
