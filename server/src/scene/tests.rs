@@ -255,6 +255,19 @@ fn controls_are_the_table_entries_the_scene_shows() {
 }
 
 #[test]
+fn every_affected_pass_is_a_pass_of_the_frame() {
+    // The showcase declares every pass: live, or culled with a reason.
+    let showcase = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/showcase.toml");
+    let graph = crate::render::build_graph(&load(&showcase).unwrap().scene);
+    let passes: Vec<&str> = graph.passes.iter().map(|p| p.name.as_str()).chain(graph.culled.iter().map(|c| c.name.as_str())).collect();
+    for s in SETTINGS {
+        for pass in s.affects {
+            assert!(passes.contains(pass), "{} affects `{pass}`, which is not one of {passes:?}", s.path);
+        }
+    }
+}
+
+#[test]
 fn control_values_read_as_written() {
     let scene = parse("s.toml", "[post]\nexposure_ev = 0.3\n\n[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1.2\n").unwrap();
     let value = |p: &str| controls(&scene).into_iter().find(|c| c.path == p).unwrap().value;
