@@ -3,6 +3,8 @@
 // touched); "save to file" writes the overrides into the scene file, keeping
 // its comments and layout; "reset" drops them.
 //
+// Each row's title lists the render passes the control affects.
+//
 // Test hooks: #controls [data-path] inputs (data-overridden when set),
 // #save-scene, #reset-overrides, #overrides-count.
 
@@ -67,6 +69,8 @@ export class ControlsPanel {
       input = el('select', { 'data-path': c.path }, ...c.options.map((o) => el('option', { value: o }, o)));
       input.addEventListener('change', () => send(input.value));
     }
-    return el('label', { class: 'control' }, el('span', { class: 'control-label', text: c.label }), input, c.kind === 'slider' ? el('output', { class: 'num' }) : null);
+    // The passes a control changes, on hover: what to watch in the pass list.
+    const affects = Array.isArray(c.affects) && c.affects.length ? `affects: ${c.affects.join(', ')}` : null;
+    return el('label', { class: 'control', title: affects }, el('span', { class: 'control-label', text: c.label }), input, c.kind === 'slider' ? el('output', { class: 'num' }) : null);
   }
 }

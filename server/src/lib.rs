@@ -16,3 +16,5 @@ pub mod render;
 pub mod scene;
 pub mod serve;
 pub mod shader;
+#[cfg(test)]
+mod testing;

@@ -189,6 +189,7 @@ async fn live_controls_override_the_scene_and_save_keeps_its_comments() {
     until(&c, &s, "exposure culled", "document.querySelector('#passes li[data-pass=\"exposure\"][data-status=\"culled\"]')").await;
     let slider = "document.querySelector('#controls [data-path=\"post.exposure_ev\"]')";
     until(&c, &s, "the exposure control", slider).await;
+    until(&c, &s, "the passes it affects on hover", &format!("{slider}.closest('label').title === 'affects: exposure'")).await;
     // Move the slider as a user does: set, then `change`.
     c.execute(&format!("const i = {slider}; i.value = '1'; i.dispatchEvent(new Event('change')); return true;"), vec![]).await.unwrap();
     until(&c, &s, "the override counted", "document.querySelector('#overrides-count').textContent === '1 unsaved'").await;

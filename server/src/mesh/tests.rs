@@ -10,6 +10,7 @@ use super::import::{Limits, load};
 use super::math::{Vec3, add, cross, dot, normalize_or_up, scale, sub};
 use super::*;
 use crate::diag::{Code, Diagnostic};
+use crate::testing::line_col;
 
 const NODES: &str = include_str!("fixtures/nodes.gltf");
 
@@ -358,14 +359,6 @@ fn missing_normals_are_computed_smooth() {
     for (p, n) in got.positions.iter().zip(&got.normals) {
         assert!(dot(*p, *n) > 0.99, "smooth normal {n:?} at {p:?} is not radial");
     }
-}
-
-/// The line and column of byte `k` of the first `needle` in `text`.
-fn line_col(text: &str, needle: &str, k: usize) -> (u32, u32) {
-    let at = text.find(needle).unwrap_or_else(|| panic!("{needle:?} is not in the text")) + k;
-    let line = text[..at].matches('\n').count() + 1;
-    let column = text[..at].rsplit('\n').next().unwrap().chars().count() + 1;
-    (line as u32, column as u32)
 }
 
 /// Asserts `d` is an error with `code` whose message contains `message`,

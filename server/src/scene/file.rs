@@ -1,9 +1,11 @@
 //! The scene file's shape as serde reads it: every table denies unknown
 //! fields, so a typo is an error at its line, never a silently ignored key.
 //! Values are checked afterwards (`super::validate`), where each problem is
-//! located by its path in the document.
+//! located by its path in the document. `[post]` and `[quality]` are read
+//! through the settings table instead (`super::settings`).
 
 use serde::Deserialize;
+use serde::de::IgnoredAny;
 
 pub type Vec3 = [f32; 3];
 
@@ -22,10 +24,12 @@ pub struct File {
     pub lights: Vec<Light>,
     #[serde(default)]
     pub media: Vec<Medium>,
-    #[serde(default)]
-    pub post: Post,
-    #[serde(default)]
-    pub quality: Quality,
+    /// Accepted here, read through the settings table from the document,
+    /// where each key and value keeps its span.
+    #[serde(default, rename = "post")]
+    _post: IgnoredAny,
+    #[serde(default, rename = "quality")]
+    _quality: IgnoredAny,
 }
 
 #[derive(Debug, Deserialize)]
@@ -210,83 +214,4 @@ pub struct Noise {
 
 fn octaves() -> i64 {
     4
-}
-
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Post {
-    /// Exposure in stops: the HDR image is multiplied by 2^EV.
-    pub exposure_ev: f32,
-    pub tonemap: Tonemap,
-    /// Draw fullscreen passes as two triangles instead of one, to compare.
-    pub two_triangles: bool,
-    pub debug_view: DebugView,
-    pub auto_exposure: bool,
-    pub auto_exposure_speed: f32,
-    pub auto_exposure_min_ev: f32,
-    pub auto_exposure_max_ev: f32,
-}
-
-impl Default for Post {
-    fn default() -> Self {
-        Post {
-            exposure_ev: 0.0,
-            tonemap: Tonemap::Aces,
-            two_triangles: false,
-            debug_view: DebugView::None,
-            auto_exposure: false,
-            auto_exposure_speed: 3.0,
-            auto_exposure_min_ev: -8.0,
-            auto_exposure_max_ev: 8.0,
-        }
-    }
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Tonemap {
-    Aces,
-    Reinhard,
-}
-
-/// What the debug-view pass shows instead of the lit frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum DebugView {
-    None,
-    Normal,
-    Albedo,
-    Roughness,
-    Metallic,
-    Depth,
-}
-
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Quality {
-    pub shadows: bool,
-    pub shadow_map_size: i64,
-    /// Ray-march steps per pixel through the media.
-    pub volume_steps: i64,
-    /// Steps of the march toward each light (self-shadowing).
-    pub volume_shadow_steps: i64,
-    pub volume_estimator: Estimator,
-}
-
-impl Default for Quality {
-    fn default() -> Self {
-        Quality { shadows: true, shadow_map_size: 1024, volume_steps: 48, volume_shadow_steps: 6, volume_estimator: Estimator::Analytic }
-    }
-}
-
-/// How each ray-march step integrates in-scattered light.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Estimator {
-    /// Scattered light × step length × transmittance at the step start:
-    /// biased, brightens as steps grow.
-    Constant,
-    /// The exact integral of in-scattering times transmittance over the
-    /// step for constant coefficients: energy-conserving at any step count.
-    Analytic,
 }

@@ -6,13 +6,15 @@
 
 mod file;
 pub mod overrides;
+pub mod settings;
 mod validate;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-pub use file::{Camera, DebugView, Estimator, Material, Noise, Post, SdfShape, Tonemap, Vec3};
+pub use file::{Camera, Material, Noise, SdfShape, Vec3};
+pub use settings::{DebugView, Estimator, Post, Quality, Tonemap};
 
 use crate::diag::{Code, Diagnostic, LineIndex, Location};
 use crate::mesh::MeshData;
@@ -88,15 +90,6 @@ pub struct Medium {
     pub noise: Option<Noise>,
 }
 
-#[derive(Debug, Clone, PartialEq)]
-pub struct Quality {
-    pub shadows: bool,
-    pub shadow_map_size: u32,
-    pub volume_steps: u32,
-    pub volume_shadow_steps: u32,
-    pub volume_estimator: Estimator,
-}
-
 impl Scene {
     pub fn has_rect_lights(&self) -> bool {
         self.lights.iter().any(|l| matches!(l.kind, LightKind::Rect { .. }))
@@ -127,15 +120,17 @@ impl Scene {
 
 /// Parses and validates a scene; `display` names the file in diagnostics.
 pub fn parse(display: &str, text: &str) -> Result<Scene, Diagnostic> {
-    let lines = LineIndex::new(text);
-    let file: file::File = toml::from_str(text).map_err(|e| {
-        let d = Diagnostic::error(Code::Scene, e.message().trim().to_owned());
-        match e.span() {
-            Some(span) => d.with_label(lines.location(display, text, span), "here", true),
-            None => d.at(Location::file_start(display)),
-        }
-    })?;
+    let file: file::File = toml::from_str(text).map_err(|e| syntax_error(display, text, e.message(), e.span()))?;
     validate::scene(display, text, file)
+}
+
+/// A TOML parser's error, located where it points.
+fn syntax_error(display: &str, text: &str, message: &str, span: Option<std::ops::Range<usize>>) -> Diagnostic {
+    let d = Diagnostic::error(Code::Scene, message.trim().to_owned());
+    match span {
+        Some(span) => d.with_label(LineIndex::new(text).location(display, text, span), "here", true),
+        None => d.at(Location::file_start(display)),
+    }
 }
 
 /// A scene and the meshes it references, read from disk.

@@ -8,6 +8,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 use toml_edit::{DocumentMut, Item, Table, Value as TomlValue};
 
+use super::settings::{self, Kind, SETTINGS};
 use super::{LightKind, Scene};
 
 /// A value a control can set.
@@ -18,6 +19,18 @@ pub enum Value {
     Int(i64),
     Float(f64),
     Text(String),
+}
+
+/// As TOML writes it (`true`, `2`, `1.5`, `"aces"`), for messages.
+impl std::fmt::Display for Value {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Value::Bool(b) => write!(f, "{b}"),
+            Value::Int(i) => write!(f, "{i}"),
+            Value::Float(x) => write!(f, "{x:?}"),
+            Value::Text(t) => write!(f, "{t:?}"),
+        }
+    }
 }
 
 /// Overrides by path, e.g. `post.exposure_ev`, `lights[1].intensity`.
@@ -64,7 +77,11 @@ fn toml_value(v: &Value) -> TomlValue {
 pub fn apply(text: &str, overrides: &Overrides) -> Result<String, String> {
     let mut doc: DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| e.message().to_owned())?;
     for (path, value) in overrides {
-        set(doc.as_table_mut(), &parse_path(path)?, value).map_err(|e| format!("{path}: {e}"))?;
+        // A table setting's value is checked as the file's would be; the
+        // rest are checked when the scene is read.
+        let segs = parse_path(path)?;
+        settings::find(path).map_or(Ok(()), |s| s.check(value)).map_err(|e| format!("{path}: {e}"))?;
+        set(doc.as_table_mut(), &segs, value).map_err(|e| format!("{path}: {e}"))?;
     }
     Ok(doc.to_string())
 }
@@ -123,6 +140,8 @@ pub struct Control {
     #[serde(flatten)]
     pub kind: ControlKind,
     pub value: Value,
+    /// The render passes whose output it changes.
+    pub affects: &'static [&'static str],
 }
 
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -133,45 +152,25 @@ pub enum ControlKind {
     Choice { options: Vec<String> },
 }
 
-fn slider(path: String, label: String, v: f64, min: f64, max: f64, step: f64) -> Control {
-    let value = if step.fract() == 0.0 && min.fract() == 0.0 { Value::Int(v as i64) } else { Value::Float(v) };
-    Control { path, label, kind: ControlKind::Slider { min, max, step }, value }
-}
-
-fn choice(path: &str, label: &str, v: &str, options: &[&str]) -> Control {
-    Control {
-        path: path.into(),
-        label: label.into(),
-        kind: ControlKind::Choice { options: options.iter().map(|s| (*s).to_owned()).collect() },
-        value: Value::Text(v.to_owned()),
+impl From<Kind> for ControlKind {
+    fn from(k: Kind) -> Self {
+        match k {
+            Kind::Toggle => ControlKind::Toggle,
+            Kind::Int { min, max, step } => ControlKind::Slider { min: min as f64, max: max as f64, step: step as f64 },
+            Kind::Float { min, max, step } => ControlKind::Slider { min, max, step },
+            Kind::Choice(options) => ControlKind::Choice { options: options.iter().map(|o| (*o).to_owned()).collect() },
+        }
     }
 }
 
-fn toggle(path: &str, label: &str, v: bool) -> Control {
-    Control { path: path.into(), label: label.into(), kind: ControlKind::Toggle, value: Value::Bool(v) }
-}
-
-fn lower(v: impl std::fmt::Debug) -> String {
-    format!("{v:?}").to_lowercase()
-}
-
-/// The controls for `scene`: post, quality, and each light's intensity.
+/// The controls for `scene`: each setting of the table its scene shows,
+/// then each light's intensity.
 pub fn controls(scene: &Scene) -> Vec<Control> {
-    let p = &scene.post;
-    let q = &scene.quality;
-    let mut out = vec![
-        slider("post.exposure_ev".into(), "Exposure (EV)".into(), f64::from(p.exposure_ev), -8.0, 8.0, 0.1),
-        choice("post.tonemap", "Tonemap", &lower(p.tonemap), &["aces", "reinhard"]),
-        choice("post.debug_view", "Debug view", &lower(p.debug_view), &["none", "normal", "albedo", "roughness", "metallic", "depth"]),
-        toggle("post.two_triangles", "Fullscreen as two triangles", p.two_triangles),
-        toggle("quality.shadows", "Shadows", q.shadows),
-        slider("quality.shadow_map_size".into(), "Shadow map size".into(), f64::from(q.shadow_map_size), 64.0, 4096.0, 64.0),
-    ];
-    if !scene.media.is_empty() {
-        out.push(slider("quality.volume_steps".into(), "Volume steps".into(), f64::from(q.volume_steps), 1.0, 256.0, 1.0));
-        out.push(slider("quality.volume_shadow_steps".into(), "Volume shadow steps".into(), f64::from(q.volume_shadow_steps), 1.0, 32.0, 1.0));
-        out.push(choice("quality.volume_estimator", "In-scattering estimator", &lower(q.volume_estimator), &["constant", "analytic"]));
-    }
+    let mut out: Vec<Control> = SETTINGS
+        .iter()
+        .filter(|s| (s.shown_when)(scene))
+        .map(|s| Control { path: s.path.into(), label: s.label.into(), kind: s.kind.into(), value: (s.get)(scene), affects: s.affects })
+        .collect();
     for (i, l) in scene.lights.iter().enumerate() {
         let kind = match l.kind {
             LightKind::Directional { .. } => "directional",
@@ -179,7 +178,13 @@ pub fn controls(scene: &Scene) -> Vec<Control> {
             LightKind::Spot { .. } => "spot",
             LightKind::Rect { .. } => "rect",
         };
-        out.push(slider(format!("lights[{i}].intensity"), format!("Light {i} ({kind}) intensity"), f64::from(l.intensity), 0.0, 100.0, 0.1));
+        out.push(Control {
+            path: format!("lights[{i}].intensity"),
+            label: format!("Light {i} ({kind}) intensity"),
+            kind: ControlKind::Slider { min: 0.0, max: 100.0, step: 0.1 },
+            value: settings::float(l.intensity),
+            affects: &["lighting", "volumes"],
+        });
     }
     out
 }

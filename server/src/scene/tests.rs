@@ -99,3 +99,193 @@ fn missing_and_malformed_meshes_are_diagnosed_at_the_reference() {
     assert!(e.file().is_some_and(|f| f.ends_with("bad.gltf")), "located in the glTF: {e}");
     assert!(e.labels.iter().any(|l| l.location.file.ends_with("s.toml") && l.location.line == 4), "and at the reference: {e:?}");
 }
+
+// ---- the settings table: [post] and [quality] ----------------------------
+
+use overrides::{ControlKind, Value, controls};
+use crate::testing::line_col;
+use settings::{Kind, SETTINGS};
+
+/// A scene that writes `key = value` in its setting's table, after other
+/// tables, so positions are not trivially at the start.
+fn with_setting(path: &str, value: &str) -> String {
+    let (table, key) = path.split_once('.').unwrap();
+    format!("[output]\nwidth = 64\nheight = 32\n\n# the setting under test\n[{table}]\n{key} = {value}   # a comment\n")
+}
+
+const MEDIUM: &str = "[[media]]\nabsorption = [0, 0, 0]\nscattering = [1, 1, 1]\nshapes = [{ type = \"sphere\", center = [0, 0, 0], radius = 1 }]\n";
+
+#[test]
+fn every_setting_round_trips() {
+    let defaults = parse("s.toml", "").unwrap();
+    for s in SETTINGS {
+        let default = (s.get)(&defaults);
+        let other = match s.kind {
+            Kind::Toggle => Value::Bool(default != Value::Bool(true)),
+            Kind::Int { max, .. } => Value::Int(max),
+            // Halfway to the max: in range, and a metering range stays ordered.
+            Kind::Float { max, .. } => Value::Float((settings::number(&default).unwrap() + max) / 2.0),
+            Kind::Choice(options) => Value::Text(options.iter().find(|o| Value::Text((**o).to_owned()) != default).unwrap().to_string()),
+        };
+        for v in [&default, &other] {
+            let scene = parse("s.toml", &with_setting(s.path, &v.to_string())).unwrap_or_else(|d| panic!("{}: {d}", s.path));
+            assert_eq!((s.get)(&scene), *v, "{}", s.path);
+        }
+        assert!(default != other, "{}: the test sets a value other than the default", s.path);
+    }
+}
+
+#[test]
+fn defaults_are_the_documented_ones() {
+    let s = parse("s.toml", "").unwrap();
+    let (p, q) = (&s.post, &s.quality);
+    assert_eq!((p.exposure_ev, p.tonemap, p.two_triangles, p.debug_view), (0.0, Tonemap::Aces, false, DebugView::None));
+    assert_eq!((p.auto_exposure, p.auto_exposure_speed, p.auto_exposure_min_ev, p.auto_exposure_max_ev), (false, 3.0, -8.0, 8.0));
+    assert_eq!((q.shadows, q.shadow_map_size, q.volume_steps, q.volume_shadow_steps, q.volume_estimator), (true, 1024, 48, 6, Estimator::Analytic));
+}
+
+#[test]
+fn out_of_range_settings_are_located_at_the_value() {
+    let mut numeric = 0;
+    for s in SETTINGS {
+        let (min, max, below, above) = match s.kind {
+            Kind::Int { min, max, .. } => (min.to_string(), max.to_string(), (min - 1).to_string(), (max + 1).to_string()),
+            Kind::Float { min, max, .. } => (min.to_string(), max.to_string(), format!("{:?}", min - 1.0), format!("{:?}", max + 1.0)),
+            _ => continue,
+        };
+        numeric += 1;
+        let (_, key) = s.path.split_once('.').unwrap();
+        for bad in [below, above] {
+            let text = with_setting(s.path, &bad);
+            let e = err(&text);
+            let shown = bad.trim_end_matches(".0");
+            assert_eq!(e.message, format!("{}: must be between {min} and {max}, not {shown}", s.path));
+            assert_eq!(at(&e), line_col(&text, &format!("{key} = "), key.len() + 3), "{}", s.path);
+        }
+    }
+    assert_eq!(numeric, 7, "every numeric setting was tried");
+    let e = err("[post]\nexposure_ev = 30.0\n");
+    assert_eq!(e.message, "post.exposure_ev: must be between -24 and 24, not 30");
+    assert_eq!(at(&e), (2, 15));
+    let e = err("[post]\nexposure_ev = nan\n");
+    assert_eq!(e.message, "post.exposure_ev: must be a finite number, not NaN");
+}
+
+#[test]
+fn unknown_settings_are_located_at_the_key() {
+    let text = "[post]\nexposure_ev = 1.0\n  exposure = 2\n";
+    let e = err(text);
+    assert_eq!(at(&e), line_col(text, "exposure =", 0));
+    assert!(e.message.starts_with("post.exposure: unknown key; expected one of: exposure_ev, auto_exposure,"), "{}", e.message);
+    let text = "# inline\nquality = { shadows = false, shadow_size = 512 }\n\n[output]\nwidth = 8\nheight = 8\n";
+    let e = err(text);
+    assert_eq!(at(&e), line_col(text, "shadow_size", 0));
+    assert!(e.message.starts_with("quality.shadow_size: unknown key"), "{}", e.message);
+    let e = err("post = 3\n");
+    assert_eq!((e.message.as_str(), at(&e)), ("post: must be a table", (1, 8)));
+}
+
+#[test]
+fn settings_of_the_wrong_type_are_located_at_the_value() {
+    for (path, value, message) in [
+        ("quality.shadows", "\"yes\"", "must be true or false, not \"yes\""),
+        ("quality.volume_steps", "4.5", "must be a whole number, not 4.5"),
+        ("post.exposure_ev", "\"bright\"", "must be a number, not \"bright\""),
+        ("post.auto_exposure", "[true]", "must be true or false, not an array"),
+        ("post.tonemap", "{ curve = 1 }", "must be one of \"aces\", \"reinhard\", not a table"),
+    ] {
+        let text = with_setting(path, value);
+        let e = err(&text);
+        assert_eq!(e.message, format!("{path}: {message}"));
+        assert_eq!(at(&e), line_col(&text, value, 0), "{path}");
+    }
+    // A whole number is a number: `exposure_ev = 1` is 1 EV.
+    assert_eq!(parse("s.toml", "[post]\nexposure_ev = 1\n").unwrap().post.exposure_ev, 1.0);
+}
+
+#[test]
+fn a_bad_choice_lists_the_options() {
+    let text = with_setting("post.debug_view", "\"normals\"");
+    let e = err(&text);
+    assert_eq!(e.message, "post.debug_view: must be one of \"none\", \"normal\", \"albedo\", \"roughness\", \"metallic\", \"depth\", not \"normals\"");
+    assert_eq!(at(&e), line_col(&text, "\"normals\"", 0));
+    let e = err("[quality]\nvolume_estimator = \"exact\"\n");
+    assert!(e.message.contains("\"constant\", \"analytic\""), "{}", e.message);
+}
+
+#[test]
+fn the_metering_range_must_be_ordered() {
+    let text = "[post]\nauto_exposure_min_ev = 2.0\nauto_exposure_max_ev = 2.0\n";
+    let e = err(text);
+    assert_eq!(e.message, "post.auto_exposure_max_ev: must be greater than post.auto_exposure_min_ev (2)");
+    assert_eq!(at(&e), (3, 24));
+    // Without a max in the file, the min written there is at fault.
+    let e = err("[post]\nauto_exposure_min_ev = 10.0\n");
+    assert_eq!(e.message, "post.auto_exposure_min_ev: must be less than post.auto_exposure_max_ev (8)");
+    assert_eq!(at(&e), (2, 24));
+    let s = parse("s.toml", "[post]\nauto_exposure_min_ev = -2.5\nauto_exposure_max_ev = -2.0\n").unwrap();
+    assert_eq!((s.post.auto_exposure_min_ev, s.post.auto_exposure_max_ev), (-2.5, -2.0));
+}
+
+#[test]
+fn controls_are_the_table_entries_the_scene_shows() {
+    for text in ["", "[post]\nauto_exposure = true\n", MEDIUM, &format!("[post]\nauto_exposure = true\n{MEDIUM}")] {
+        let scene = parse("s.toml", text).unwrap();
+        let shown = controls(&scene);
+        let settings: Vec<_> = shown.iter().filter(|c| !c.path.starts_with("lights[")).collect();
+        let expected: Vec<_> = SETTINGS.iter().filter(|s| (s.shown_when)(&scene)).collect();
+        assert_eq!(settings.len(), expected.len(), "{text}");
+        for (c, s) in settings.iter().zip(expected) {
+            assert_eq!((c.path.as_str(), c.label.as_str(), c.affects, &c.value), (s.path, s.label, s.affects, &(s.get)(&scene)));
+            match (&c.kind, s.kind) {
+                (ControlKind::Toggle, Kind::Toggle) => {}
+                (ControlKind::Slider { min, max, step }, Kind::Int { min: lo, max: hi, step: st }) => {
+                    assert_eq!((*min, *max, *step), (lo as f64, hi as f64, st as f64), "{}", s.path)
+                }
+                (ControlKind::Slider { min, max, step }, Kind::Float { min: lo, max: hi, step: st }) => assert_eq!((*min, *max, *step), (lo, hi, st), "{}", s.path),
+                (ControlKind::Choice { options }, Kind::Choice(o)) => assert_eq!(options, o, "{}", s.path),
+                (c, k) => panic!("{}: control {c:?} for {k:?}", s.path),
+            }
+        }
+        let has = |p: &str| shown.iter().any(|c| c.path == p);
+        assert_eq!(has("quality.volume_steps"), !scene.media.is_empty(), "volume controls only with media: {text}");
+        assert_eq!(has("post.auto_exposure_speed"), scene.post.auto_exposure, "metering controls only with auto exposure: {text}");
+        assert!(has("post.exposure_ev") && has("quality.shadows"), "{text}");
+    }
+}
+
+#[test]
+fn every_affected_pass_is_a_pass_of_the_frame() {
+    // The showcase declares every pass: live, or culled with a reason.
+    let showcase = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/showcase.toml");
+    let graph = crate::render::build_graph(&load(&showcase).unwrap().scene);
+    let passes: Vec<&str> = graph.passes.iter().map(|p| p.name.as_str()).chain(graph.culled.iter().map(|c| c.name.as_str())).collect();
+    for s in SETTINGS {
+        for pass in s.affects {
+            assert!(passes.contains(pass), "{} affects `{pass}`, which is not one of {passes:?}", s.path);
+        }
+    }
+}
+
+#[test]
+fn control_values_read_as_written() {
+    let scene = parse("s.toml", "[post]\nexposure_ev = 0.3\n\n[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1.2\n").unwrap();
+    let value = |p: &str| controls(&scene).into_iter().find(|c| c.path == p).unwrap().value;
+    assert_eq!((value("post.exposure_ev"), value("lights[0].intensity")), (Value::Float(0.3), Value::Float(1.2)));
+}
+
+#[test]
+fn overrides_of_settings_are_checked_by_the_table() {
+    for (path, value, message) in [
+        ("post.exposure_ev", Value::Float(30.0), "post.exposure_ev: must be between -24 and 24, not 30"),
+        ("quality.shadow_map_size", Value::Int(8), "quality.shadow_map_size: must be between 64 and 4096, not 8"),
+        ("quality.shadows", Value::Int(1), "quality.shadows: must be true or false, not 1"),
+        ("post.tonemap", Value::Text("filmic".into()), "post.tonemap: must be one of \"aces\", \"reinhard\", not \"filmic\""),
+    ] {
+        let o = overrides::Overrides::from([(path.to_owned(), value)]);
+        assert_eq!(overrides::apply("[post]\nexposure_ev = 0.0\n", &o), Err(message.to_owned()));
+    }
+    let o = overrides::Overrides::from([("post.auto_exposure".to_owned(), Value::Bool(true))]);
+    let s = parse("s.toml", &overrides::apply("", &o).unwrap()).unwrap();
+    assert!(s.post.auto_exposure);
+}

@@ -6,6 +6,8 @@
 use std::collections::BTreeSet;
 
 use super::file::{self, LightType, Scale, Vec3};
+use super::overrides::Value;
+use super::settings::{self, SETTINGS};
 use super::*;
 
 /// One step of a path into the TOML document.
@@ -18,7 +20,7 @@ pub enum Seg {
 struct Checker<'a> {
     display: &'a str,
     text: &'a str,
-    doc: Option<toml_edit::Document<&'a str>>,
+    doc: toml_edit::Document<&'a str>,
 }
 
 type Checked<T> = Result<T, Diagnostic>;
@@ -27,13 +29,22 @@ impl Checker<'_> {
     /// Where the value at `path` is written, when the document has a span
     /// for it.
     fn location(&self, path: &[Seg]) -> Option<Location> {
-        let span = self.doc.as_ref().and_then(|d| span_of(d.as_item(), path))?;
-        Some(LineIndex::new(self.text).location(self.display, self.text, span))
+        self.located(span_of(self.doc.as_item(), path))
+    }
+
+    fn located(&self, span: Option<std::ops::Range<usize>>) -> Option<Location> {
+        Some(LineIndex::new(self.text).location(self.display, self.text, span?))
     }
 
     fn error(&self, path: &[Seg], message: impl Into<String>) -> Diagnostic {
-        let d = Diagnostic::error(Code::Scene, format!("{}: {}", path_string(path), message.into()));
-        match self.location(path) {
+        self.error_at(&path_string(path), span_of(self.doc.as_item(), path), message)
+    }
+
+    /// An error about `path` at `span` (a key, where the key is the
+    /// problem), or at the file's start when there is no span.
+    fn error_at(&self, path: &str, span: Option<std::ops::Range<usize>>, message: impl Into<String>) -> Diagnostic {
+        let d = Diagnostic::error(Code::Scene, format!("{path}: {}", message.into()));
+        match self.located(span) {
             Some(at) => d.with_label(at, "here", true),
             None => d.at(Location::file_start(self.display)),
         }
@@ -86,6 +97,12 @@ impl Checker<'_> {
         self.vec3(path, v)?;
         let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
         if len > 1e-6 { Ok(v.map(|c| c / len)) } else { Err(self.error(path, "must not be the zero vector")) }
+    }
+
+    /// Whether the file itself sets `s`.
+    fn written(&self, s: &settings::Setting) -> bool {
+        let (table, key) = s.split();
+        self.doc.as_item().get(table).and_then(|t| t.get(key)).is_some()
     }
 
     fn required<T>(&self, path: &[Seg], v: Option<T>, why: &str) -> Checked<T> {
@@ -146,7 +163,8 @@ fn span_of(item: &toml_edit::Item, path: &[Seg]) -> Option<std::ops::Range<usize
 }
 
 pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnostic> {
-    let c = Checker { display, text, doc: toml_edit::Document::parse(text).ok() };
+    let doc = toml_edit::Document::parse(text).map_err(|e| syntax_error(display, text, e.message(), e.span()))?;
+    let c = Checker { display, text, doc };
     use Seg::{Index as I, Key as K};
 
     let width = c.int(&[K("output"), K("width")], f.output.width, 1, i64::from(MAX_SIDE))?;
@@ -344,16 +362,80 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
         });
     }
 
-    c.range(&[K("post"), K("exposure_ev"), ], f.post.exposure_ev, -24.0, 24.0)?;
-    let q = &f.quality;
-    let qp = |k| [K("quality"), K(k)];
-    let quality = Quality {
-        shadows: q.shadows,
-        shadow_map_size: c.int(&qp("shadow_map_size"), q.shadow_map_size, 64, 4096)?,
-        volume_steps: c.int(&qp("volume_steps"), q.volume_steps, 1, 1024)?,
-        volume_shadow_steps: c.int(&qp("volume_shadow_steps"), q.volume_shadow_steps, 1, 64)?,
-        volume_estimator: q.volume_estimator,
+    let mut scene = Scene {
+        width,
+        height,
+        camera: f.camera,
+        materials: f.materials,
+        objects,
+        lights,
+        media,
+        post: Post::default(),
+        quality: Quality::default(),
     };
+    settings(&c, &mut scene)?;
+    Ok(scene)
+}
 
-    Ok(Scene { width, height, camera: f.camera, materials: f.materials, objects, lights, media, post: f.post, quality })
+/// Reads `[post]` and `[quality]` through the settings table: an unknown key
+/// is an error at the key, a value of the wrong type or out of range an
+/// error at the value; then the ordered pairs are checked.
+fn settings(c: &Checker, scene: &mut Scene) -> Checked<()> {
+    // SETTINGS lists each table's entries together.
+    let mut tables: Vec<&str> = SETTINGS.iter().map(|s| s.split().0).collect();
+    tables.dedup();
+    let root = c.doc.as_table();
+    for name in tables {
+        let Some((key, item)) = root.get_key_value(name) else { continue };
+        let Some(table) = item.as_table_like() else {
+            return Err(c.error_at(name, item.span().or_else(|| key.span()), "must be a table"));
+        };
+        for (k, item) in table.iter() {
+            let path = format!("{name}.{k}");
+            let Some(setting) = settings::find(&path) else {
+                let known: Vec<&str> = SETTINGS.iter().filter(|s| s.split().0 == name).map(|s| s.split().1).collect();
+                let span = table.get_key_value(k).and_then(|(key, _)| key.span());
+                return Err(c.error_at(&path, span, format!("unknown key; expected one of: {}", known.join(", "))));
+            };
+            let value = match item.as_value() {
+                Some(v) => plain(v).map_err(|found| setting.expected(found)),
+                None => Err(setting.expected("a table")),
+            };
+            value.and_then(|v| setting.set(scene, &v)).map_err(|e| c.error_at(&path, item.span(), e))?;
+        }
+    }
+    for (low, high) in settings::ORDERED {
+        let (Some(lo), Some(hi)) = (settings::find(low), settings::find(high)) else { continue };
+        let (Some(a), Some(b)) = (settings::number(&(lo.get)(scene)), settings::number(&(hi.get)(scene))) else { continue };
+        if a < b {
+            continue;
+        }
+        // At the upper value where the file has one, else at the lower.
+        return Err(if c.written(hi) || !c.written(lo) {
+            c.error(&segs(hi), format!("must be greater than {low} ({a})"))
+        } else {
+            c.error(&segs(lo), format!("must be less than {high} ({b})"))
+        });
+    }
+    Ok(())
+}
+
+fn segs(s: &settings::Setting) -> [Seg; 2] {
+    let (table, key) = s.split();
+    [Seg::Key(table), Seg::Key(key)]
+}
+
+/// A TOML value as an override carries it; other kinds of value are
+/// described for the error.
+fn plain(v: &toml_edit::Value) -> Result<Value, &'static str> {
+    use toml_edit::Value as T;
+    match v {
+        T::Boolean(b) => Ok(Value::Bool(*b.value())),
+        T::Integer(i) => Ok(Value::Int(*i.value())),
+        T::Float(f) => Ok(Value::Float(*f.value())),
+        T::String(s) => Ok(Value::Text(s.value().clone())),
+        T::Datetime(_) => Err("a date"),
+        T::Array(_) => Err("an array"),
+        T::InlineTable(_) => Err("a table"),
+    }
 }

@@ -1,0 +1,313 @@
+//! The `[post]` and `[quality]` settings, each declared once in `settings!`
+//! below: its typed field (what the renderer reads), default, type and
+//! range, label, the render passes it affects and when its control shows.
+//! Reading and checking the file (`super::validate`), overrides
+//! (`super::overrides::apply`) and the browser's controls
+//! (`super::overrides::controls`) all come from this one table, so they
+//! cannot disagree.
+
+use super::Scene;
+use super::overrides::Value;
+
+/// A setting's type and the values it accepts. Ranges are inclusive; `step`
+/// is the browser slider's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Kind {
+    Toggle,
+    Int { min: i64, max: i64, step: i64 },
+    Float { min: f64, max: f64, step: f64 },
+    /// The option names as written in the file.
+    Choice(&'static [&'static str]),
+}
+
+/// One entry of the table.
+pub struct Setting {
+    /// As written in the file: `post.exposure_ev`.
+    pub path: &'static str,
+    pub label: &'static str,
+    pub kind: Kind,
+    /// The render passes whose output changes with this setting.
+    pub affects: &'static [&'static str],
+    /// Whether the browser shows a control for it in this scene.
+    pub shown_when: fn(&Scene) -> bool,
+    /// The typed field's value.
+    pub get: fn(&Scene) -> Value,
+    /// Sets the typed field; false when `Value` is not of its type.
+    assign: fn(&mut Scene, &Value) -> bool,
+}
+
+impl Setting {
+    /// The table (`post`) and key (`exposure_ev`).
+    pub fn split(&self) -> (&'static str, &'static str) {
+        self.path.split_once('.').unwrap_or(("", self.path))
+    }
+
+    /// Checks `v` against the entry's type and range, then sets the typed
+    /// field. The message is written to follow the path (`post.x: …`).
+    pub fn set(&self, scene: &mut Scene, v: &Value) -> Result<(), String> {
+        self.check(v)?;
+        if (self.assign)(scene, v) { Ok(()) } else { Err(self.expected(&v.to_string())) }
+    }
+
+    /// Type and range, as the file and overrides both need.
+    pub fn check(&self, v: &Value) -> Result<(), String> {
+        match (self.kind, v) {
+            (Kind::Toggle, Value::Bool(_)) => Ok(()),
+            (Kind::Int { min, max, .. }, Value::Int(i)) => {
+                if (min..=max).contains(i) { Ok(()) } else { Err(format!("must be between {min} and {max}, not {i}")) }
+            }
+            (Kind::Float { min, max, .. }, Value::Int(_) | Value::Float(_)) => {
+                let f = number(v).unwrap_or(f64::NAN);
+                if !f.is_finite() {
+                    Err(format!("must be a finite number, not {f}"))
+                } else if (min..=max).contains(&f) {
+                    Ok(())
+                } else {
+                    Err(format!("must be between {min} and {max}, not {f}"))
+                }
+            }
+            (Kind::Choice(options), Value::Text(t)) => {
+                if options.contains(&t.as_str()) { Ok(()) } else { Err(format!("must be one of {}, not {t:?}", quoted(options))) }
+            }
+            _ => Err(self.expected(&v.to_string())),
+        }
+    }
+
+    /// The message for a value of the wrong type, `found` as the user wrote
+    /// it (`"high"`, `1.5`, `an array`).
+    pub fn expected(&self, found: &str) -> String {
+        let want = match self.kind {
+            Kind::Toggle => "true or false".to_owned(),
+            Kind::Int { .. } => "a whole number".to_owned(),
+            Kind::Float { .. } => "a number".to_owned(),
+            Kind::Choice(options) => format!("one of {}", quoted(options)),
+        };
+        format!("must be {want}, not {found}")
+    }
+}
+
+/// The entry for `path`, if it is a table setting.
+pub fn find(path: &str) -> Option<&'static Setting> {
+    SETTINGS.iter().find(|s| s.path == path)
+}
+
+/// Pairs of settings where the first must be less than the second; a
+/// violation is reported at the second.
+pub const ORDERED: &[(&str, &str)] = &[("post.auto_exposure_min_ev", "post.auto_exposure_max_ev")];
+
+pub fn number(v: &Value) -> Option<f64> {
+    match v {
+        Value::Int(i) => Some(*i as f64),
+        Value::Float(f) => Some(*f),
+        _ => None,
+    }
+}
+
+fn quoted(options: &[&str]) -> String {
+    options.iter().map(|o| format!("{o:?}")).collect::<Vec<_>>().join(", ")
+}
+
+/// A field type a setting can have: converts to and from the value a file,
+/// an override or a control carries.
+trait Typed: Sized {
+    fn to_value(&self) -> Value;
+    fn from_value(v: &Value) -> Option<Self>;
+}
+
+impl Typed for bool {
+    fn to_value(&self) -> Value {
+        Value::Bool(*self)
+    }
+    fn from_value(v: &Value) -> Option<Self> {
+        if let Value::Bool(b) = v { Some(*b) } else { None }
+    }
+}
+
+impl Typed for u32 {
+    fn to_value(&self) -> Value {
+        Value::Int(i64::from(*self))
+    }
+    fn from_value(v: &Value) -> Option<Self> {
+        if let Value::Int(i) = v { u32::try_from(*i).ok() } else { None }
+    }
+}
+
+/// The shortest decimal that reads back as `f`, so a control shows 0.1 as
+/// written, not 0.10000000149011612.
+pub fn float(f: f32) -> Value {
+    Value::Float(f.to_string().parse().unwrap_or(f64::from(f)))
+}
+
+impl Typed for f32 {
+    fn to_value(&self) -> Value {
+        float(*self)
+    }
+    fn from_value(v: &Value) -> Option<Self> {
+        number(v).map(|f| f as f32)
+    }
+}
+
+/// An enum whose variants are a setting's options, with their names as
+/// written in the file.
+macro_rules! choice {
+    ($(#[$m:meta])* $name:ident { $($(#[$vm:meta])* $variant:ident = $text:literal,)* }) => {
+        $(#[$m])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        pub enum $name { $($(#[$vm])* $variant,)* }
+
+        impl $name {
+            pub const NAMES: &[&str] = &[$($text),*];
+        }
+
+        impl Typed for $name {
+            fn to_value(&self) -> Value {
+                Value::Text(match self { $(Self::$variant => $text,)* }.to_owned())
+            }
+            fn from_value(v: &Value) -> Option<Self> {
+                match v {
+                    $(Value::Text(t) if t == $text => Some(Self::$variant),)*
+                    _ => None,
+                }
+            }
+        }
+    };
+}
+
+choice!(Tonemap {
+    Aces = "aces",
+    Reinhard = "reinhard",
+});
+
+choice!(
+    /// What the debug-view pass shows instead of the lit frame.
+    DebugView {
+        None = "none",
+        Normal = "normal",
+        Albedo = "albedo",
+        Roughness = "roughness",
+        Metallic = "metallic",
+        Depth = "depth",
+    }
+);
+
+choice!(
+    /// How each ray-march step integrates in-scattered light.
+    Estimator {
+        /// Scattered light × step length × transmittance at the step start:
+        /// biased, brightens as steps grow.
+        Constant = "constant",
+        /// The exact integral of in-scattering times transmittance over the
+        /// step for constant coefficients: energy-conserving at any step count.
+        Analytic = "analytic",
+    }
+);
+
+macro_rules! or_always {
+    () => {
+        always
+    };
+    ($f:expr) => {
+        $f
+    };
+}
+
+/// Declares each table's struct (a field per setting, `Default` from the
+/// settings' defaults) and `SETTINGS`, the table every other use reads.
+macro_rules! settings {
+    ($(
+        $(#[$tm:meta])*
+        $table:ident: $Struct:ident {
+            $(
+                $(#[$doc:meta])*
+                $field:ident: $ty:ty = $default:expr, $kind:expr, $label:literal, affects $affects:expr $(, shown_when $shown:expr)?;
+            )*
+        }
+    )*) => {
+        $(
+            $(#[$tm])*
+            #[derive(Debug, Clone, PartialEq)]
+            pub struct $Struct {
+                $($(#[$doc])* pub $field: $ty,)*
+            }
+
+            impl Default for $Struct {
+                fn default() -> Self {
+                    $Struct { $($field: $default,)* }
+                }
+            }
+        )*
+
+        /// Every setting, in the order the browser shows them.
+        pub static SETTINGS: &[Setting] = &[$($(
+            Setting {
+                path: concat!(stringify!($table), ".", stringify!($field)),
+                label: $label,
+                kind: $kind,
+                affects: &$affects,
+                shown_when: or_always!($($shown)?),
+                get: |s| Typed::to_value(&s.$table.$field),
+                assign: |s, v| match <$ty as Typed>::from_value(v) {
+                    Some(x) => {
+                        s.$table.$field = x;
+                        true
+                    }
+                    None => false,
+                },
+            },
+        )*)*];
+    };
+}
+
+fn always(_: &Scene) -> bool {
+    true
+}
+
+fn has_media(s: &Scene) -> bool {
+    !s.media.is_empty()
+}
+
+fn auto_exposure(s: &Scene) -> bool {
+    s.post.auto_exposure
+}
+
+/// Every pass drawn as a fullscreen triangle.
+const FULLSCREEN: [&str; 6] = ["test_pattern", "lighting", "volumes", "exposure", "tonemap", "debug_view"];
+
+use Kind::{Choice, Float, Int, Toggle};
+
+settings! {
+    /// `[post]`: exposure, tonemapping and the debug view.
+    post: Post {
+        /// Exposure in stops: the HDR image is multiplied by 2^EV. With auto
+        /// exposure on, the compensation added to the metered exposure.
+        exposure_ev: f32 = 0.0, Float { min: -24.0, max: 24.0, step: 0.1 },
+            "Exposure (EV; compensation with auto exposure)", affects ["exposure"];
+        /// Meter the frame and adapt the exposure over time.
+        auto_exposure: bool = false, Toggle, "Auto exposure", affects ["exposure_histogram", "exposure_adapt", "exposure"];
+        /// How fast the adapted exposure follows the metered one.
+        auto_exposure_speed: f32 = 3.0, Float { min: 0.1, max: 30.0, step: 0.1 },
+            "Adaptation speed (EV/s)", affects ["exposure_adapt"], shown_when auto_exposure;
+        /// The luminance range the meter considers, in EV.
+        auto_exposure_min_ev: f32 = -8.0, Float { min: -16.0, max: 16.0, step: 0.5 },
+            "Metering range min (EV)", affects ["exposure_histogram", "exposure_adapt"], shown_when auto_exposure;
+        auto_exposure_max_ev: f32 = 8.0, Float { min: -16.0, max: 16.0, step: 0.5 },
+            "Metering range max (EV)", affects ["exposure_histogram", "exposure_adapt"], shown_when auto_exposure;
+        tonemap: Tonemap = Tonemap::Aces, Choice(Tonemap::NAMES), "Tonemap", affects ["tonemap"];
+        debug_view: DebugView = DebugView::None, Choice(DebugView::NAMES), "Debug view", affects ["debug_view"];
+        /// Draw fullscreen passes as two triangles instead of one, to compare.
+        two_triangles: bool = false, Toggle, "Fullscreen as two triangles", affects FULLSCREEN;
+    }
+
+    /// `[quality]`: shadow and ray-march costs.
+    quality: Quality {
+        shadows: bool = true, Toggle, "Shadows", affects ["shadows", "lighting", "volumes"];
+        shadow_map_size: u32 = 1024, Int { min: 64, max: 4096, step: 64 }, "Shadow map size", affects ["shadows"];
+        /// Ray-march steps per pixel through the media.
+        volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volumes"], shown_when has_media;
+        /// Steps of the march toward each light (self-shadowing).
+        volume_shadow_steps: u32 = 6, Int { min: 1, max: 64, step: 1 },
+            "Volume shadow steps", affects ["volumes"], shown_when has_media;
+        volume_estimator: Estimator = Estimator::Analytic, Choice(Estimator::NAMES),
+            "In-scattering estimator", affects ["volumes"], shown_when has_media;
+    }
+}
