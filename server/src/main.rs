@@ -194,6 +194,8 @@ enum Color {
 }
 
 fn main() -> ExitCode {
+    // SAFETY: the first thing the process does, before any thread exists.
+    unsafe { loupe::gpu::provide_runtime_dir() };
     let cli = Cli::parse();
     match cli.command {
         Command::Check(args) => run_check(args),

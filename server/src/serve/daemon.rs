@@ -683,7 +683,7 @@ impl Daemon {
             version: env!("CARGO_PKG_VERSION").to_owned(),
             adapter: self.gpu.adapter_name(),
             cpu_adapter: self.gpu.is_cpu(),
-            features: format!("{:?}", self.gpu.features).split(" | ").map(str::to_owned).collect(),
+            features: self.gpu.feature_names(),
             degraded: self.gpu.degraded.clone(),
             scene: library::display_path(&self.config.scene_path),
             frame: shared::read(&self.shared.status).frame,
