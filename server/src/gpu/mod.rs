@@ -6,6 +6,8 @@
 //! them is how loupe keeps the last good pipeline.
 
 pub mod pipeline;
+#[cfg(test)]
+pub mod testing;
 
 use std::sync::{Arc, Mutex};
 
