@@ -182,7 +182,7 @@ struct CheckArgs {
     /// (`float64,shader-int64,shader-float16`) or `all`; what every WebGPU
     /// device has is always allowed. Default: `capabilities` in loupe.toml,
     /// else with a device what its adapter supports, and without one
-    /// `primitive-index,shader-float16,subgroup,subgroup-barrier` (what
+    /// `primitive-index,subgroup,subgroup-barrier,shader-float16` (what
     /// loupe can request).
     #[arg(long, value_name = "LIST", value_parser = check::capabilities::parse_arg)]
     capabilities: Option<naga::valid::Capabilities>,

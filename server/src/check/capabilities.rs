@@ -6,10 +6,13 @@
 //! `float64`, `SHADER_INT64` is `shader-int64`). A list replaces the default
 //! set; what every WebGPU device has is always allowed on top of it.
 
+use std::sync::Arc;
+
 use naga::valid::Capabilities;
 
 use crate::diag::{Code, Diagnostic};
 use crate::gpu;
+use crate::shader::SourceFile;
 
 /// What the shader uses, for the capabilities a shader author meets most.
 const USES: &[(Capabilities, &str)] = &[
@@ -30,6 +33,15 @@ const USES: &[(Capabilities, &str)] = &[
     (Capabilities::SHADER_INT64_ATOMIC_ALL_OPS, "64-bit integer atomics"),
     (Capabilities::SHADER_FLOAT32_ATOMIC, "`atomic<f32>`"),
     (Capabilities::SHADER_BARYCENTRICS, "`@builtin(barycentric)`"),
+];
+
+/// Type names that need a capability: where naga reports no span (type
+/// errors have none), the first one written is where the shader uses it.
+const TYPE_NAMES: &[(Capabilities, &[&str])] = &[
+    (Capabilities::FLOAT64, &["f64"]),
+    (Capabilities::SHADER_INT64, &["i64", "u64"]),
+    (Capabilities::SHADER_FLOAT16, &["f16"]),
+    (Capabilities::SHADER_INT16, &["i16", "u16"]),
 ];
 
 /// What every WebGPU-compliant device allows: always part of the set.
@@ -80,8 +92,10 @@ pub fn parse_arg(s: &str) -> Result<Capabilities, String> {
 /// Rewrites naga's "requires the `naga::valid::Capabilities::FLOAT64`
 /// flag" (or "Capability Capabilities(SHADER_INT64) is required") into
 /// what the shader uses and how to allow it; the location and naga's own
-/// words (as a note) are kept. Other diagnostics pass through unchanged.
-pub fn explain(d: Diagnostic, checked: Capabilities) -> Diagnostic {
+/// words (as a note) are kept. naga gives type errors no span: those are
+/// located at the first such type name written in `files` (the shader,
+/// then what it imports). Other diagnostics pass through unchanged.
+pub fn explain(d: Diagnostic, checked: Capabilities, files: &[Arc<SourceFile>]) -> Diagnostic {
     if d.code != Code::Validation || !d.message.contains("apabilit") {
         return d;
     }
@@ -115,7 +129,34 @@ pub fn explain(d: Diagnostic, checked: Capabilities) -> Diagnostic {
     out = out.with_note(format!("checked with: {}", describe(checked)));
     out.notes.push(format!("naga: {}", d.message));
     out.notes.extend(d.notes);
+    if out.labels.is_empty() {
+        let names: Vec<&str> = TYPE_NAMES.iter().filter(|(c, _)| needed.contains(*c)).flat_map(|(_, n)| n.iter().copied()).collect();
+        if let Some((loc, name)) = files.iter().find_map(|f| first_word(f, &names)) {
+            out.location = None;
+            out = out.with_label(loc, format!("`{name}` used here"), true);
+        }
+    }
     out
+}
+
+/// The first of `words` written in `file` as a whole word, outside `//`
+/// comments.
+fn first_word(file: &SourceFile, words: &[&str]) -> Option<(crate::diag::Location, String)> {
+    let ident = |c: char| c.is_ascii_alphanumeric() || c == '_';
+    let mut offset = 0;
+    for line in file.text.split_inclusive('\n') {
+        let code = line.split("//").next().unwrap_or_default();
+        for (at, _) in code.char_indices() {
+            let before = code[..at].chars().next_back();
+            let Some(word) = words.iter().find(|w| code[at..].starts_with(**w)) else { continue };
+            let after = code[at + word.len()..].chars().next();
+            if !before.is_some_and(ident) && !after.is_some_and(ident) {
+                return Some((file.location(offset + at..offset + at + word.len()), (*word).to_owned()));
+            }
+        }
+        offset += line.len();
+    }
+    None
 }
 
 /// The wgpu features (or downlevel flags) that give a device `caps`, by
@@ -165,6 +206,14 @@ mod tests {
     }
 
     #[test]
+    fn the_documented_default_is_the_real_one() {
+        let default = describe(gpu::capabilities_without_device());
+        assert_eq!(default, "primitive-index,subgroup,subgroup-barrier,shader-float16");
+        assert!(include_str!("../../../README.md").contains(&format!("without one: `{default}`")), "README states {default}");
+        assert!(include_str!("../main.rs").contains(&format!("/// `{default}`")), "--help states {default}");
+    }
+
+    #[test]
     fn describe_leaves_out_the_baseline() {
         assert_eq!(describe(baseline()), "none beyond WebGPU's");
         assert_eq!(describe(parse(["shader-int64,float64"]).unwrap()), "float64,shader-int64");
@@ -178,7 +227,7 @@ mod tests {
     #[test]
     fn a_missing_capability_is_explained_in_the_users_words() {
         let checked = parse(["shader-float16"]).unwrap();
-        let d = explain(naga_error("Using `f64` values requires the `naga::valid::Capabilities::FLOAT64` flag"), checked);
+        let d = explain(naga_error("Using `f64` values requires the `naga::valid::Capabilities::FLOAT64` flag"), checked, &[]);
         assert!(d.message.contains("`f64` (64-bit floats)") && d.message.contains("`float64` capability"), "{}", d.message);
         let notes = d.notes.join("\n");
         assert!(notes.contains("--capabilities float64,shader-float16"), "{notes}");
@@ -188,7 +237,7 @@ mod tests {
         let loc = d.location.as_ref().unwrap();
         assert_eq!((loc.line, loc.column), (3, 9), "the location is kept");
 
-        let d = explain(naga_error("Capability Capabilities(SHADER_INT64) is required"), checked);
+        let d = explain(naga_error("Capability Capabilities(SHADER_INT64) is required"), checked, &[]);
         assert!(d.message.contains("`i64`/`u64`") && d.message.contains("`shader-int64`"), "{}", d.message);
         assert!(d.notes.join("\n").contains("SHADER_INT64"));
     }
@@ -196,9 +245,27 @@ mod tests {
     #[test]
     fn other_diagnostics_pass_through() {
         let d = naga_error("Expression [3] is invalid");
-        assert_eq!(explain(d.clone(), baseline()).message, d.message);
+        assert_eq!(explain(d.clone(), baseline(), &[]).message, d.message);
         // A capability the check had is not the problem.
         let d = naga_error("Capability Capabilities(FLOAT64) is required");
-        assert_eq!(explain(d.clone(), Capabilities::all()).message, d.message);
+        assert_eq!(explain(d.clone(), Capabilities::all(), &[]).message, d.message);
+    }
+
+    #[test]
+    fn a_type_error_without_a_span_points_at_the_type_written() {
+        let file = |name: &str, text: &str| Arc::new(SourceFile::from_text(name.into(), name.into(), text.into()));
+        let files = [
+            file("main.wgsl", "// no u64 here\nfn f() -> u32 { return 1u; }\n"),
+            file("lib.wgsl", "// i64 in a comment\nfn g(x: u32) -> u64x { return x; }\nfn h(x: u64) -> u64 { return x; }\n"),
+        ];
+        let spanless = Diagnostic::error(Code::Validation, "Using `u64` values requires the `naga::valid::Capabilities::SHADER_INT64` flag")
+            .at(Location::file_start("main.wgsl"));
+        let d = explain(spanless, baseline(), &files);
+        let loc = d.location.as_ref().unwrap();
+        assert_eq!((loc.file.as_str(), loc.line, loc.column, loc.end_column), ("lib.wgsl", 3, 9, 12), "{d:?}");
+        assert_eq!(d.labels[0].message, "`u64` used here");
+        // naga's own span wins.
+        let d = explain(naga_error("Using `f64` values requires the `naga::valid::Capabilities::FLOAT64` flag"), baseline(), &files);
+        assert_eq!(d.location.unwrap().line, 3);
     }
 }

@@ -333,8 +333,11 @@ fn check_file(
             }
             Ok(None) => {}
             Err(ds) => {
+                // The shader, then what it imports: where a capability
+                // error without a span is looked for.
+                let sources: Vec<Arc<SourceFile>> = std::iter::once(file.clone()).chain(lib.dependencies(file).unwrap_or_default()).collect();
                 for d in ds {
-                    let d = capabilities::explain(d, caps);
+                    let d = capabilities::explain(d, caps, &sources);
                     let d = if permutations.len() > 1 { d.with_note(format!("permutation: [{}]", defs_key(defs))) } else { d };
                     if !diagnostics.iter().any(|x| x.to_string() == d.to_string()) {
                         diagnostics.push(d);

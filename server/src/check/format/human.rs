@@ -41,10 +41,10 @@ pub fn write_diagnostics(diags: &[Diagnostic], color: bool, out: &mut dyn io::Wr
 pub fn read_sources(diags: &[Diagnostic], files: &mut SourceFiles) {
     for d in diags {
         for l in d.location.iter().chain(d.labels.iter().map(|l| &l.location)) {
-            if files.get(&l.file).is_none() {
-                if let Ok(text) = std::fs::read_to_string(&l.file) {
-                    files.insert(l.file.clone(), text.into());
-                }
+            if files.get(&l.file).is_none()
+                && let Ok(text) = std::fs::read_to_string(&l.file)
+            {
+                files.insert(l.file.clone(), text.into());
             }
         }
     }
