@@ -16,11 +16,10 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
+use naga::valid::Capabilities;
 use rayon::prelude::*;
 
 use crate::diag::{Code, Diagnostic, Location, Severity, SourceFiles};
-use naga::valid::Capabilities;
-
 use crate::gpu::{self, Gpu, pipeline::{self, PipelineSpec}};
 use crate::shader::{Compose, Composed, Library, NagaOil, ShaderDefs, SourceFile, defs_key, library};
 
@@ -142,7 +141,7 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
             .par_iter()
             .with_max_len(1)
             .map(|display| match unreadable.get(display) {
-                Some(d) => Checked::failed(display, [d.clone()]),
+                Some(d) => Checked::uncompiled(display, ModuleKind::Entry, [d.clone()]),
                 None => check_file(&lib, &lib.get(display).expect("read above").clone(), &specs_by_file, caps),
             })
             .collect()
@@ -249,7 +248,7 @@ fn check_scene(path: &Path) -> Checked {
     let start = Instant::now();
     let display = library::display_path(path);
     let diagnostics = guarded(&display, "the scene loader", || crate::scene::load(path).map_err(|d| vec![d])).err().unwrap_or_default();
-    Checked { kind: ModuleKind::Scene, duration: start.elapsed(), ..Checked::failed(&display, diagnostics) }
+    Checked { duration: start.elapsed(), ..Checked::uncompiled(&display, ModuleKind::Scene, diagnostics) }
 }
 
 fn create_checked(gpu: &Gpu, spec: &PipelineSpec, defs: &ShaderDefs, composed: &Composed, lib: &Library, display: &str) -> Result<(), Vec<Diagnostic>> {
@@ -282,10 +281,11 @@ struct Checked {
 }
 
 impl Checked {
-    fn failed(display: &str, diagnostics: impl IntoIterator<Item = Diagnostic>) -> Self {
+    /// A file with nothing composed: unreadable WGSL, or a scene.
+    fn uncompiled(display: &str, kind: ModuleKind, diagnostics: impl IntoIterator<Item = Diagnostic>) -> Self {
         Checked {
             display: display.to_owned(),
-            kind: ModuleKind::Entry,
+            kind,
             permutations: Vec::new(),
             diagnostics: diagnostics.into_iter().collect(),
             composed: Vec::new(),
