@@ -31,8 +31,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Compose, parse and validate every WGSL module and create every
-    /// pipeline the renderer uses: a shader gate for CI.
+    /// Compose, parse and validate every WGSL module, load every scene,
+    /// and create every pipeline the renderer uses: a gate for CI.
     ///
     /// Exit codes: 0 clean; 1 errors (or warnings with --deny-warnings);
     /// 2 bad usage or unreadable input; 3 --device given and no GPU adapter.
@@ -166,21 +166,32 @@ struct ServeArgs {
 
 #[derive(clap::Args)]
 struct CheckArgs {
-    /// Files or directories to check (directories are searched for *.wgsl).
-    /// Default: the project's shaders/ and scenes/.
+    /// Files or directories to check: directories are searched for *.wgsl,
+    /// and for *.toml scenes inside a directory named `scenes`; a file
+    /// named here is a scene when it ends in .toml, else WGSL.
+    /// Default: `paths` in loupe.toml, else the project's shaders/ and scenes/.
     paths: Vec<PathBuf>,
-    /// Output format.
-    #[arg(long, value_enum, default_value_t = format::Format::Human)]
-    format: format::Format,
+    /// Output format [default: `format` in loupe.toml, else human].
+    #[arg(long, value_enum)]
+    format: Option<format::Format>,
     /// Skip pipeline creation: check sources only, never open a device.
     #[arg(long, conflicts_with = "device")]
     no_device: bool,
     /// Require a device: exit 3 when no GPU adapter exists.
     #[arg(long)]
     device: bool,
-    /// Treat warnings as errors for the exit code.
-    #[arg(long)]
-    deny_warnings: bool,
+    /// Treat warnings as errors for the exit code; `--deny-warnings=false`
+    /// overrides loupe.toml's `deny_warnings = true`.
+    #[arg(long, value_name = "BOOL", num_args = 0..=1, require_equals = true, default_missing_value = "true")]
+    deny_warnings: Option<bool>,
+    /// Shader capabilities to validate with, comma-separated naga names
+    /// (`float64,shader-int64,shader-float16`) or `all`; what every WebGPU
+    /// device has is always allowed. Default: `capabilities` in loupe.toml,
+    /// else with a device what its adapter supports, and without one
+    /// `primitive-index,subgroup,subgroup-barrier,shader-float16` (what
+    /// loupe can request).
+    #[arg(long, value_name = "LIST", value_parser = check::capabilities::parse_arg)]
+    capabilities: Option<naga::valid::Capabilities>,
     /// Colour in the human format.
     #[arg(long, value_enum, default_value_t = Color::Auto)]
     color: Color,
@@ -200,6 +211,8 @@ enum Color {
 }
 
 fn main() -> ExitCode {
+    // SAFETY: the first thing the process does, before any thread exists.
+    unsafe { loupe::gpu::provide_runtime_dir() };
     let cli = Cli::parse();
     match cli.command {
         Command::Check(args) => run_check(args),
@@ -207,6 +220,12 @@ fn main() -> ExitCode {
         Command::Render(args) => run_render(args),
         Command::Bench(args) => run_bench(args),
     }
+}
+
+/// Prints diagnostics on stderr the way `loupe check` prints them.
+fn print_diagnostics(diags: &[loupe::diag::Diagnostic]) {
+    let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
+    let _ = format::human::write_diagnostics(diags, color, &mut std::io::stderr().lock());
 }
 
 /// Prints input errors the way `loupe check` does and picks the exit code.
@@ -217,8 +236,7 @@ fn offline_failed(cmd: &str, e: offline::OfflineError) -> ExitCode {
             ExitCode::from(exit::NO_DEVICE)
         }
         offline::OfflineError::Input(diags) => {
-            let color = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
-            let _ = format::human::write_diagnostics(&diags, color, &mut std::io::stderr().lock());
+            print_diagnostics(&diags);
             ExitCode::from(exit::ERRORS)
         }
         offline::OfflineError::Io(e) => {
@@ -314,11 +332,21 @@ fn run_serve(args: ServeArgs) -> ExitCode {
 }
 
 fn run_check(args: CheckArgs) -> ExitCode {
+    // loupe.toml's defaults, then the flags over them.
+    let defaults = match check::project::read(&args.root) {
+        Ok(d) => d,
+        Err(d) => {
+            print_diagnostics(&[d]);
+            return ExitCode::from(exit::USAGE);
+        }
+    };
     let shader_root = args.root.join("shaders");
-    let paths = if args.paths.is_empty() {
-        [shader_root.clone(), args.root.join("scenes")].into_iter().filter(|p| p.exists()).collect()
-    } else {
+    let paths = if !args.paths.is_empty() {
         args.paths.clone()
+    } else if let Some(paths) = defaults.paths {
+        paths
+    } else {
+        [shader_root.clone(), args.root.join("scenes")].into_iter().filter(|p| p.exists()).collect()
     };
     if paths.is_empty() {
         eprintln!("loupe check: nothing to check: no paths given and no shaders/ or scenes/ under {}", args.root.display());
@@ -329,7 +357,8 @@ fn run_check(args: CheckArgs) -> ExitCode {
         (false, true) => DeviceMode::Required,
         (false, false) => DeviceMode::Auto,
     };
-    let (report, files) = match check::run(&CheckOptions { paths, shader_root, device }) {
+    let capabilities = args.capabilities.or(defaults.capabilities);
+    let (report, files) = match check::run(&CheckOptions { paths, shader_root, device, capabilities }) {
         Ok(r) => r,
         Err(check::CheckError::BadPath(e)) => {
             eprintln!("loupe check: cannot read input: {e}");
@@ -347,13 +376,14 @@ fn run_check(args: CheckArgs) -> ExitCode {
     };
     let opts = format::Options { color, timings: !args.no_timings };
     let mut out = std::io::stdout().lock();
-    if let Err(e) = format::write(args.format, &report, &files, &opts, &mut out) {
+    let format = args.format.or(defaults.format).unwrap_or(format::Format::Human);
+    if let Err(e) = format::write(format, &report, &files, &opts, &mut out) {
         if e.kind() != std::io::ErrorKind::BrokenPipe {
             eprintln!("loupe check: cannot write output: {e}");
             return ExitCode::from(exit::USAGE);
         }
     }
-    match report.exit_code(args.deny_warnings) {
+    match report.exit_code(args.deny_warnings.or(defaults.deny_warnings).unwrap_or(false)) {
         0 => ExitCode::from(exit::OK),
         _ => ExitCode::from(exit::ERRORS),
     }

@@ -24,6 +24,12 @@ fn project_shaders_are_clean_with_pipelines_created() {
     run.code(0).stdout_has("0 errors");
     // With a device (lavapipe here), every pipeline spec is created.
     run.check(run.stdout.contains("pipelines on"), "expected pipelines to be created on an adapter");
+    // The default paths hold the scenes too, each one checked.
+    let junit = loupe(&repo(), &["check", "--no-device", "--format", "junit"]);
+    junit.code(0);
+    for scene in ["minimal", "pattern", "showcase", "volume"] {
+        junit.check(junit.stdout.contains(&format!("name=\"scenes/{scene}.toml\"")), &format!("scenes/{scene}.toml was checked"));
+    }
 }
 
 #[test]
@@ -210,4 +216,162 @@ fn binding_mismatch(stdout: &str) -> serde_json::Value {
         .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
         .find(|d| d["code"] == "binding-mismatch")
         .unwrap_or_else(|| panic!("no binding-mismatch: {stdout}"))
+}
+
+#[test]
+fn clean_runs_print_no_error_lines() {
+    // Without XDG_RUNTIME_DIR, creating a Vulkan instance on Mesa once made
+    // libwayland print `error: XDG_RUNTIME_DIR is invalid or not set` for
+    // every clean run: removed here so the test holds on a desktop too.
+    let p = Project::copy_of_repo("quiet");
+    for args in [
+        &["check", "--no-timings"][..],
+        &["render", "--scene", "scenes/minimal.toml", "--out", "out", "--size", "64x36"][..],
+    ] {
+        let out = std::process::Command::new(loupe_tests::loupe_bin())
+            .args(args)
+            .current_dir(&p.root)
+            .env_remove("XDG_RUNTIME_DIR")
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "loupe {}: {stderr}", args.join(" "));
+        let errors: Vec<&str> = stderr.lines().filter(|l| l.to_lowercase().contains("error")).collect();
+        assert!(errors.is_empty(), "loupe {} printed error lines: {errors:?}", args.join(" "));
+    }
+}
+
+/// A project with a clean shader and a scene whose fourth line holds an
+/// unknown field.
+fn broken_scene_project() -> Project {
+    let p = Project::empty("bad-scene");
+    p.write("shaders/ok.wgsl", "@fragment\nfn fs_main() -> @location(0) vec4<f32> { return vec4(1.0); }\n");
+    p.write("scenes/bad.toml", "[output]\nwidth = 64\nheight = 64\ncolour = 1\n");
+    p
+}
+
+#[test]
+fn a_broken_scene_fails_the_run_at_its_line_and_column() {
+    let p = broken_scene_project();
+    p.run(&["check", "--no-device", "--color", "never"])
+        .code(1)
+        .stdout_has("error[scene]: unknown field `colour`")
+        .stdout_has("scenes/bad.toml:4:1")
+        .stdout_has("colour = 1")
+        .stdout_has("1 error");
+    let run = p.run(&["check", "--no-device", "--format", "json"]);
+    run.code(1);
+    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().expect("one diagnostic")).unwrap();
+    assert_eq!((d["file"].as_str(), d["line"].as_u64(), d["column"].as_u64()), (Some("scenes/bad.toml"), Some(4), Some(1)), "{d}");
+    assert_eq!(d["code"], "scene");
+    // Every other format carries it too.
+    let github = p.run(&["check", "--no-device", "--format", "github"]);
+    github.code(1).stdout_has("file=scenes/bad.toml,line=4,col=1");
+    let sarif = p.run(&["check", "--no-device", "--format", "sarif"]);
+    sarif.code(1).stdout_has("\"uri\": \"scenes/bad.toml\"");
+    let junit = p.run(&["check", "--no-device", "--format", "junit"]);
+    junit.code(1).stdout_has("name=\"scenes/bad.toml\"").stdout_has("<failure ");
+}
+
+#[test]
+fn a_scene_named_on_the_command_line_is_checked_as_a_scene() {
+    let p = broken_scene_project();
+    let run = p.run(&["check", "--no-device", "--format", "json", "scenes/bad.toml"]);
+    run.code(1);
+    let codes: Vec<String> =
+        run.stdout.lines().map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()["code"].as_str().unwrap().to_owned()).collect();
+    assert_eq!(codes, ["scene"], "the scene's error, not a WGSL parse error: {}", run.stdout);
+}
+
+#[test]
+fn a_missing_gltf_is_located_at_the_mesh_value() {
+    let p = Project::empty("missing-gltf");
+    let scene = "[output]\nwidth = 64\nheight = 64\n\n[[materials]]\nname = \"m\"\n\n[[objects]]\nname = \"o\"\nmesh = \"meshes/nope.gltf\"\nmaterial = \"m\"\n";
+    p.write("scenes/gone.toml", scene);
+    let run = p.run(&["check", "--no-device", "--format", "json"]);
+    run.code(1);
+    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+    assert_eq!((d["file"].as_str(), d["line"].as_u64(), d["column"].as_u64()), (Some("scenes/gone.toml"), Some(10), Some(8)), "{d}");
+    assert!(d["message"].as_str().unwrap().contains("meshes/nope.gltf"), "{d}");
+}
+
+#[test]
+fn toml_files_that_are_not_scenes_are_left_alone() {
+    let p = Project::empty("not-scenes");
+    p.write("shaders/ok.wgsl", "@fragment\nfn fs_main() -> @location(0) vec4<f32> { return vec4(1.0); }\n");
+    p.write("loupe.toml", "[check]\ndeny_warnings = true\n");
+    p.write("Cargo.toml", "[package]\nname = \"x\"\n");
+    p.write("scenes/loupe.toml", "[check]\n");
+    // Searching the whole project finds the shader, not the TOML files
+    // outside scenes/, and never the project file.
+    let run = p.run(&["check", "--no-device", "--format", "junit", "."]);
+    run.code(0);
+    assert_eq!(run.stdout.matches("<testcase ").count(), 1, "{}", run.stdout);
+    run.check(!run.stdout.contains(".toml"), "no TOML file was checked");
+}
+
+/// A compute shader using f64 in a function's signature.
+const F64_SHADER: &str = "fn twice(x: f64) -> f64 {\n    return x * 2.0;\n}\n\n@compute @workgroup_size(1)\nfn main() {\n    _ = twice(1.0);\n}\n";
+
+#[test]
+fn a_missing_capability_is_named_with_the_flag_that_allows_it() {
+    let p = Project::empty("capabilities");
+    p.write("shaders/wide.wgsl", F64_SHADER);
+    let run = p.run(&["check", "--no-device", "--format", "json"]);
+    run.code(1);
+    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().unwrap()).unwrap();
+    let message = d["message"].as_str().unwrap();
+    assert!(message.contains("`f64`") && message.contains("`float64` capability"), "{d}");
+    assert!(d["notes"].to_string().contains("--capabilities float64"), "{d}");
+    // At the type as written: line 1, `x: f64`.
+    assert_eq!((d["file"].as_str(), d["line"].as_u64(), d["column"].as_u64()), (Some("shaders/wide.wgsl"), Some(1), Some(13)), "{d}");
+    p.run(&["check", "--no-device", "--capabilities", "float64"]).code(0).stdout_has("0 errors");
+    p.run(&["check", "--no-device", "--capabilities", "all"]).code(0);
+    // A list replaces the default: f64 alone does not allow i64.
+    p.write("shaders/wide.wgsl", F64_SHADER.replace("_ = twice(1.0);", "_ = twice(1.0);\n    let n: i64 = 1li;"));
+    p.run(&["check", "--no-device", "--capabilities", "float64", "--color", "never"]).code(1).stdout_has("`shader-int64` capability");
+    p.run(&["check", "--no-device", "--capabilities", "float64,shader-int64"]).code(0);
+    let bad = p.run(&["check", "--no-device", "--capabilities", "float64,doubles"]);
+    bad.code(2).stderr_has("unknown capability `doubles`").stderr_has("shader-int64").stderr_has("shader-float16");
+}
+
+#[test]
+fn loupe_toml_sets_the_defaults_and_flags_override_them() {
+    let p = Project::empty("project-file");
+    p.write("src/wide.wgsl", F64_SHADER);
+    p.write("src/orphan.wgsl", "fn helper() -> f32 { return 1.0; }\n");
+    // No shaders/ or scenes/: only loupe.toml's paths lead to src/.
+    p.write("loupe.toml", "[check]\npaths = [\"src\"]\ncapabilities = [\"float64\"]\nformat = \"json\"\n");
+    let run = p.run(&["check", "--no-device"]);
+    run.code(0);
+    let d: serde_json::Value = serde_json::from_str(run.stdout.lines().next().expect("the orphan's warning, as JSON")).unwrap();
+    assert_eq!((d["file"].as_str(), d["code"].as_str()), (Some("src/orphan.wgsl"), Some("unused-module")), "{d}");
+    // Flags win: the format, the capabilities, the paths.
+    p.run(&["check", "--no-device", "--format", "human"]).code(0).stdout_has("1 warning");
+    p.run(&["check", "--no-device", "--capabilities", "shader-int64", "--format", "human"]).code(1).stdout_has("`float64` capability");
+    p.run(&["check", "--no-device", "src/orphan.wgsl"]).code(0).stdout_has("\"src/orphan.wgsl\"");
+    // deny_warnings, and the flag's way back.
+    p.write("loupe.toml", "[check]\npaths = [\"src\"]\ncapabilities = \"all\"\ndeny_warnings = true\n");
+    p.run(&["check", "--no-device"]).code(1).stdout_has("1 warning");
+    p.run(&["check", "--no-device", "--deny-warnings=false"]).code(0);
+    p.write("loupe.toml", "[check]\npaths = [\"src\"]\ncapabilities = \"all\"\n");
+    p.run(&["check", "--no-device", "--deny-warnings"]).code(1);
+}
+
+#[test]
+fn a_bad_project_file_is_a_located_usage_error() {
+    let p = Project::empty("bad-project-file");
+    p.write("shaders/ok.wgsl", "@fragment\nfn fs_main() -> @location(0) vec4<f32> { return vec4(1.0); }\n");
+    for (text, at, says) in [
+        ("[check]\nformat = \"json\"\nfromat = \"json\"\n", "loupe.toml:3:1", "unknown key `fromat`"),
+        ("[check]\ndeny_warnings = \"yes\"\n", "loupe.toml:2:17", "true or false"),
+        ("[check]\nformat = \"xml\"\n", "loupe.toml:2:10", "not \"xml\""),
+        ("[check]\ncapabilities = [\"f64\"]\n", "loupe.toml:2:17", "unknown capability `f64`"),
+        ("[check]\npaths = \"shaders\"\n", "loupe.toml:2:9", "an array of paths"),
+        ("[serve]\nport = 1\n", "loupe.toml:1:2", "unknown table `serve`"),
+        ("[check\n", "loupe.toml:1:", "error[project-file]"),
+    ] {
+        p.write("loupe.toml", text);
+        p.run(&["check", "--no-device"]).code(2).stderr_has(at).stderr_has(says).stderr_has("error[project-file]");
+    }
 }

@@ -1,5 +1,5 @@
 //! Golden tests in naga's manner: each directory under tests/golden/ is a
-//! tiny project of bad shaders, checked with `loupe check --no-device`; its
+//! tiny project of bad shaders or scenes, checked with `loupe check --no-device`; its
 //! human-format output must equal the checked-in `expected.txt` exactly.
 //!
 //! Regenerate after an intended change with:

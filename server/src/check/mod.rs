@@ -1,9 +1,11 @@
 //! `loupe check`: the CI shader gate. Reads every WGSL file, composes and
 //! validates each entry shader under every shader-def permutation the
-//! renderer uses, and, with a device, creates every pipeline exactly as the
-//! renderer does.
+//! renderer uses, loads every scene with the meshes it references, and,
+//! with a device, creates every pipeline exactly as the renderer does.
 
+pub mod capabilities;
 pub mod format;
+pub mod project;
 mod report;
 
 pub use report::{CheckReport, ModuleKind, ModuleResult};
@@ -13,10 +15,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
+use naga::valid::Capabilities;
 use rayon::prelude::*;
 
 use crate::diag::{Code, Diagnostic, Location, Severity, SourceFiles};
-use crate::gpu::{self, pipeline::{self, PipelineSpec}};
+use crate::gpu::{self, Gpu, pipeline::{self, PipelineSpec}};
 use crate::shader::{Compose, Composed, Library, NagaOil, ShaderDefs, SourceFile, defs_key, library};
 
 /// naga's parser and validator recurse on nested expressions; a worker stack
@@ -39,6 +42,9 @@ pub struct CheckOptions {
     /// resolve, and pipeline specs name shaders relative to it.
     pub shader_root: PathBuf,
     pub device: DeviceMode,
+    /// What sources are validated with. `None`: what the adapter supports,
+    /// or without one `gpu::capabilities_without_device()`.
+    pub capabilities: Option<Capabilities>,
 }
 
 /// A failure of the run itself rather than of a checked file.
@@ -54,7 +60,9 @@ pub enum CheckError {
 /// they point into.
 pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError> {
     let start = Instant::now();
-    let targets = library::discover(&opts.paths).map_err(CheckError::BadPath)?;
+    let found = library::discover_with(&opts.paths, is_target).map_err(CheckError::BadPath)?;
+    let (scenes, targets): (Vec<PathBuf>, Vec<PathBuf>) =
+        found.into_iter().filter(|p| p.file_name().is_none_or(|n| n != project::FILE)).partition(|p| is_toml(p));
     let root_files = if opts.shader_root.is_dir() {
         library::discover(std::slice::from_ref(&opts.shader_root)).map_err(CheckError::BadPath)?
     } else {
@@ -101,9 +109,25 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     let lib = Library::new(sources);
     let shader_root = canon(&opts.shader_root);
     let specs_by_file = specs_by_display(&lib, &shader_root);
-    // Sources are judged against everything loupe can request; the device
-    // pass then reports what this adapter lacks.
-    let caps = gpu::capabilities_without_device();
+
+    // The device first: without a capability list, sources are judged by
+    // what its adapter supports. Pipelines are created on it at the end.
+    let mut device_note = None;
+    let gpu = match opts.device {
+        DeviceMode::Off => None,
+        mode => match gpu::open() {
+            Ok(gpu) => Some(gpu),
+            Err(e) if mode == DeviceMode::Required => return Err(CheckError::NoDevice(e)),
+            Err(e) => {
+                device_note = Some(Diagnostic {
+                    severity: Severity::Note,
+                    ..Diagnostic::error(Code::DeviceMissing, format!("pipelines were not created: {e}"))
+                });
+                None
+            }
+        },
+    };
+    let caps = opts.capabilities.unwrap_or_else(|| gpu.as_ref().map_or_else(gpu::capabilities_without_device, Gpu::adapter_capabilities));
 
     // Compose every target under each of its permutations, in parallel,
     // one file per task and largest first: rayon otherwise hands each thread
@@ -111,16 +135,21 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     // one core busy while the other idles.
     let size = |d: &String| lib.get(d).map_or(0, |f| f.text.len());
     target_displays.sort_by_key(|d| std::cmp::Reverse(size(d)));
-    let checked: Vec<Checked> = pool.install(|| {
+    let mut checked: Vec<Checked> = pool.install(|| {
         target_displays
             .par_iter()
             .with_max_len(1)
             .map(|display| match unreadable.get(display) {
-                Some(d) => Checked::failed(display, d.clone()),
+                Some(d) => Checked::uncompiled(display, ModuleKind::Entry, [d.clone()]),
                 None => check_file(&lib, &lib.get(display).expect("read above").clone(), &specs_by_file, caps),
             })
             .collect()
     });
+    let scenes: Vec<Checked> = pool.install(|| scenes.par_iter().with_max_len(1).map(|p| check_scene(p)).collect());
+    for c in scenes {
+        format::human::read_sources(&c.diagnostics, &mut files);
+        checked.push(c);
+    }
 
     let mut report = CheckReport::default();
     let mut seen = BTreeSet::new();
@@ -170,38 +199,56 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     }
 
     // Create every pipeline on the device, on this thread.
-    if opts.device != DeviceMode::Off {
-        match gpu::open() {
-            Ok(gpu) => {
-                report.adapter = Some(gpu.adapter_name());
-                for c in &checked {
-                    for (spec, defs, composed) in &c.composed {
-                        let result = crate::shader::guard::guarded(&c.display, "wgpu", || {
-                            pipeline::create(&gpu.device, spec, defs, composed, &lib, &c.display).map(|_| ())
-                        });
-                        match result {
-                            Ok(()) => modules.get_mut(&c.display).expect("inserted").pipelines += 1,
-                            Err(ds) => {
-                                for d in ds {
-                                    let d = d.with_note(format!("permutation: [{}]", defs_key(defs)));
-                                    place(&c.display, d, &mut modules);
-                                }
-                            }
+    report.general.extend(device_note);
+    if let Some(gpu) = &gpu {
+        report.adapter = Some(gpu.adapter_name());
+        for c in &checked {
+            for (spec, defs, composed) in &c.composed {
+                let result = crate::shader::guard::guarded(&c.display, "wgpu", || {
+                    pipeline::create(&gpu.device, spec, defs, composed, &lib, &c.display).map(|_| ())
+                });
+                match result {
+                    Ok(()) => modules.get_mut(&c.display).expect("inserted").pipelines += 1,
+                    Err(ds) => {
+                        for d in ds {
+                            let d = d.with_note(format!("permutation: [{}]", defs_key(defs)));
+                            place(&c.display, d, &mut modules);
                         }
                     }
                 }
             }
-            Err(e) if opts.device == DeviceMode::Required => return Err(CheckError::NoDevice(e)),
-            Err(e) => report.general.push(Diagnostic {
-                severity: Severity::Note,
-                ..Diagnostic::error(Code::DeviceMissing, format!("pipelines were not created: {e}"))
-            }),
         }
     }
 
     report.modules = modules.into_values().collect();
     report.duration = start.elapsed();
     Ok((report, files))
+}
+
+/// Whether a file found under `root` is checked: every `*.wgsl`, and a
+/// `*.toml` inside a directory named `scenes` (the search root counts).
+/// Files named on the command line are always checked, by extension.
+fn is_target(root: &Path, path: &Path) -> bool {
+    if path.extension().is_some_and(|e| e == "wgsl") {
+        return true;
+    }
+    let scenes = |c: &std::ffi::OsStr| c == "scenes";
+    let root_name = root.canonicalize().ok().and_then(|r| r.file_name().map(ToOwned::to_owned));
+    let inside = path.strip_prefix(root).ok().and_then(Path::parent).is_some_and(|dir| dir.iter().any(scenes));
+    is_toml(path) && (root_name.as_deref().is_some_and(scenes) || inside)
+}
+
+fn is_toml(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e == "toml")
+}
+
+/// Loads a scene as `loupe serve` does: the file, then every glTF it
+/// references.
+fn check_scene(path: &Path) -> Checked {
+    let start = Instant::now();
+    let display = library::display_path(path);
+    let diagnostics = guarded(&display, "the scene loader", || crate::scene::load(path).map_err(|d| vec![d])).err().unwrap_or_default();
+    Checked { duration: start.elapsed(), ..Checked::uncompiled(&display, ModuleKind::Scene, diagnostics) }
 }
 
 /// Pipeline specs by the display path of the shader file they build from.
@@ -230,12 +277,13 @@ struct Checked {
 }
 
 impl Checked {
-    fn failed(display: &str, d: Diagnostic) -> Self {
+    /// A file with nothing composed: unreadable WGSL, or a scene.
+    fn uncompiled(display: &str, kind: ModuleKind, diagnostics: impl IntoIterator<Item = Diagnostic>) -> Self {
         Checked {
             display: display.to_owned(),
-            kind: ModuleKind::Entry,
+            kind,
             permutations: Vec::new(),
-            diagnostics: vec![d],
+            diagnostics: diagnostics.into_iter().collect(),
             composed: Vec::new(),
             duration: Default::default(),
         }
@@ -261,8 +309,10 @@ fn check_file(
     let mut composed = Vec::new();
     for defs in &permutations {
         let result = match kind {
-            ModuleKind::Library => guarded(&file.display, || crate::shader::compose::check_library(lib, file, defs, caps).map(|_| None)),
-            ModuleKind::Entry => guarded(&file.display, || NagaOil.compose(lib, file, defs, caps).map(Some)),
+            ModuleKind::Library => {
+                guarded(&file.display, "the WGSL compiler", || crate::shader::compose::check_library(lib, file, defs, caps).map(|_| None))
+            }
+            _ => guarded(&file.display, "the WGSL compiler", || NagaOil.compose(lib, file, defs, caps).map(Some)),
         };
         match result {
             Ok(Some(c)) if c.module.entry_points.is_empty() && !diagnostics.iter().any(|d| d.code == Code::UnusedModule) => {
@@ -279,7 +329,11 @@ fn check_file(
             }
             Ok(None) => {}
             Err(ds) => {
+                // The shader, then what it imports: where a capability
+                // error without a span is looked for.
+                let sources: Vec<Arc<SourceFile>> = std::iter::once(file.clone()).chain(lib.dependencies(file).unwrap_or_default()).collect();
                 for d in ds {
+                    let d = capabilities::explain(d, caps, &sources);
                     let d = if permutations.len() > 1 { d.with_note(format!("permutation: [{}]", defs_key(defs))) } else { d };
                     if !diagnostics.iter().any(|x| x.to_string() == d.to_string()) {
                         diagnostics.push(d);
@@ -291,10 +345,10 @@ fn check_file(
     Checked { display: file.display.clone(), kind, permutations, diagnostics, composed, duration: start.elapsed() }
 }
 
-/// Runs one compile step, turning a panic inside naga or naga_oil into a
-/// diagnostic so the other files are still checked.
-fn guarded<T>(display: &str, f: impl FnOnce() -> Result<T, Vec<Diagnostic>>) -> Result<T, Vec<Diagnostic>> {
-    crate::shader::guard::guarded(display, "the WGSL compiler", f)
+/// Runs one step of `who` (naga, naga_oil, the scene loader), turning a
+/// panic into a diagnostic so the other files are still checked.
+fn guarded<T>(display: &str, who: &str, f: impl FnOnce() -> Result<T, Vec<Diagnostic>>) -> Result<T, Vec<Diagnostic>> {
+    crate::shader::guard::guarded(display, who, f)
 }
 
 /// Silences the default panic message while compile steps run: a panic

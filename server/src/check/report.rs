@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use crate::diag::{Diagnostic, Severity};
 
-/// What one checked WGSL file is.
+/// What one checked file is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ModuleKind {
     /// Declares `#define_import_path`: checked as part of every shader that
@@ -12,6 +12,8 @@ pub enum ModuleKind {
     Library,
     /// A shader with entry points, composed with its imports.
     Entry,
+    /// A scene file, loaded with the meshes it references.
+    Scene,
 }
 
 #[derive(Debug, Clone)]

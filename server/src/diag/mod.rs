@@ -100,6 +100,8 @@ pub enum Code {
     Scene,
     #[serde(rename = "unused-module")]
     UnusedModule,
+    #[serde(rename = "project-file")]
+    ProjectFile,
     #[serde(rename = "gpu")]
     Gpu,
 }
@@ -123,6 +125,7 @@ impl Code {
             Code::DeviceMissing => "device-missing",
             Code::Scene => "scene",
             Code::UnusedModule => "unused-module",
+            Code::ProjectFile => "project-file",
             Code::Gpu => "gpu",
         }
     }
@@ -146,11 +149,12 @@ impl Code {
             Code::DeviceMissing => "a GPU device was required and none exists",
             Code::Scene => "the scene file is invalid",
             Code::UnusedModule => "a file has no entry point and no #define_import_path: nothing can use it",
+            Code::ProjectFile => "the project file loupe.toml is invalid",
             Code::Gpu => "the GPU rejected commands while a frame was recorded or submitted (an error no error scope caught)",
         }
     }
 
-    pub const ALL: [Code; 17] = [
+    pub const ALL: [Code; 18] = [
         Code::Io,
         Code::Encoding,
         Code::EmptyFile,
@@ -167,6 +171,7 @@ impl Code {
         Code::DeviceMissing,
         Code::Scene,
         Code::UnusedModule,
+        Code::ProjectFile,
         Code::Gpu,
     ];
 }

@@ -6,6 +6,8 @@
 //! them is how loupe keeps the last good pipeline.
 
 pub mod pipeline;
+#[cfg(test)]
+pub mod testing;
 
 use std::sync::{Arc, Mutex};
 
@@ -61,33 +63,89 @@ impl Gpu {
     /// The naga capabilities matching the granted features, so shaders are
     /// validated against what this device can actually run.
     pub fn capabilities(&self) -> naga::valid::Capabilities {
-        capabilities(self.features)
+        capabilities(self.features, self.adapter.get_downlevel_capabilities().flags)
+    }
+
+    /// Everything the adapter could grant, requested or not: what `loupe
+    /// check` validates arbitrary WGSL with on this machine.
+    pub fn adapter_capabilities(&self) -> naga::valid::Capabilities {
+        capabilities(self.adapter.features(), self.adapter.get_downlevel_capabilities().flags)
+    }
+
+    /// The granted features by their wgpu names (`TIMESTAMP_QUERY`).
+    pub fn feature_names(&self) -> Vec<String> {
+        feature_names(self.features)
     }
 }
 
-pub fn capabilities(features: wgpu::Features) -> naga::valid::Capabilities {
-    use naga::valid::Capabilities as C;
-    let mut caps = C::default();
-    if features.contains(wgpu::Features::SHADER_F16) {
-        caps |= C::SHADER_FLOAT16;
-    }
-    if features.contains(wgpu::Features::SUBGROUP) {
-        caps |= C::SUBGROUP;
-    }
-    if features.contains(wgpu::Features::SUBGROUP_BARRIER) {
-        caps |= C::SUBGROUP_BARRIER;
-    }
-    if features.contains(wgpu::Features::PRIMITIVE_INDEX) {
-        caps |= C::PRIMITIVE_INDEX;
-    }
-    caps
+/// Feature names as wgpu spells its flags, in flag order.
+pub fn feature_names(features: wgpu::Features) -> Vec<String> {
+    features.iter_names().map(|(name, _)| name.to_owned()).collect()
+}
+
+/// The naga capabilities a device with these features and downlevel flags
+/// has: wgpu's own mapping, the one it validates shader modules with.
+pub fn capabilities(features: wgpu::Features, downlevel: wgpu::DownlevelFlags) -> naga::valid::Capabilities {
+    wgpu_naga_bridge::features_to_naga_capabilities(features, downlevel)
 }
 
 /// Capabilities assumed when checking without a device: everything loupe
-/// can request, so sources are judged on their own and the device pass
-/// reports what a particular adapter lacks.
+/// can request on a WebGPU-compliant adapter, so sources are judged on
+/// their own and the device pass reports what a particular adapter lacks.
 pub fn capabilities_without_device() -> naga::valid::Capabilities {
-    OPTIONAL_FEATURES.iter().fold(capabilities(wgpu::Features::SUBGROUP_BARRIER), |c, (f, _)| c | capabilities(*f))
+    let requestable = OPTIONAL_FEATURES.iter().fold(wgpu::Features::SUBGROUP_BARRIER, |all, (f, _)| all | *f);
+    capabilities(requestable, wgpu::DownlevelFlags::compliant())
+}
+
+/// Gives the process a private `XDG_RUNTIME_DIR` when it has none (or a
+/// relative one, which is as bad).
+///
+/// Why: creating a Vulkan instance runs Mesa's implicit device-select
+/// layer, which connects to Wayland to find the default GPU because wgpu
+/// enables `VK_KHR_wayland_surface` whenever the driver offers it
+/// (wgpu-hal's `desired_extensions` has no opt-out, even for an instance
+/// without a display). Without the variable, libwayland prints `error:
+/// XDG_RUNTIME_DIR is invalid or not set in the environment.` on stderr
+/// for every instance; with a valid directory that holds no compositor
+/// socket, the connection fails quietly. Turning the layer off instead
+/// (`NODEVICE_SELECT=1`) would also silence it, but would override a
+/// user's `MESA_VK_DEVICE_SELECT`.
+///
+/// # Safety
+///
+/// Changes the environment: call before any other thread starts.
+pub unsafe fn provide_runtime_dir() {
+    let usable = std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_absolute());
+    if usable {
+        return;
+    }
+    if let Some(dir) = private_runtime_dir() {
+        // SAFETY: the caller guarantees no other thread runs yet.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", dir) };
+    }
+}
+
+/// `$TMPDIR/loupe-runtime-<uid>`, created 0700, used only when it is a
+/// real directory (not a link) owned by this user with mode 0700, as the
+/// XDG base directory spec requires of a runtime directory.
+#[cfg(unix)]
+fn private_runtime_dir() -> Option<std::path::PathBuf> {
+    use std::os::unix::fs::{DirBuilderExt, MetadataExt};
+    // The owner of /proc/self is the process's effective user.
+    let uid = std::fs::metadata("/proc/self").ok()?.uid();
+    let dir = std::env::temp_dir().join(format!("loupe-runtime-{uid}"));
+    match std::fs::DirBuilder::new().mode(0o700).create(&dir) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+        Err(_) => return None,
+    }
+    let meta = std::fs::symlink_metadata(&dir).ok()?;
+    (meta.is_dir() && meta.uid() == uid && meta.mode() & 0o777 == 0o700).then_some(dir)
+}
+
+#[cfg(not(unix))]
+fn private_runtime_dir() -> Option<std::path::PathBuf> {
+    None
 }
 
 /// Opens the best adapter: a real GPU over a CPU one. `LOUPE_ADAPTER`
@@ -141,4 +199,51 @@ pub fn open() -> Result<Gpu, OpenError> {
         }
     }));
     Ok(Gpu { adapter, device, queue, info, features, degraded, uncaptured })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn feature_names_are_wgpu_flag_names() {
+        let names = feature_names(wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SHADER_F16 | wgpu::Features::SUBGROUP);
+        assert_eq!(names, ["SUBGROUP", "TIMESTAMP_QUERY", "SHADER_F16"]);
+        assert!(feature_names(wgpu::Features::empty()).is_empty());
+    }
+
+    #[test]
+    fn a_device_reports_its_features_by_name() {
+        let gpu = open().unwrap_or_else(|e| panic!("needs a device (lavapipe will do): {e}"));
+        let names = gpu.feature_names();
+        assert!(!names.is_empty(), "lavapipe grants some optional features");
+        let mut back = wgpu::Features::empty();
+        for name in &names {
+            assert!(!name.is_empty() && name.chars().all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_'), "{name:?}");
+            back |= wgpu::Features::from_name(name).unwrap_or_else(|| panic!("{name} is no wgpu feature"));
+        }
+        assert_eq!(back, gpu.features, "the names say exactly what was granted");
+    }
+
+    #[test]
+    fn capabilities_without_device_allow_what_loupe_can_request() {
+        use naga::valid::Capabilities as C;
+        let caps = capabilities_without_device();
+        for c in [C::SHADER_FLOAT16, C::SUBGROUP, C::SUBGROUP_BARRIER, C::PRIMITIVE_INDEX, C::CUBE_ARRAY_TEXTURES, C::SHADER_FLOAT16_IN_FLOAT32] {
+            assert!(caps.contains(c), "{c:?}");
+        }
+        for c in [C::FLOAT64, C::SHADER_INT64, C::RAY_QUERY] {
+            assert!(!caps.contains(c), "{c:?} is not requested");
+        }
+    }
+
+    #[test]
+    fn runtime_dir_is_private() {
+        use std::os::unix::fs::MetadataExt;
+        let dir = private_runtime_dir().expect("a runtime directory under the temp dir");
+        let meta = std::fs::symlink_metadata(&dir).unwrap();
+        assert!(meta.is_dir());
+        assert_eq!(meta.mode() & 0o777, 0o700);
+        assert_eq!(private_runtime_dir(), Some(dir), "found again on the next start");
+    }
 }

@@ -704,7 +704,7 @@ impl Daemon {
             version: env!("CARGO_PKG_VERSION").to_owned(),
             adapter: gpu.adapter_name(),
             cpu_adapter: gpu.is_cpu(),
-            features: format!("{:?}", gpu.features).split(" | ").map(str::to_owned).collect(),
+            features: gpu.feature_names(),
             degraded: gpu.degraded.clone(),
             scene: library::display_path(&self.config.scene_path),
             frame: shared::read(&self.shared.status).frame,

@@ -379,6 +379,13 @@ pub fn read_tree(root: &Path) -> Result<Library, String> {
 /// Every `*.wgsl` file under `roots` (files named directly are taken as
 /// they are), sorted, deduplicated.
 pub fn discover(roots: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
+    discover_with(roots, |_, p| p.extension().is_some_and(|e| e == "wgsl"))
+}
+
+/// Every file under `roots` that `wanted(root, path)` accepts, where `root`
+/// is the directory being searched (files named directly are taken as they
+/// are); sorted, deduplicated. Hidden files and directories are skipped.
+pub fn discover_with(roots: &[PathBuf], wanted: impl Fn(&Path, &Path) -> bool) -> Result<Vec<PathBuf>, String> {
     let mut out = BTreeSet::new();
     for root in roots {
         let meta = std::fs::metadata(root).map_err(|e| format!("{}: {e}", root.display()))?;
@@ -397,7 +404,7 @@ pub fn discover(roots: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
                 }
                 match entry.file_type() {
                     Ok(t) if t.is_dir() => stack.push(p),
-                    Ok(_) if p.extension().is_some_and(|e| e == "wgsl") => {
+                    Ok(_) if wanted(root, &p) => {
                         out.insert(p);
                     }
                     _ => {}

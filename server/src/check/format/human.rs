@@ -31,16 +31,23 @@ pub fn write(
 /// read from the files they name.
 pub fn write_diagnostics(diags: &[Diagnostic], color: bool, out: &mut dyn io::Write) -> io::Result<()> {
     let mut files = SourceFiles::default();
+    read_sources(diags, &mut files);
+    if color { emit(diags, &files, &mut Ansi::new(out)) } else { emit(diags, &files, &mut NoColor::new(out)) }
+}
+
+/// Adds the text of every file the diagnostics point into that `files`
+/// lacks, read by its display path; a file that is not text (a binary glTF)
+/// is left out, and its diagnostics print without an excerpt.
+pub fn read_sources(diags: &[Diagnostic], files: &mut SourceFiles) {
     for d in diags {
         for l in d.location.iter().chain(d.labels.iter().map(|l| &l.location)) {
-            if files.get(&l.file).is_none() {
-                if let Ok(text) = std::fs::read_to_string(&l.file) {
-                    files.insert(l.file.clone(), text.into());
-                }
+            if files.get(&l.file).is_none()
+                && let Ok(text) = std::fs::read_to_string(&l.file)
+            {
+                files.insert(l.file.clone(), text.into());
             }
         }
     }
-    if color { emit(diags, &files, &mut Ansi::new(out)) } else { emit(diags, &files, &mut NoColor::new(out)) }
 }
 
 fn emit<W: WriteStyle>(diags: &[Diagnostic], files: &SourceFiles, w: &mut W) -> io::Result<()> {
