@@ -99,8 +99,8 @@ impl Kernel {
             label: Some("test kernel"),
             source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(module)),
         });
-        let mut entries = vec![pipeline::storage(0, wgpu::ShaderStages::COMPUTE), read_write(1)];
-        entries.extend((0..textures as u32).map(|k| pipeline::texture(2 + k)));
+        let mut entries = vec![pipeline::storage("inputs", 0, wgpu::ShaderStages::COMPUTE).entry, read_write(1)];
+        entries.extend((0..textures as u32).map(|k| pipeline::texture("texture", 2 + k).entry));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("test kernel"), entries: &entries });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("test kernel"),
