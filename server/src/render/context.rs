@@ -8,8 +8,7 @@ use std::sync::Arc;
 
 use wgpu::util::DeviceExt;
 
-use super::pool::Physical;
-use super::resource::{Handle, PipelineKey};
+use super::resource::{Handle, Physical, PipelineKey};
 use super::scene_gpu::SceneGpu;
 use crate::gpu::pipeline::{self, Pipeline};
 

@@ -11,8 +11,8 @@ use std::time::Instant;
 use super::capture::{CapturedImage, CapturedTensor, Layout};
 use super::context::PassContext;
 use super::graph::{Graph, PassKind, Resource};
-use super::pool::{Physical, ResourcePool};
-use super::resource::{PipelineKey, ResourceDesc, TensorLayout, TextureDesc};
+use super::pool::ResourcePool;
+use super::resource::{Physical, PipelineKey, ResourceDesc, TensorLayout, TextureDesc};
 use super::scene_gpu::SceneGpu;
 use crate::gpu::pipeline::Pipeline;
 

@@ -6,13 +6,7 @@
 use std::collections::HashMap;
 
 use super::graph::{Graph, Resource};
-use super::resource::{Handle, Lifetime, ResourceDesc, TextureKind};
-
-/// One allocated resource.
-pub enum Physical {
-    Texture { texture: wgpu::Texture, view: wgpu::TextureView },
-    Buffer(wgpu::Buffer),
-}
+use super::resource::{Handle, Lifetime, Physical, ResourceDesc, TextureKind};
 
 #[derive(Default)]
 pub struct ResourcePool {

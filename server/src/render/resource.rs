@@ -97,6 +97,12 @@ impl TensorLayout {
     }
 }
 
+/// The GPU memory behind a handle.
+pub enum Physical {
+    Texture { texture: wgpu::Texture, view: wgpu::TextureView },
+    Buffer(wgpu::Buffer),
+}
+
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub enum ResourceDesc {
     Texture(TextureDesc),
