@@ -19,7 +19,7 @@ use crate::render::pipelines::{self, PipelineCache};
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::{self};
 use crate::scene::{self, overrides::Overrides};
-use crate::shader::library;
+use crate::shader::{NagaOil, library};
 
 #[derive(Debug, thiserror::Error)]
 pub enum OfflineError {
@@ -69,7 +69,7 @@ pub fn prepare(job: &Job) -> Result<Prepared, OfflineError> {
     for key in graph.pipelines() {
         let spec = pipeline::spec(key.spec).expect("keys come from specs");
         let display = library::display_path(&job.shader_root.join(spec.shader));
-        cache.install(&gpu.device, &key, pipelines::compose(&lib, &key, &display), &lib, &display);
+        cache.install(&gpu.device, &key, pipelines::compose(&NagaOil, &lib, &key, &display), &lib, &display);
         errors.extend(cache.entries[&key].diagnostics.iter().cloned());
     }
     if !errors.is_empty() {

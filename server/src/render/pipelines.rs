@@ -11,17 +11,17 @@ use super::graph::PipelineKey;
 use crate::diag::{Code, Diagnostic, Location};
 use crate::gpu::{self, pipeline::{self, Pipeline}};
 use crate::protocol::{PassStatus, PipelineInfo};
-use crate::shader::{Compose, Composed, Library, NagaOil};
+use crate::shader::{Compose, Composed, Library};
 
 /// Composes and validates the shader of pipeline `key`, which lives at
-/// `display` in `lib`. Runs on any thread; a missing file and a compiler
-/// panic come back as diagnostics like any other error.
-pub fn compose(lib: &Library, key: &PipelineKey, display: &str) -> Result<Composed, Vec<Diagnostic>> {
+/// `display` in `lib`, with `composer`. Runs on any thread; a missing file
+/// and a compiler panic come back as diagnostics like any other error.
+pub fn compose(composer: &dyn Compose, lib: &Library, key: &PipelineKey, display: &str) -> Result<Composed, Vec<Diagnostic>> {
     let Some(file) = lib.get(display) else {
         return Err(vec![pipeline::missing_shader(key.spec, display)]);
     };
     let caps = gpu::capabilities_without_device();
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| NagaOil.compose(lib, file, &key.defs, caps))).unwrap_or_else(|_| {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| composer.compose(lib, file, &key.defs, caps))).unwrap_or_else(|_| {
         Err(vec![Diagnostic::error(Code::CompilerPanic, "the WGSL compiler crashed on this file").at(Location::file_start(display))])
     })
 }

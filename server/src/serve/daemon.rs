@@ -18,7 +18,7 @@ use crate::gpu::{self, Gpu, pipeline};
 use crate::protocol::{self, ControlsReport, PassInfo, PassStatus, PassTiming, ReloadTimings, ServerEvent, Status};
 use crate::render::{self, frame, graph::{Graph, PipelineKey}, pipelines::{self, Installed, PipelineCache}, scene_gpu::SceneGpu};
 use crate::scene::{self, Scene, overrides::Overrides};
-use crate::shader::{Library, SourceFile, library};
+use crate::shader::{ComposeCache, Library, SourceFile, library};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum RenderMode {
@@ -97,6 +97,8 @@ pub struct Daemon {
     shared: Arc<Shared>,
     events: Sender<Event>,
     workers: Arc<rayon::ThreadPool>,
+    /// Keeps the workers' composers warm between reloads.
+    composer: Arc<ComposeCache>,
     next_reload: u64,
     reloads: BTreeMap<u64, Reload>,
     /// Reloads finished since the last frame, to tag that frame with.
@@ -161,6 +163,7 @@ impl Daemon {
             shared,
             events,
             workers: Arc::new(workers),
+            composer: Arc::default(),
             next_reload: 1,
             reloads: BTreeMap::new(),
             finished_reloads: Vec::new(),
@@ -426,6 +429,7 @@ impl Daemon {
             let display = self.shader_display(spec);
             let lib = self.lib.clone();
             let tx = self.events.clone();
+            let composer = self.composer.clone();
             let file_error = self.file_errors.values().find(|d| {
                 d.file().is_some_and(|f| f == display || lib.get(&display).is_some_and(|s| lib.dependencies(s).is_ok_and(|deps| deps.iter().any(|x| x.display == f))))
             }).cloned();
@@ -433,7 +437,7 @@ impl Daemon {
                 let start = Instant::now();
                 let result = match file_error {
                     Some(d) => Err(vec![d]),
-                    None => pipelines::compose(&lib, &key, &display),
+                    None => pipelines::compose(&*composer, &lib, &key, &display),
                 };
                 let compose_ms = start.elapsed().as_secs_f64() * 1e3;
                 let _ = tx.send(Event::CompileFinished(CompileResult { reload: id, pipeline: key.spec.to_owned(), defs: key.defs, result, compose_ms }));
