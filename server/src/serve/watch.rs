@@ -257,7 +257,9 @@ fn progress(kind: &EventKind, index: usize) -> Option<Progress> {
         EventKind::Modify(ModifyKind::Metadata(_)) => None,
         // A finished file arrived at the path (`Both` names from, then to).
         EventKind::Modify(ModifyKind::Name(RenameMode::To)) => Some(Progress::Complete),
-        EventKind::Modify(ModifyKind::Name(RenameMode::Both)) if index > 0 => Some(Progress::Complete),
+        EventKind::Modify(ModifyKind::Name(RenameMode::Both)) if index > 0 => {
+            Some(Progress::Complete)
+        }
         _ => Some(Progress::Unsettled),
     }
 }
@@ -281,7 +283,9 @@ impl Pending {
     }
 
     fn complete(&self) -> bool {
-        !self.rescan && self.dirs.is_empty() && self.files.values().all(|p| *p == Progress::Complete)
+        !self.rescan
+            && self.dirs.is_empty()
+            && self.files.values().all(|p| *p == Progress::Complete)
     }
 }
 
@@ -321,23 +325,23 @@ impl Debouncer {
                         Err(_) => return,
                     },
                     Some(pending) => {
-                    let deadline = self.deadline(pending);
-                    let now = Instant::now();
-                    let result = if now >= deadline {
-                        Err(RecvTimeoutError::Timeout)
-                    } else {
-                        raw.recv_timeout(deadline - now)
-                    };
-                    match result {
-                        Ok(msg) => msg,
-                        Err(RecvTimeoutError::Timeout) => {
-                            if !self.flush() {
-                                return;
+                        let deadline = self.deadline(pending);
+                        let now = Instant::now();
+                        let result = if now >= deadline {
+                            Err(RecvTimeoutError::Timeout)
+                        } else {
+                            raw.recv_timeout(deadline - now)
+                        };
+                        match result {
+                            Ok(msg) => msg,
+                            Err(RecvTimeoutError::Timeout) => {
+                                if !self.flush() {
+                                    return;
+                                }
+                                continue;
                             }
-                            continue;
+                            Err(RecvTimeoutError::Disconnected) => return,
                         }
-                        Err(RecvTimeoutError::Disconnected) => return,
-                    }
                     }
                 },
             };
@@ -903,10 +907,16 @@ mod tests {
             s.until_content(&x, full.as_bytes());
             s.expect_silence();
             let partial = s.log.iter().find(|c| match c {
-                FileChange::Written { content, .. } => !written.iter().any(|w| w.as_bytes() == &content[..]),
+                FileChange::Written { content, .. } => {
+                    !written.iter().any(|w| w.as_bytes() == &content[..])
+                }
                 FileChange::Removed { .. } => true,
             });
-            assert!(partial.is_none(), "a half-written file was reported ({pause} ms pause): {:?}", s.log);
+            assert!(
+                partial.is_none(),
+                "a half-written file was reported ({pause} ms pause): {:?}",
+                s.log
+            );
         }
     }
 
@@ -945,8 +955,17 @@ mod tests {
         s.expect_silence();
         // On a loaded machine the gap can outlast the retry window; then a
         // Removed may come first, but the file must end up Written.
-        let last = s.log.iter().rev().find(|c| c.path() == x).expect("a change for x");
-        assert!(matches!(last, FileChange::Written { content, .. } if &content[..] == b"v2 longer"), "{:?}", s.log);
+        let last = s
+            .log
+            .iter()
+            .rev()
+            .find(|c| c.path() == x)
+            .expect("a change for x");
+        assert!(
+            matches!(last, FileChange::Written { content, .. } if &content[..] == b"v2 longer"),
+            "{:?}",
+            s.log
+        );
     }
 
     #[test]
