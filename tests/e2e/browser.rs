@@ -6,7 +6,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use fantoccini::{Client, ClientBuilder, Locator};
-use loupe_tests::{Project, Server};
+use loupe_tests::{Project, Server, reload};
 
 const LIMIT: Duration = Duration::from_secs(60);
 const TONEMAP: &str = "shaders/post/tonemap.wgsl";
@@ -51,6 +51,31 @@ async fn browser() -> (Driver, Client) {
             Err(_) => tokio::time::sleep(Duration::from_millis(200)).await,
         }
     }
+}
+
+/// The image `#frame` shows, as drawn: its frame number, a hash of its
+/// RGBA8 pixels and its centre pixel.
+struct Shown {
+    frame: u64,
+    pixels: u64,
+    centre: [u8; 3],
+}
+
+async fn shown(c: &Client) -> Shown {
+    let js = "const img = document.querySelector('#frame');
+        const canvas = document.createElement('canvas');
+        canvas.width = img.naturalWidth; canvas.height = img.naturalHeight;
+        const g = canvas.getContext('2d');
+        g.drawImage(img, 0, 0);
+        const d = g.getImageData(0, 0, canvas.width, canvas.height).data;
+        let h = 2166136261;
+        for (let i = 0; i < d.length; i++) h = Math.imul(h ^ d[i], 16777619) >>> 0;
+        const at = 4 * ((canvas.height >> 1) * canvas.width + (canvas.width >> 1));
+        return [Number(img.dataset.frame), h, d.length, d[at], d[at + 1], d[at + 2]];";
+    let v = c.execute(js, vec![]).await.unwrap();
+    let n = |i: usize| v[i].as_u64().unwrap_or_else(|| panic!("#frame: {v}"));
+    assert!(n(2) > 0, "an image is shown");
+    Shown { frame: n(0), pixels: n(1) << 32 | n(2), centre: [n(3) as u8, n(4) as u8, n(5) as u8] }
 }
 
 /// What to print about the server when a wait times out.
@@ -101,7 +126,7 @@ async fn page_shows_frame_and_errors_at_their_line_and_clears_them() {
     let first = until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
     assert!(first.as_u64().unwrap() >= 1);
     until(&c, &s, "the tonemap pass listed ok", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"ok\"]')").await;
-    let src_before = c.find(Locator::Css("#frame")).await.unwrap().attr("src").await.unwrap();
+    let before = shown(&c).await;
     // The inspector opens on the final output and, live, gets its exact
     // floats streamed over the WebSocket (a subscription of this page).
     until(&c, &s, "a streamed capture in the inspector", "window.loupe.state.inspector.streamedLoads >= 1 && window.loupe.state.inspector.output === 'color'").await;
@@ -122,15 +147,33 @@ async fn page_shows_frame_and_errors_at_their_line_and_clears_them() {
     let hl = c.find(Locator::Css(&format!("#diagnostics {sel} .hl"))).await.unwrap().text().await.unwrap();
     assert!(hl.contains("mux("), "the highlighted excerpt line is the broken one: {hl}");
     until(&c, &s, "the pass marked stale", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"stale\"]')").await;
-    // The old image stays on screen.
-    let src_broken = c.find(Locator::Css("#frame")).await.unwrap().attr("src").await.unwrap();
-    assert!(src_broken.is_some(), "an image is still shown");
-    let _ = src_before;
+    // The old image stays on screen: a frame rendered while the diagnostic
+    // is up (a rebuild asked for now fails again and renders one) is shown,
+    // with the same pixels.
+    let at_diagnostic = shown(&c).await.frame;
+    let (code, _) = s.post("/api/reload");
+    assert_eq!(code, 202);
+    until(&c, &s, "a frame after the failed rebuild", &format!("Number(document.querySelector('#frame').dataset.frame) > {at_diagnostic}")).await;
+    let broken_shown = shown(&c).await;
+    assert_eq!(broken_shown.pixels, before.pixels, "the image is unchanged while the shader is broken (frames {} and {})", before.frame, broken_shown.frame);
 
-    // Fix it: the error clears and the pass is ok again.
-    p.write(TONEMAP, &good);
+    // Fix it with a new colour: the error clears, the pass is ok again and
+    // the image changes to that colour.
+    let colour = reload::colour(5);
+    p.write(TONEMAP, reload::constant_colour(&good, colour));
     until(&c, &s, "the error to clear", &format!("!document.querySelector('#diagnostics {sel}')")).await;
     until(&c, &s, "the pass ok again", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"ok\"]')").await;
+    let start = Instant::now();
+    let want = colour.map(|c| reload::srgb(c) * 255.0);
+    let fixed = loop {
+        let now = shown(&c).await;
+        if want.iter().zip(now.centre).all(|(w, got)| (w - got as f32).abs() <= 2.0) {
+            break now;
+        }
+        assert!(start.elapsed() < LIMIT, "the fixed colour {want:?} never showed: {:?} in frame {}\n{}", now.centre, now.frame, s.log());
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    };
+    assert_ne!(fixed.pixels, before.pixels);
 
     // A uniform larger than the renderer binds once reached the GPU and
     // blanked the frame; now pipeline creation refuses it at the binding's

@@ -2,6 +2,7 @@
 //! the HTTP API, the WebSocket stream, uncaptured GPU errors, device loss,
 //! and a short soak.
 
+use std::collections::BTreeSet;
 use std::time::Duration;
 
 use loupe_tests::reload::{self, Driver};
@@ -57,37 +58,47 @@ fn broken_shader_keeps_last_good_frame_and_reports_location_then_clears() {
 
 #[test]
 fn a_change_to_an_imported_module_rebuilds_only_its_dependents() {
+    // minimal.toml renders depth, G-buffer, lighting and tonemap; of their
+    // shaders only lighting.wgsl imports lib/brdf.wgsl (volumes.wgsl, which
+    // shares other modules with it, is culled here).
+    const BRDF: &str = "shaders/lib/brdf.wgsl";
+    const UNUSED: &str = "shaders/lib/unused.wgsl";
     let p = Project::copy_of_repo("serve-deps");
-    let s = Server::start(&p.root, &["--render", "on-change"]);
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/minimal.toml"]);
     s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
-    let gens = |s: &Server| -> Vec<(String, u64)> {
-        // The importers of color.wgsl (the NaN watch imports nothing).
-        let importers = ["debug.test_pattern", "post.tonemap"];
-        s.get_json("/api/pipelines")
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter(|p| importers.contains(&p["name"].as_str().unwrap()))
-            .map(|p| (p["name"].as_str().unwrap().to_owned(), p["generation"].as_u64().unwrap()))
-            .collect()
-    };
-    let before = gens(&s);
-    assert_eq!(before.len(), 2);
-    // color.wgsl is imported by tonemap (tonemap_aces) and the test pattern
-    // (srgb_to_linear): change a comment-free detail in tonemap_reinhard
-    // only used by tonemap, but both import the module, so both rebuild.
-    let color = p.read("shaders/lib/color.wgsl").replace("return c / (1.0 + l);", "return c / (1.0 + l + 0.0);");
-    p.write("shaders/lib/color.wgsl", color);
-    s.wait_for("both importers to rebuild", LIMIT, || {
-        let after = gens(&s);
-        after.iter().zip(&before).all(|(a, b)| a.1 > b.1).then_some(())
-    });
-    // fullscreen.wgsl is imported by both too; a file nobody imports
-    // rebuilds nothing.
-    let before = gens(&s);
-    p.write("shaders/lib/unused.wgsl", "#define_import_path demo::unused\nfn nothing() {}\n");
-    std::thread::sleep(Duration::from_millis(1500));
-    assert_eq!(gens(&s), before, "an unrelated file rebuilt nothing");
+    let all: BTreeSet<String> = s.get_json("/api/pipelines").as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap().to_owned()).collect();
+    let lighting: BTreeSet<String> = all.iter().filter(|n| n.starts_with("lighting.deferred")).cloned().collect();
+    assert!(!lighting.is_empty() && all.contains("post.tonemap") && all.iter().any(|n| n.starts_with("geometry.gbuffer")), "{all:?}");
+
+    // Three saves, each followed to its frame: the imported module, a file
+    // nobody imports, an unrelated shader. The last one bounds the stream:
+    // every rebuild the first two caused was announced before it.
+    let mut d = Driver::new(&p, &s);
+    let brdf = p.read(BRDF);
+    let changed = brdf.replace("fn specular_f0(", "fn unused_helper() -> f32 { return 1.0; }\n\nfn specular_f0(");
+    assert_ne!(changed, brdf);
+    let tonemap = reload::constant_colour(&p.read(TONEMAP), reload::colour(1));
+    let mut events = Vec::new();
+    for (rel, content) in [(BRDF, changed.as_str()), (UNUSED, "#define_import_path demo::unused\nfn nothing() {}\n"), (TONEMAP, &tonemap)] {
+        let o = d.save(rel, content).unwrap_or_else(|| panic!("no reload for {rel}\n{}", s.log()));
+        assert!(o.succeeded, "{rel}: {:?}", d.events);
+        events.extend(d.events.drain(..));
+    }
+    let started: Vec<(Vec<String>, BTreeSet<String>)> = events
+        .iter()
+        .filter(|e| e["type"] == "reload_started")
+        .map(|e| {
+            let strings = |k: &str| e[k].as_array().unwrap().iter().map(|v| v.as_str().unwrap().to_owned());
+            (strings("files").collect::<Vec<_>>(), strings("pipelines").collect::<BTreeSet<_>>())
+        })
+        .skip_while(|(files, _)| files.iter().all(|f| f != BRDF))
+        .collect();
+    let expected = vec![
+        (vec![BRDF.to_owned()], lighting),
+        (vec![UNUSED.to_owned()], BTreeSet::new()),
+        (vec![TONEMAP.to_owned()], BTreeSet::from(["post.tonemap".to_owned()])),
+    ];
+    assert_eq!(started, expected, "reloads in order, from the brdf.wgsl save on");
 }
 
 #[test]

@@ -12,7 +12,7 @@ use serde::Serialize;
 use super::resource::PipelineKey;
 use crate::diag::Diagnostic;
 use crate::gpu::{self, pipeline::{self, Pipeline}};
-use crate::shader::{Compose, Composed, Library, NagaOil};
+use crate::shader::{Compose, Composed, Library};
 
 /// A composed module and the content of the sources it was composed from.
 pub struct Compiled {
@@ -23,14 +23,14 @@ pub struct Compiled {
 }
 
 /// Composes and validates the shader of pipeline `key`, which lives at
-/// `display` in `lib`. Runs on any thread; a missing file and a compiler
-/// panic come back as diagnostics like any other error.
-pub fn compose(lib: &Library, key: &PipelineKey, display: &str) -> Result<Compiled, Vec<Diagnostic>> {
+/// `display` in `lib`, with `composer`. Runs on any thread; a missing file
+/// and a compiler panic come back as diagnostics like any other error.
+pub fn compose(composer: &dyn Compose, lib: &Library, key: &PipelineKey, display: &str) -> Result<Compiled, Vec<Diagnostic>> {
     let Some(file) = lib.get(display) else {
         return Err(vec![pipeline::missing_shader(key.spec.name, display)]);
     };
     let caps = gpu::capabilities_without_device();
-    crate::shader::guard::guarded(display, "the WGSL compiler", || NagaOil.compose(lib, file, &key.defs, caps))
+    crate::shader::guard::guarded(display, "the WGSL compiler", || composer.compose(lib, file, &key.defs, caps))
         .map(|composed| Compiled { sources: sources_hash(lib, &composed.files), composed })
 }
 

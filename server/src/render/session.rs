@@ -25,7 +25,7 @@ use crate::gpu::Gpu;
 use crate::gpu::pipeline::PipelineSpec;
 use crate::mesh::MeshData;
 use crate::scene::{Loaded, Scene};
-use crate::shader::{Library, library};
+use crate::shader::{ComposeCache, Library, library};
 
 /// How a pass stands this frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -94,6 +94,8 @@ pub struct Session {
     pool: ResourcePool,
     frame: u64,
     options: FrameOptions,
+    /// naga_oil composers kept warm between compiles, shared by the jobs.
+    composer: Arc<ComposeCache>,
 }
 
 impl Session {
@@ -102,6 +104,7 @@ impl Session {
         Session {
             graph: super::build_graph(&loaded.scene, FrameOptions::default()),
             options: FrameOptions::default(),
+            composer: Arc::default(),
             scene: loaded.scene.clone(),
             meshes: loaded.meshes.clone(),
             scene_gpu,
@@ -221,10 +224,10 @@ impl Session {
     /// Composing `key` as a job for any thread: it holds this version of
     /// the sources.
     pub fn compose_job(&self, key: &PipelineKey) -> impl FnOnce() -> Result<Compiled, Vec<Diagnostic>> + Send + 'static {
-        let lib = self.lib.clone();
+        let (lib, composer) = (self.lib.clone(), self.composer.clone());
         let key = key.clone();
         let display = self.shader_display(key.spec);
-        move || pipelines::compose(&lib, &key, &display)
+        move || pipelines::compose(&*composer, &lib, &key, &display)
     }
 
     /// Creates the pipeline from a compile result and swaps it in when it

@@ -1,4 +1,4 @@
-//! The source watcher: file-system events in, debounced and content-checked
+//! The source watcher: file-system events in, coalesced and content-checked
 //! [`Event::FilesChanged`] batches out.
 //!
 //! Roots are always watched as directories, recursively, never as single
@@ -6,27 +6,48 @@
 //! the target replace the inode, and a watch on the old inode would go quiet.
 //!
 //! Raw notify events go to a debounce thread that collects the source paths
-//! they name and, once events stop for [`NotifyWatcher::quiet`] (or
-//! [`NotifyWatcher::max_delay`] after the first event of the batch, whichever
-//! comes first), reads every path, hashes it, and reports only the files
-//! whose content actually changed. A file that is missing is given one more
-//! chance after [`NotifyWatcher::missing_retry`] (delete-then-recreate and
-//! rename saves make files vanish briefly) before it is reported removed.
+//! they name, with what the newest event says about each: the save is
+//! *complete* (the writer closed the file, or a finished file was renamed
+//! onto the path), the file is *being written* (data changed, not closed
+//! yet), or it is *unsettled* (created, removed, renamed away, a directory,
+//! lost events). When the batch is flushed, every path is read and hashed
+//! and only files whose content actually changed are reported. The batch is
+//! flushed:
+//!
+//! - at once, when every path in it is complete — a save costs no waiting —
+//!   unless saves are coming in a burst (this batch began within
+//!   [`NotifyWatcher::quiet`] of the previous one's last event): then as
+//!   below;
+//! - while a file is being written, when the writer closes it: a writer that
+//!   pauses between chunks is not read half-way. A writer that keeps a file
+//!   open past [`NotifyWatcher::max_delay`] is read then, and again when it
+//!   closes it (the trade-off for a batch that always ends);
+//! - otherwise once no event came for [`NotifyWatcher::quiet`] (a removal
+//!   may be the first half of delete-then-recreate; a directory may be
+//!   filling up);
+//! - at the latest [`NotifyWatcher::max_delay`] after the batch's first
+//!   event, even if events keep coming.
+//!
+//! Events already queued are taken in before any of these decisions, so the
+//! events of one save land in one batch. A file that is missing is given
+//! one more chance after [`NotifyWatcher::missing_retry`] (delete-then-
+//! recreate and rename saves make files vanish briefly) before it is
+//! reported removed.
 //!
 //! Paths in batches are `root.join(relative)`, spelled with the roots exactly
 //! as they were passed to [`SourceWatcher::start`] (nothing is canonicalised).
 
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fmt;
 use std::fs;
 use std::io;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender, TryRecvError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use notify::event::{AccessKind, AccessMode, CreateKind, ModifyKind, RemoveKind};
+use notify::event::{AccessKind, AccessMode, CreateKind, ModifyKind, RemoveKind, RenameMode};
 use notify::{EventKind, RecursiveMode, Watcher};
 
 use super::event::{Event, FileBatch, FileChange};
@@ -80,10 +101,12 @@ impl fmt::Debug for WatchGuard {
 /// a debounce thread of our own.
 #[derive(Debug, Clone)]
 pub struct NotifyWatcher {
-    /// Flush a batch once no new event arrived for this long.
+    /// Flush a batch that is not evidently complete once no new event
+    /// arrived for this long; also how close saves must follow each other to
+    /// count as a burst.
     pub quiet: Duration,
     /// Flush a batch at the latest this long after its first event, even if
-    /// events keep coming.
+    /// events keep coming or a file is still open for writing.
     pub max_delay: Duration,
     /// How long to wait before reading a missing file again, before calling
     /// it removed.
@@ -184,6 +207,7 @@ impl SourceWatcher for NotifyWatcher {
             max_delay: self.max_delay,
             missing_retry: self.missing_retry,
             pending: None,
+            previous_last: None,
         };
         let thread = std::thread::Builder::new()
             .name("loupe-watch".into())
@@ -212,17 +236,57 @@ enum Raw {
     Stop,
 }
 
+/// What the newest event for a path says about the save it belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Progress {
+    /// The writer closed the file, or a finished file was renamed onto it.
+    Complete,
+    /// Data changed and the writer has not closed the file yet.
+    Writing,
+    /// Created, removed, renamed away: more may follow.
+    Unsettled,
+}
+
+/// What an event of `kind` says about the save of its `index`th path;
+/// `None`: nothing (a path already pending keeps its state).
+fn progress(kind: &EventKind, index: usize) -> Option<Progress> {
+    match kind {
+        EventKind::Access(AccessKind::Close(AccessMode::Write)) => Some(Progress::Complete),
+        EventKind::Modify(ModifyKind::Data(_)) => Some(Progress::Writing),
+        // A touch or chmod, often right after a save: no news about content.
+        EventKind::Modify(ModifyKind::Metadata(_)) => None,
+        // A finished file arrived at the path (`Both` names from, then to).
+        EventKind::Modify(ModifyKind::Name(RenameMode::To)) => Some(Progress::Complete),
+        EventKind::Modify(ModifyKind::Name(RenameMode::Both)) if index > 0 => {
+            Some(Progress::Complete)
+        }
+        _ => Some(Progress::Unsettled),
+    }
+}
+
 /// The batch being collected.
 struct Pending {
     first: Instant,
     last: Instant,
-    /// Source files named by events.
-    files: BTreeSet<PathBuf>,
+    /// Source files named by events, with where their save stands.
+    files: BTreeMap<PathBuf, Progress>,
     /// Paths that may be directories (created, renamed, removed): scanned for
     /// source files, and every known file under them is checked.
     dirs: BTreeSet<PathBuf>,
     /// The backend lost events: check everything.
     rescan: bool,
+}
+
+impl Pending {
+    fn writing(&self) -> bool {
+        self.files.values().any(|p| *p == Progress::Writing)
+    }
+
+    fn complete(&self) -> bool {
+        !self.rescan
+            && self.dirs.is_empty()
+            && self.files.values().all(|p| *p == Progress::Complete)
+    }
 }
 
 struct Debouncer {
@@ -234,6 +298,9 @@ struct Debouncer {
     max_delay: Duration,
     missing_retry: Duration,
     pending: Option<Pending>,
+    /// The last event of the previous batch: a batch starting soon after it
+    /// is part of a burst of saves.
+    previous_last: Option<Instant>,
 }
 
 /// One read of one candidate path.
@@ -247,30 +314,36 @@ enum Check {
 impl Debouncer {
     fn run(mut self, raw: Receiver<Raw>) {
         loop {
-            let msg = match &self.pending {
-                None => match raw.recv() {
-                    Ok(msg) => msg,
-                    Err(_) => return,
-                },
-                Some(pending) => {
-                    let deadline = (pending.last + self.quiet).min(pending.first + self.max_delay);
-                    let now = Instant::now();
-                    let result = if now >= deadline {
-                        Err(RecvTimeoutError::Timeout)
-                    } else {
-                        raw.recv_timeout(deadline - now)
-                    };
-                    match result {
+            // Everything already queued first: one save's events come
+            // together and belong in one batch.
+            let msg = match raw.try_recv() {
+                Ok(msg) => msg,
+                Err(TryRecvError::Disconnected) => return,
+                Err(TryRecvError::Empty) => match &self.pending {
+                    None => match raw.recv() {
                         Ok(msg) => msg,
-                        Err(RecvTimeoutError::Timeout) => {
-                            if !self.flush() {
-                                return;
+                        Err(_) => return,
+                    },
+                    Some(pending) => {
+                        let deadline = self.deadline(pending);
+                        let now = Instant::now();
+                        let result = if now >= deadline {
+                            Err(RecvTimeoutError::Timeout)
+                        } else {
+                            raw.recv_timeout(deadline - now)
+                        };
+                        match result {
+                            Ok(msg) => msg,
+                            Err(RecvTimeoutError::Timeout) => {
+                                if !self.flush() {
+                                    return;
+                                }
+                                continue;
                             }
-                            continue;
+                            Err(RecvTimeoutError::Disconnected) => return,
                         }
-                        Err(RecvTimeoutError::Disconnected) => return,
                     }
-                }
+                },
             };
             match msg {
                 Raw::Stop => return,
@@ -278,6 +351,24 @@ impl Debouncer {
                 Raw::Event(at, event) => self.absorb(at, event),
             }
         }
+    }
+
+    /// When `pending` is to be flushed (the rules are in the module docs).
+    fn deadline(&self, pending: &Pending) -> Instant {
+        let latest = pending.first + self.max_delay;
+        if pending.writing() {
+            // Until the writer closes the file (it is then complete).
+            return latest;
+        }
+        let burst = self
+            .previous_last
+            .is_some_and(|last| pending.first.saturating_duration_since(last) < self.quiet);
+        let settled = if pending.complete() && !burst {
+            pending.last
+        } else {
+            pending.last + self.quiet
+        };
+        settled.min(latest)
     }
 
     /// Adds one raw event to the pending batch (or ignores it).
@@ -308,12 +399,12 @@ impl Debouncer {
 
         let mut files = Vec::new();
         let mut dirs = Vec::new();
-        for path in event.paths {
+        for (i, path) in event.paths.into_iter().enumerate() {
             if self.in_hidden_dir(&path) {
                 continue;
             }
             if is_source_file(&path) {
-                files.push(path);
+                files.push((path, progress(&event.kind, i)));
             } else if maybe_dir
                 && path
                     .file_name()
@@ -330,13 +421,18 @@ impl Debouncer {
         let pending = self.pending.get_or_insert_with(|| Pending {
             first: at,
             last: at,
-            files: BTreeSet::new(),
+            files: BTreeMap::new(),
             dirs: BTreeSet::new(),
             rescan: false,
         });
         pending.first = pending.first.min(at);
         pending.last = pending.last.max(at);
-        pending.files.extend(files);
+        for (path, progress) in files {
+            let state = pending.files.entry(path).or_insert(Progress::Unsettled);
+            if let Some(progress) = progress {
+                *state = progress;
+            }
+        }
         pending.dirs.extend(dirs);
         pending.rescan |= rescan;
     }
@@ -372,8 +468,9 @@ impl Debouncer {
         let Some(pending) = self.pending.take() else {
             return true;
         };
+        self.previous_last = Some(pending.last);
 
-        let mut candidates = pending.files;
+        let mut candidates: BTreeSet<PathBuf> = pending.files.into_keys().collect();
         if pending.rescan {
             for root in &self.roots {
                 walk_sources(root, 0, &mut candidates);
@@ -743,6 +840,87 @@ mod tests {
     }
 
     #[test]
+    fn vim_backup_save() {
+        // vim's default on Unix: probe with "4913", rename the file to its
+        // backup, write a new file, restore its mode, delete the backup.
+        let dir = TempDir::new("vim");
+        let x = dir.path("x.wgsl");
+        fs::write(&x, "v1").unwrap();
+        let mut s = start(&dir);
+        fs::write(dir.path("4913"), "").unwrap();
+        fs::remove_file(dir.path("4913")).unwrap();
+        fs::rename(&x, dir.path("x.wgsl~")).unwrap();
+        fs::write(&x, "v2").unwrap();
+        let mode = fs::metadata(dir.path("x.wgsl~")).unwrap().permissions();
+        fs::set_permissions(&x, mode).unwrap();
+        fs::remove_file(dir.path("x.wgsl~")).unwrap();
+        s.until_content(&x, b"v2");
+        s.expect_silence();
+        assert!(!s.removed_ever(&x), "{:?}", s.log);
+        assert!(s.state.keys().all(|p| p == &x), "{:?}", s.state_summary());
+    }
+
+    #[test]
+    fn a_save_right_after_a_completed_save_ends_on_the_second() {
+        // The first save is reported as soon as it is complete; the second
+        // comes 1 ms later and must not be lost behind it.
+        let dir = TempDir::new("twosaves");
+        let x = dir.path("x.wgsl");
+        fs::write(&x, "v0").unwrap();
+        let mut s = start(&dir);
+        let tmp = dir.path("x.wgsl.tmp");
+        for (i, by_rename) in [false, true].into_iter().enumerate() {
+            let (first, second) = (format!("first {i}"), format!("second {i}"));
+            for content in [&first, &second] {
+                if by_rename {
+                    fs::write(&tmp, content).unwrap();
+                    fs::rename(&tmp, &x).unwrap();
+                } else {
+                    fs::write(&x, content).unwrap();
+                }
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            s.until_content(&x, second.as_bytes());
+            s.expect_silence();
+            assert_eq!(s.state[&x].as_deref(), Some(second.as_bytes()));
+        }
+    }
+
+    #[test]
+    fn a_slow_writer_is_read_only_once_it_closes_the_file() {
+        // Two chunks with a pause longer than `quiet` between them, in one
+        // open file: nobody may see the first chunk alone.
+        let dir = TempDir::new("slow");
+        let x = dir.path("x.wgsl");
+        fs::write(&x, "v0").unwrap();
+        let mut s = start(&dir);
+        let mut written = Vec::new();
+        for (i, pause) in [30, 100].into_iter().enumerate() {
+            let full = format!("{i}: the first half, and the rest");
+            written.push(full.clone());
+            let (half, rest) = full.split_at(full.find("and").unwrap());
+            let mut file = fs::File::create(&x).unwrap();
+            io::Write::write_all(&mut file, half.as_bytes()).unwrap();
+            std::thread::sleep(Duration::from_millis(pause));
+            io::Write::write_all(&mut file, rest.as_bytes()).unwrap();
+            drop(file);
+            s.until_content(&x, full.as_bytes());
+            s.expect_silence();
+            let partial = s.log.iter().find(|c| match c {
+                FileChange::Written { content, .. } => {
+                    !written.iter().any(|w| w.as_bytes() == &content[..])
+                }
+                FileChange::Removed { .. } => true,
+            });
+            assert!(
+                partial.is_none(),
+                "a half-written file was reported ({pause} ms pause): {:?}",
+                s.log
+            );
+        }
+    }
+
+    #[test]
     fn delete_then_recreate() {
         let dir = TempDir::new("recreate");
         let x = dir.path("x.wgsl");
@@ -777,8 +955,17 @@ mod tests {
         s.expect_silence();
         // On a loaded machine the gap can outlast the retry window; then a
         // Removed may come first, but the file must end up Written.
-        let last = s.log.iter().rev().find(|c| c.path() == x).expect("a change for x");
-        assert!(matches!(last, FileChange::Written { content, .. } if &content[..] == b"v2 longer"), "{:?}", s.log);
+        let last = s
+            .log
+            .iter()
+            .rev()
+            .find(|c| c.path() == x)
+            .expect("a change for x");
+        assert!(
+            matches!(last, FileChange::Written { content, .. } if &content[..] == b"v2 longer"),
+            "{:?}",
+            s.log
+        );
     }
 
     #[test]

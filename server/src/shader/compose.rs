@@ -7,7 +7,7 @@
 
 use std::collections::{BTreeSet, HashMap};
 use std::ops::Range;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 use naga_oil::compose::{
@@ -59,27 +59,155 @@ impl Compose for NagaOil {
         defs: &ShaderDefs,
         caps: Capabilities,
     ) -> Result<Composed, Vec<Diagnostic>> {
-        let deps = lib.dependencies(entry)?;
-        let mut files: Vec<String> = deps.iter().map(|f| f.display.clone()).collect();
-        files.push(entry.display.clone());
-        let module = if !entry.has_directives {
-            naga::front::wgsl::parse_str(&entry.text).map_err(|e| {
-                let labels = e.labels().map(|(s, m)| (s.to_range().unwrap_or(0..0), m.to_owned())).collect();
-                vec![located(Code::Parse, e.message().to_owned(), labels, Vec::new(), entry)]
-            })?
-        } else {
-            compose_with_naga_oil(&deps, entry, defs, caps)?
-        };
-        // naga_oil validates too, but keeps the ModuleInfo to itself; the
-        // renderer and the binding check need it, so validate here once more
-        // (cheap next to parsing) and report against the entry on failure.
-        let info = Validator::new(ValidationFlags::all(), caps).validate(&module).map_err(|e| {
-            let (message, notes) = root_cause(e.as_inner());
-            let labels = validation_labels(e.spans().map(|(s, m)| (s.to_range().unwrap_or(0..0), m.clone())));
-            vec![located(Code::Validation, message, labels, notes, entry)]
-        })?;
-        Ok(Composed { module, info, files })
+        compose_and_validate(lib, entry, caps, |deps| compose_with_naga_oil(deps, entry, defs, caps))
     }
+}
+
+/// The naga_oil composer with composers kept warm between compiles: each
+/// imported module is parsed and composed once per text and set of defs,
+/// so an edit to a file nobody imports recomposes that file alone.
+///
+/// A composer is reused only while every module a compile needs is the same
+/// text in it as in the compile's library: an import whose text changed
+/// gets a fresh composer, because naga_oil numbers a re-added module as if
+/// it were new, which can collide with another module's number and put
+/// error spans in the wrong file. Failures are reported from a fresh
+/// composer, exactly as [`NagaOil`] reports them. One composer is kept per
+/// compile that ran at once (at most [`ComposeCache::MAX_IDLE`]).
+#[derive(Default)]
+pub struct ComposeCache {
+    idle: Mutex<Vec<Warm>>,
+}
+
+struct Warm {
+    composer: Composer,
+    caps: Capabilities,
+    /// Every module added, by import path: the file's display path and the
+    /// hash of the text it was added from.
+    modules: HashMap<String, (String, blake3::Hash)>,
+}
+
+impl Warm {
+    fn new(caps: Capabilities) -> Self {
+        Warm { composer: Composer::default().with_capabilities(caps), caps, modules: HashMap::new() }
+    }
+
+    /// Whether this composer holds no other version of `deps` than theirs.
+    fn current_for(&self, caps: Capabilities, deps: &[Arc<SourceFile>]) -> bool {
+        self.caps == caps
+            && deps.iter().all(|d| {
+                let Some((name, _)) = &d.import_path else { return true };
+                self.modules.get(name).is_none_or(|(display, hash)| *display == d.display && *hash == d.hash)
+            })
+    }
+
+    /// Adds the modules of `deps` it does not hold yet, then composes
+    /// `entry`.
+    fn compose(
+        &mut self,
+        deps: &[Arc<SourceFile>],
+        entry: &SourceFile,
+        defs: &ShaderDefs,
+    ) -> Result<naga::Module, ComposerError> {
+        for dep in deps {
+            let name = dep.import_path.as_ref().map(|(name, _)| name);
+            if name.is_some_and(|name| self.modules.contains_key(name)) {
+                continue;
+            }
+            self.composer.add_composable_module(ComposableModuleDescriptor {
+                source: &dep.text,
+                file_path: &dep.display,
+                ..Default::default()
+            })?;
+            if let Some(name) = name {
+                self.modules.insert(name.clone(), (dep.display.clone(), dep.hash));
+            }
+        }
+        self.composer.make_naga_module(NagaModuleDescriptor {
+            source: &entry.text,
+            file_path: &entry.display,
+            shader_defs: naga_oil_defs(defs),
+            ..Default::default()
+        })
+    }
+}
+
+impl ComposeCache {
+    /// The most idle composers kept.
+    pub const MAX_IDLE: usize = 8;
+
+    /// A composer current for `deps` (outdated ones are dropped), or a new one.
+    fn take(&self, caps: Capabilities, deps: &[Arc<SourceFile>]) -> Warm {
+        let mut idle = self.idle.lock().unwrap_or_else(|e| e.into_inner());
+        idle.retain(|w| w.caps != caps || w.current_for(caps, deps));
+        match idle.iter().rposition(|w| w.caps == caps) {
+            Some(at) => idle.swap_remove(at),
+            None => Warm::new(caps),
+        }
+    }
+
+    fn give_back(&self, warm: Warm) {
+        let mut idle = self.idle.lock().unwrap_or_else(|e| e.into_inner());
+        if idle.len() < Self::MAX_IDLE {
+            idle.push(warm);
+        }
+    }
+}
+
+impl Compose for ComposeCache {
+    fn compose(
+        &self,
+        lib: &Library,
+        entry: &SourceFile,
+        defs: &ShaderDefs,
+        caps: Capabilities,
+    ) -> Result<Composed, Vec<Diagnostic>> {
+        compose_and_validate(lib, entry, caps, |deps| {
+            let mut warm = self.take(caps, deps);
+            match warm.compose(deps, entry, defs) {
+                Ok(module) => {
+                    self.give_back(warm);
+                    Ok(module)
+                }
+                // The composer may hold half an attempt: not kept.
+                Err(_) => compose_with_naga_oil(deps, entry, defs, caps),
+            }
+        })
+    }
+}
+
+/// What every composer shares: resolving the imports, plain files straight
+/// to naga, and validation with the `ModuleInfo` kept.
+fn compose_and_validate(
+    lib: &Library,
+    entry: &SourceFile,
+    caps: Capabilities,
+    compose: impl FnOnce(&[Arc<SourceFile>]) -> Result<naga::Module, Vec<Diagnostic>>,
+) -> Result<Composed, Vec<Diagnostic>> {
+    let deps = lib.dependencies(entry)?;
+    let mut files: Vec<String> = deps.iter().map(|f| f.display.clone()).collect();
+    files.push(entry.display.clone());
+    let module = if !entry.has_directives {
+        naga::front::wgsl::parse_str(&entry.text).map_err(|e| {
+            let labels = e.labels().map(|(s, m)| (s.to_range().unwrap_or(0..0), m.to_owned())).collect();
+            vec![located(Code::Parse, e.message().to_owned(), labels, Vec::new(), entry)]
+        })?
+    } else {
+        compose(&deps)?
+    };
+    // naga_oil validates too, but keeps the ModuleInfo to itself; the
+    // renderer and the binding check need it, so validate here once more
+    // (cheap next to parsing) and report against the entry on failure.
+    let info = Validator::new(ValidationFlags::all(), caps).validate(&module).map_err(|e| {
+        let (message, notes) = root_cause(e.as_inner());
+        let labels = validation_labels(e.spans().map(|(s, m)| (s.to_range().unwrap_or(0..0), m.clone())));
+        vec![located(Code::Validation, message, labels, notes, entry)]
+    })?;
+    Ok(Composed { module, info, files })
+}
+
+fn naga_oil_defs(defs: &ShaderDefs) -> HashMap<String, ShaderDefValue> {
+    defs.iter().map(|d| (d.clone(), ShaderDefValue::Bool(true))).collect()
 }
 
 fn compose_with_naga_oil(
@@ -88,27 +216,8 @@ fn compose_with_naga_oil(
     defs: &ShaderDefs,
     caps: Capabilities,
 ) -> Result<naga::Module, Vec<Diagnostic>> {
-    let shader_defs: HashMap<String, ShaderDefValue> =
-        defs.iter().map(|d| (d.clone(), ShaderDefValue::Bool(true))).collect();
-    let mut composer = Composer::default().with_capabilities(caps);
-    for dep in deps {
-        let added = composer
-            .add_composable_module(ComposableModuleDescriptor {
-                source: &dep.text,
-                file_path: &dep.display,
-                ..Default::default()
-            })
-            .map(|_| ());
-        added.map_err(|e| vec![from_composer(&composer, e, deps, entry)])?;
-    }
-    composer
-        .make_naga_module(NagaModuleDescriptor {
-            source: &entry.text,
-            file_path: &entry.display,
-            shader_defs,
-            ..Default::default()
-        })
-        .map_err(|e| vec![from_composer(&composer, e, deps, entry)])
+    let mut fresh = Warm::new(caps);
+    fresh.compose(deps, entry, defs).map_err(|e| vec![from_composer(&fresh.composer, e, deps, entry)])
 }
 
 /// Checks a library module on its own: parsed and validated as a shader
@@ -326,8 +435,75 @@ mod tests {
     }
 
     fn compose(lib: &Library, entry: &str, defs: &[&str]) -> Result<Composed, Vec<Diagnostic>> {
-        let defs = defs.iter().map(|s| s.to_string()).collect();
-        NagaOil.compose(lib, lib.get(entry).unwrap(), &defs, Capabilities::all())
+        compose_both(&ComposeCache::default(), lib, entry, defs)
+    }
+
+    /// Composes `entry` with `NagaOil` and with `cache`, checks that both
+    /// give the same WGSL back or the same diagnostics, and returns
+    /// `NagaOil`'s result.
+    fn compose_both(cache: &ComposeCache, lib: &Library, entry: &str, defs: &[&str]) -> Result<Composed, Vec<Diagnostic>> {
+        let defs: ShaderDefs = defs.iter().map(|s| s.to_string()).collect();
+        let file = lib.get(entry).unwrap();
+        let fresh = NagaOil.compose(lib, file, &defs, Capabilities::all());
+        let warm = cache.compose(lib, file, &defs, Capabilities::all());
+        match (&fresh, &warm) {
+            (Ok(a), Ok(b)) => assert_eq!(wgsl(a), wgsl(b), "{entry} {defs:?}"),
+            (Err(a), Err(b)) => assert_eq!(a, b, "{entry} {defs:?}"),
+            _ => panic!("the cache disagrees on {entry} {defs:?}: fresh {:?}, cached {:?}", fresh.as_ref().map(wgsl), warm.as_ref().map(wgsl)),
+        }
+        fresh
+    }
+
+    fn wgsl(c: &Composed) -> String {
+        naga::back::wgsl::write_string(&c.module, &c.info, naga::back::wgsl::WriterFlags::empty()).unwrap()
+    }
+
+    fn util(body: &str) -> SourceFile {
+        file("lib/util.wgsl", &format!("#define_import_path util\n\nfn helper(x: f32) -> f32 {{\n{body}\n}}\n"))
+    }
+
+    fn lib_with(util: SourceFile) -> Library {
+        let main = "#import util::helper\n\n@fragment\nfn fs() -> @location(0) vec4<f32> {\n    return vec4(helper(1.0));\n}\n";
+        let other = "#import util::helper\n\n@compute @workgroup_size(1)\nfn cs() {\n    _ = helper(2.0);\n}\n";
+        Library::new([util, file("main.wgsl", main), file("other.wgsl", other)])
+    }
+
+    #[test]
+    fn the_cache_follows_edits_to_imports_and_reports_like_a_fresh_composer() {
+        let cache = ComposeCache::default();
+        let v1 = lib_with(util("#ifdef TRIPLE\n    return x * 3.0;\n#else\n    return x * 2.0;\n#endif"));
+        let doubled = wgsl(&compose_both(&cache, &v1, "main.wgsl", &[]).unwrap());
+        compose_both(&cache, &v1, "other.wgsl", &[]).unwrap();
+        let tripled = wgsl(&compose_both(&cache, &v1, "main.wgsl", &["TRIPLE"]).unwrap());
+        assert!(doubled.contains("2f") && tripled.contains("3f"), "{doubled}\n{tripled}");
+
+        // The import breaks: the cached module must not stand in for it.
+        let v2 = lib_with(util("    let v = 1u;\n    return x + v;"));
+        let errs = compose_both(&cache, &v2, "main.wgsl", &[]).unwrap_err();
+        let loc = errs[0].location.as_ref().unwrap();
+        assert_eq!((loc.file.as_str(), loc.line), ("lib/util.wgsl", 5), "{errs:?}");
+
+        // And is fixed differently.
+        let v3 = lib_with(util("    return x * 5.0;"));
+        let fixed = wgsl(&compose_both(&cache, &v3, "main.wgsl", &[]).unwrap());
+        assert!(fixed.contains("5f"), "{fixed}");
+        compose_both(&cache, &v3, "other.wgsl", &[]).unwrap();
+    }
+
+    #[test]
+    fn one_warm_composer_serves_a_library_and_outdated_ones_are_dropped() {
+        let cache = ComposeCache::default();
+        let held = |cache: &ComposeCache| -> Vec<Vec<blake3::Hash>> {
+            cache.idle.lock().unwrap().iter().map(|w| w.modules.values().map(|(_, hash)| *hash).collect()).collect()
+        };
+        let v1 = lib_with(util("    return x * 2.0;"));
+        for entry in ["main.wgsl", "other.wgsl", "main.wgsl"] {
+            compose_both(&cache, &v1, entry, &[]).unwrap();
+        }
+        assert_eq!(held(&cache), [[v1.get("lib/util.wgsl").unwrap().hash]]);
+        let v2 = lib_with(util("    return x * 4.0;"));
+        compose_both(&cache, &v2, "other.wgsl", &[]).unwrap();
+        assert_eq!(held(&cache), [[v2.get("lib/util.wgsl").unwrap().hash]]);
     }
 
     #[test]

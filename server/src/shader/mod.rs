@@ -4,5 +4,5 @@ pub mod compose;
 pub mod guard;
 pub mod library;
 
-pub use compose::{Compose, Composed, NagaOil, ShaderDefs, defs_key};
+pub use compose::{Compose, ComposeCache, Composed, NagaOil, ShaderDefs, defs_key};
 pub use library::{Library, SourceFile};
