@@ -383,7 +383,36 @@ fn an_edit_to_a_meshs_external_buffer_reloads_the_scene() {
     let p = Project::copy_of_repo("serve-mesh-bin");
     let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/minimal.toml"]);
     s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
-    let bin = "scenes/meshes/torus_knot.bin";
+    break_and_mend_buffer(&p, &s, "scenes/meshes/torus_knot.bin");
+}
+
+/// A scene outside `scenes/` is watched with everything it loads.
+#[test]
+fn a_scene_outside_the_scenes_folder_is_watched_with_its_meshes() {
+    let p = Project::copy_of_repo("serve-scene-elsewhere");
+    for file in ["torus_knot.gltf", "torus_knot.bin"] {
+        p.write(&format!("elsewhere/meshes/{file}"), std::fs::read(p.path(&format!("scenes/meshes/{file}"))).unwrap());
+    }
+    let scene = "elsewhere/scene.toml";
+    let good = p.read("scenes/minimal.toml");
+    p.write(scene, &good);
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", scene]);
+    s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
+
+    p.save_by_rename(scene, good.replace("intensity = 12.0", "intensity = -12.0"));
+    let diagnostic = s.wait_for("the scene's error reported", LIMIT, || {
+        let d = s.get_json("/api/diagnostics");
+        d["diagnostics"].as_array()?.iter().find(|d| d["code"] == "scene").cloned()
+    });
+    assert!(diagnostic["location"]["file"] == scene, "{diagnostic}");
+    p.save_by_rename(scene, &good);
+    s.wait_for("the scene's error to clear", LIMIT, || s.get_json("/api/diagnostics")["diagnostics"].as_array()?.is_empty().then_some(()));
+    break_and_mend_buffer(&p, &s, "elsewhere/meshes/torus_knot.bin");
+}
+
+/// Truncates a mesh's buffer by a rename save, waits for the located
+/// diagnostic, restores it and waits for the diagnostic to clear.
+fn break_and_mend_buffer(p: &Project, s: &Server, bin: &str) {
     let good = std::fs::read(p.path(bin)).unwrap();
     p.save_by_rename(bin, &good[..good.len() / 2]);
     let diagnostic = s.wait_for("the truncated buffer reported", LIMIT, || {

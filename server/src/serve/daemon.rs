@@ -41,6 +41,8 @@ pub struct Config {
     pub scene_path: PathBuf,
     pub mode: RenderMode,
     pub max_fps: f64,
+    /// Where the scene's files outside the watched roots are named.
+    pub watch_files: super::watch::WatchedFiles,
 }
 
 struct Reload {
@@ -152,6 +154,7 @@ impl Daemon {
             .build()
             .expect("compile worker threads");
         let timing = if gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) { "gpu" } else { "cpu" };
+        config.watch_files.set(&loaded.files);
         Daemon {
             session: Session::new(gpu, &config.shader_root, lib, &loaded).with_options(FrameOptions { nan_watch: true }),
             config,
@@ -337,6 +340,7 @@ impl Daemon {
         self.trace_stale = true;
         self.session.set_scene(&l);
         self.scene_files = l.files;
+        self.config.watch_files.set(&self.scene_files);
         self.scene_error = None;
     }
 

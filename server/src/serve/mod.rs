@@ -18,7 +18,6 @@ use std::sync::mpsc;
 
 use daemon::{Config, Daemon, RenderMode};
 use event::Event;
-use watch::SourceWatcher;
 
 pub struct ServeOptions {
     pub root: PathBuf,
@@ -51,9 +50,14 @@ pub fn run(opts: ServeOptions) -> Result<(), ServeError> {
     let (tx, clients, inbox) = inbox::open();
     let shared = shared::Shared::new(clients, vec![shader_root.clone(), scene_root.clone()], opts.debug_api);
 
+    // Watching starts first: the daemon names the scene's files outside the
+    // roots to it as soon as it has loaded the scene.
+    let roots: Vec<PathBuf> = [shader_root.clone(), scene_root].into_iter().filter(|p| p.is_dir()).collect();
+    let watch = watch::NotifyWatcher::default().start(&roots, tx.clone()).map_err(ServeError::Watch)?;
+
     // The device is opened on the render thread, which then owns it.
     let (ready_tx, ready_rx) = mpsc::channel();
-    let config = Config { shader_root: shader_root.clone(), scene_path: opts.scene.clone(), mode: opts.mode, max_fps: opts.max_fps };
+    let config = Config { shader_root, scene_path: opts.scene.clone(), mode: opts.mode, max_fps: opts.max_fps, watch_files: watch.files() };
     let (shared_r, tx_r) = (shared.clone(), tx.clone());
     let render = std::thread::Builder::new()
         .name("loupe-render".into())
@@ -73,8 +77,6 @@ pub fn run(opts: ServeOptions) -> Result<(), ServeError> {
         .map_err(|e| ServeError::Other(format!("cannot start the render thread: {e}")))?;
     ready_rx.recv().map_err(|_| ServeError::Other("the render thread died while starting".into()))??;
 
-    let roots: Vec<PathBuf> = [shader_root, scene_root].into_iter().filter(|p| p.is_dir()).collect();
-    let _watch = watch::NotifyWatcher::default().start(&roots, tx.clone()).map_err(ServeError::Watch)?;
 
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)

@@ -34,8 +34,13 @@
 //! recreate and rename saves make files vanish briefly) before it is
 //! reported removed.
 //!
-//! Paths in batches are `root.join(relative)`, spelled with the roots exactly
-//! as they were passed to [`SourceWatcher::start`] (nothing is canonicalised).
+//! Single files outside the roots (a scene elsewhere and its meshes) can be
+//! added while running, through [`WatchedFiles`]: their directories are
+//! watched non-recursively and only those files are reported.
+//!
+//! Paths in batches are absolute, `root.join(relative)` with the root made
+//! absolute against the working directory (nothing is canonicalised), as
+//! notify names the paths of its events.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fmt;
@@ -55,45 +60,50 @@ use super::event::{Event, FileBatch, FileChange};
 /// How deep directory walks go (a guard against symlink loops).
 const MAX_WALK_DEPTH: usize = 32;
 
-/// Something that reports source-file changes as [`Event::FilesChanged`].
-pub trait SourceWatcher: Send {
-    /// Starts watching `roots` recursively; content changes arrive on `events`
-    /// as [`Event::FilesChanged`]. The returned guard stops watching when
-    /// dropped.
-    fn start(&mut self, roots: &[PathBuf], events: Sender<Event>) -> Result<WatchGuard, String>;
+/// Keeps a watch alive; dropping it stops the watch: the debounce thread
+/// exits, dropping the notify watcher it owns, and is joined, so no batch is
+/// sent after the drop returns.
+#[must_use = "dropping the guard stops watching"]
+pub struct WatchGuard {
+    control: Sender<Raw>,
+    thread: Option<JoinHandle<()>>,
 }
 
-/// Keeps a watch alive; dropping it stops the watch (for [`NotifyWatcher`]:
-/// the notify watcher is dropped and the debounce thread exits and is
-/// joined, so no batch is sent after the drop returns).
-#[must_use = "dropping the guard stops watching"]
-pub struct WatchGuard(Option<Box<dyn FnOnce() + Send>>);
-
 impl WatchGuard {
-    /// A guard that runs `stop` when dropped (for other [`SourceWatcher`]s).
-    pub fn new(stop: impl FnOnce() + Send + 'static) -> Self {
-        WatchGuard(Some(Box::new(stop)))
-    }
-
-    /// A guard with nothing to stop (for fakes in tests).
-    pub fn noop() -> Self {
-        WatchGuard(None)
+    /// The handle that names the single files watched besides the roots.
+    pub fn files(&self) -> WatchedFiles {
+        WatchedFiles(Some(self.control.clone()))
     }
 }
 
 impl Drop for WatchGuard {
     fn drop(&mut self) {
-        if let Some(stop) = self.0.take() {
-            stop();
+        let _ = self.control.send(Raw::Stop);
+        if let Some(thread) = self.thread.take() {
+            join_quietly(thread);
         }
     }
 }
 
 impl fmt::Debug for WatchGuard {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_tuple("WatchGuard")
-            .field(&self.0.is_some())
-            .finish()
+        f.debug_struct("WatchGuard").finish_non_exhaustive()
+    }
+}
+
+/// Single files to watch besides the roots: what a scene outside the roots
+/// depends on (the scene file, its glTF meshes and their buffers). Their
+/// directories are watched non-recursively and only the named files in them
+/// are reported; files under a root are covered by its watch already.
+#[derive(Clone, Default)]
+pub struct WatchedFiles(Option<Sender<Raw>>);
+
+impl WatchedFiles {
+    /// Replaces the set of single files (a handle from no watcher ignores it).
+    pub fn set(&self, files: &[PathBuf]) {
+        if let Some(control) = &self.0 {
+            let _ = control.send(Raw::Files(files.to_vec()));
+        }
     }
 }
 
@@ -156,8 +166,13 @@ fn is_ignored_name(name: &str) -> bool {
             })
 }
 
-impl SourceWatcher for NotifyWatcher {
-    fn start(&mut self, roots: &[PathBuf], events: Sender<Event>) -> Result<WatchGuard, String> {
+impl NotifyWatcher {
+    /// Starts watching `roots` recursively; content changes arrive on
+    /// `events` as [`Event::FilesChanged`].
+    pub fn start(&self, roots: &[PathBuf], events: Sender<Event>) -> Result<WatchGuard, String> {
+        // notify reports absolute paths; so does everything here.
+        let roots: Vec<PathBuf> = roots.iter().map(|r| absolute(r)).collect();
+        let roots = &roots[..];
         for root in roots {
             match fs::metadata(root) {
                 Ok(meta) if meta.is_dir() => {}
@@ -200,6 +215,9 @@ impl SourceWatcher for NotifyWatcher {
         }
 
         let debouncer = Debouncer {
+            watcher,
+            canonical_roots: roots.iter().map(|r| fs::canonicalize(r).unwrap_or_else(|_| r.clone())).collect(),
+            single: BTreeSet::new(),
             roots: roots.to_vec(),
             known,
             events,
@@ -214,12 +232,7 @@ impl SourceWatcher for NotifyWatcher {
             .spawn(move || debouncer.run(raw_rx))
             .map_err(|err| format!("start watch thread: {err}"))?;
 
-        Ok(WatchGuard::new(move || {
-            drop(watcher);
-            let _ = raw_tx.send(Raw::Stop);
-            drop(raw_tx);
-            join_quietly(thread);
-        }))
+        Ok(WatchGuard { control: raw_tx, thread: Some(thread) })
     }
 }
 
@@ -229,10 +242,12 @@ fn join_quietly(thread: JoinHandle<()>) {
     }
 }
 
-/// What the notify callback hands the debounce thread.
+/// What the notify callback and the guard hand the debounce thread.
 enum Raw {
     Event(Instant, notify::Event),
     Error(notify::Error),
+    /// The single files to watch from now on.
+    Files(Vec<PathBuf>),
     Stop,
 }
 
@@ -290,7 +305,14 @@ impl Pending {
 }
 
 struct Debouncer {
+    /// Owned here so single files can be added while running.
+    watcher: notify::RecommendedWatcher,
     roots: Vec<PathBuf>,
+    /// The roots resolved, to tell whether a single file lies under one.
+    canonical_roots: Vec<PathBuf>,
+    /// Single files outside the roots; their directories are watched
+    /// non-recursively.
+    single: BTreeSet<PathBuf>,
     /// Content hash of every source file as last seen.
     known: HashMap<PathBuf, blake3::Hash>,
     events: Sender<Event>,
@@ -348,6 +370,7 @@ impl Debouncer {
             match msg {
                 Raw::Stop => return,
                 Raw::Error(err) => log::warn!("watch: {err}"),
+                Raw::Files(files) => self.watch_single(files),
                 Raw::Event(at, event) => self.absorb(at, event),
             }
         }
@@ -400,6 +423,13 @@ impl Debouncer {
         let mut files = Vec::new();
         let mut dirs = Vec::new();
         for (i, path) in event.paths.into_iter().enumerate() {
+            if !self.roots.iter().any(|root| path.starts_with(root)) {
+                // From a single file's directory: only that file counts.
+                if self.single.contains(&path) {
+                    files.push((path, progress(&event.kind, i)));
+                }
+                continue;
+            }
             if self.in_hidden_dir(&path) {
                 continue;
             }
@@ -435,6 +465,40 @@ impl Debouncer {
         }
         pending.dirs.extend(dirs);
         pending.rescan |= rescan;
+    }
+
+    /// Watches `files` besides the roots, from now on instead of the
+    /// previous set; their current content is the baseline changes are
+    /// reported against.
+    fn watch_single(&mut self, files: Vec<PathBuf>) {
+        let outside: BTreeSet<PathBuf> = files.iter().map(|f| absolute(f)).filter(|f| !self.under_root(f)).collect();
+        let dirs = |files: &BTreeSet<PathBuf>| -> BTreeSet<PathBuf> { files.iter().filter_map(|f| f.parent().map(Path::to_path_buf)).collect() };
+        let (before, after) = (dirs(&self.single), dirs(&outside));
+        for dir in before.difference(&after) {
+            let _ = self.watcher.unwatch(dir);
+        }
+        for dir in after.difference(&before) {
+            if let Err(err) = self.watcher.watch(dir, RecursiveMode::NonRecursive) {
+                log::warn!("watch {}: {err}", dir.display());
+            }
+        }
+        for gone in self.single.difference(&outside) {
+            self.known.remove(gone);
+        }
+        for new in outside.difference(&self.single) {
+            match hash_file(new) {
+                Ok(hash) => {
+                    self.known.insert(new.clone(), hash);
+                }
+                Err(err) => log::warn!("watch: read {}: {err}", new.display()),
+            }
+        }
+        self.single = outside;
+    }
+
+    /// Whether `file` (absolute) lies under a root, through links too.
+    fn under_root(&self, file: &Path) -> bool {
+        file.parent().and_then(|dir| fs::canonicalize(dir).ok()).is_some_and(|dir| self.canonical_roots.iter().any(|root| dir.starts_with(root)))
     }
 
     /// Whether `path` lies below a hidden directory of its root (`.git/…`).
@@ -553,6 +617,12 @@ impl Debouncer {
             }
         }
     }
+}
+
+/// `path` made absolute against the working directory, as notify names
+/// the paths of its events.
+fn absolute(path: &Path) -> PathBuf {
+    std::path::absolute(path).unwrap_or_else(|_| path.to_owned())
 }
 
 fn is_missing(err: &io::Error) -> bool {
@@ -805,6 +875,35 @@ mod tests {
             "{:?}",
             s.log
         );
+    }
+
+    /// A scene outside the roots: its own files are reported, by rename save
+    /// too, and nothing else in their directory; a replaced set drops them.
+    #[test]
+    fn single_files_outside_the_roots() {
+        let (root, elsewhere) = (TempDir::new("single-root"), TempDir::new("single-elsewhere"));
+        let scene = elsewhere.path("scene.toml");
+        let other = elsewhere.path("notes.toml");
+        fs::write(&scene, "v1").unwrap();
+        let mut s = start(&root);
+        s.guard.as_ref().unwrap().files().set(&[scene.clone(), root.path("inside.wgsl")]);
+        // Already current: the set's baseline is what is on disk now.
+        s.expect_silence();
+
+        fs::write(&other, "not ours").unwrap();
+        fs::write(&scene, "v2").unwrap();
+        s.until_content(&scene, b"v2");
+        let tmp = elsewhere.path("scene.toml.tmp");
+        fs::write(&tmp, "v3").unwrap();
+        fs::rename(&tmp, &scene).unwrap();
+        s.until_content(&scene, b"v3");
+        assert!(s.state.keys().all(|p| p == &scene), "{:?}", s.state_summary());
+
+        s.guard.as_ref().unwrap().files().set(&[]);
+        // The set is taken in order with the events: wait for the watch to go.
+        std::thread::sleep(Duration::from_millis(100));
+        fs::write(&scene, "v4").unwrap();
+        s.expect_silence();
     }
 
     #[test]
