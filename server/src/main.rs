@@ -306,6 +306,10 @@ fn run_bench(args: BenchArgs) -> ExitCode {
             r.frame_ms_all_captures,
             over(r.frame_ms_all_captures)
         );
+        println!(
+            "  conversion and statistics (serve: on its own thread): final only {:.2} ms; every output {:.2} ms",
+            r.convert_ms_final_capture, r.convert_ms_all_captures
+        );
     }
     ExitCode::from(exit::OK)
 }

@@ -199,11 +199,16 @@ pub struct BenchReport {
     pub timing: String,
     /// Median per pass, milliseconds, in frame order.
     pub passes: Vec<(String, f64)>,
-    /// Median wall time from submit to every readback landed, per capture
-    /// setting, measured interleaved so drift hits each alike.
+    /// Median wall time from submit to every readback landed (what the
+    /// thread that submits frames waits for), per capture setting,
+    /// measured interleaved so drift hits each alike.
     pub frame_ms_no_capture: f64,
     pub frame_ms_final_capture: f64,
     pub frame_ms_all_captures: f64,
+    /// Median time converting the landed readbacks and taking their
+    /// statistics, which `serve` does on a thread of its own.
+    pub convert_ms_final_capture: f64,
+    pub convert_ms_all_captures: f64,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -220,13 +225,17 @@ pub fn bench(job: &Job, frames: u32) -> Result<BenchReport, OfflineError> {
         frame(&mut session, None);
     }
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-    let (mut t_none, mut t_final, mut t_all) = (Vec::new(), Vec::new(), Vec::new());
+    let [mut t_none, mut t_final, mut t_all, mut c_none, mut c_final, mut c_all] = std::array::from_fn(|_| Vec::new());
     let mut timing = String::new();
     for _ in 0..frames {
-        for (set, times) in [(Some(&none), &mut t_none), (Some(&fin), &mut t_final), (None, &mut t_all)] {
+        for (set, times, converts) in [(Some(&none), &mut t_none, &mut c_none), (Some(&fin), &mut t_final, &mut c_final), (None, &mut t_all, &mut c_all)] {
             let start = Instant::now();
-            let r = frame(&mut session, set);
-            times.push(start.elapsed().as_secs_f64() * 1e3);
+            let pending = session.submit(set, FRAME_DT);
+            session.land(&pending);
+            let landed = Instant::now();
+            let r = pending.finish();
+            times.push((landed - start).as_secs_f64() * 1e3);
+            converts.push(landed.elapsed().as_secs_f64() * 1e3);
             if set.is_some_and(BTreeSet::is_empty) {
                 timing = r.timing.to_owned();
                 for (name, t) in r.timings {
@@ -247,5 +256,7 @@ pub fn bench(job: &Job, frames: u32) -> Result<BenchReport, OfflineError> {
         frame_ms_no_capture: median(t_none),
         frame_ms_final_capture: median(t_final),
         frame_ms_all_captures: median(t_all),
+        convert_ms_final_capture: median(c_final),
+        convert_ms_all_captures: median(c_all),
     })
 }

@@ -118,29 +118,58 @@ impl Layout {
         self.channels * self.bytes_per_channel
     }
 
-    /// Converts tightly packed rows (no padding) to RGBA f32.
-    pub fn to_rgba_f32(&self, bytes: &[u8]) -> Vec<f32> {
-        let texels = bytes.len() / self.bytes_per_texel();
-        let mut out = Vec::with_capacity(texels * 4);
-        for t in bytes.chunks_exact(self.bytes_per_texel()) {
-            let mut px = [0.0, 0.0, 0.0, 1.0];
-            for (c, v) in px.iter_mut().enumerate().take(self.channels) {
-                let b = &t[c * self.bytes_per_channel..(c + 1) * self.bytes_per_channel];
-                *v = match self.kind {
-                    Kind::F16 => half::f16::from_le_bytes([b[0], b[1]]).to_f32(),
-                    Kind::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-                    Kind::Unorm8 | Kind::Bgra8 { srgb: false } => f32::from(b[0]) / 255.0,
-                    Kind::Srgb8 | Kind::Bgra8 { srgb: true } if c < 3 => srgb_to_linear(f32::from(b[0]) / 255.0),
-                    Kind::Srgb8 | Kind::Bgra8 { srgb: true } => f32::from(b[0]) / 255.0,
-                };
+    /// Appends tightly packed texels (no row padding) as RGBA f32. One
+    /// loop per kind, so the per-texel work has no branches on the format.
+    pub fn extend_rgba_f32(&self, bytes: &[u8], out: &mut Vec<f32>) {
+        let (n, size) = (self.channels, self.bytes_per_channel);
+        match self.kind {
+            Kind::F16 => push_texels(bytes, n, size, out, |b, _| half::f16::from_le_bytes([b[0], b[1]]).to_f32()),
+            Kind::F32 => push_texels(bytes, n, size, out, |b, _| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            Kind::Unorm8 | Kind::Bgra8 { srgb: false } => push_texels(bytes, n, size, out, |b, _| UNORM8[usize::from(b[0])]),
+            Kind::Srgb8 | Kind::Bgra8 { srgb: true } => {
+                let lut = srgb8_to_linear();
+                push_texels(bytes, n, size, out, |b, c| if c < 3 { lut[usize::from(b[0])] } else { UNORM8[usize::from(b[0])] });
             }
-            if matches!(self.kind, Kind::Bgra8 { .. }) {
+        }
+        if matches!(self.kind, Kind::Bgra8 { .. }) {
+            let texels = bytes.len() / self.bytes_per_texel();
+            let start = out.len() - texels * 4;
+            for px in out[start..].chunks_exact_mut(4) {
                 px.swap(0, 2);
             }
-            out.extend_from_slice(&px);
         }
-        out
     }
+}
+
+/// Appends each texel of `channels` channels of `size` bytes as RGBA,
+/// missing channels 0 and missing alpha 1.
+#[inline(always)]
+fn push_texels(bytes: &[u8], channels: usize, size: usize, out: &mut Vec<f32>, channel: impl Fn(&[u8], usize) -> f32) {
+    out.reserve(bytes.len() / (channels * size) * 4);
+    for t in bytes.chunks_exact(channels * size) {
+        let mut px = [0.0, 0.0, 0.0, 1.0];
+        for (c, v) in px.iter_mut().enumerate().take(channels) {
+            *v = channel(&t[c * size..], c);
+        }
+        out.extend_from_slice(&px);
+    }
+}
+
+/// Byte / 255 for every byte.
+static UNORM8: [f32; 256] = {
+    let mut t = [0.0; 256];
+    let mut i = 0;
+    while i < 256 {
+        t[i] = i as f32 / 255.0;
+        i += 1;
+    }
+    t
+};
+
+/// The linear value of every sRGB-encoded byte.
+fn srgb8_to_linear() -> &'static [f32; 256] {
+    static TABLE: std::sync::OnceLock<[f32; 256]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| std::array::from_fn(|i| srgb_to_linear(UNORM8[i])))
 }
 
 impl CapturedImage {
@@ -357,7 +386,8 @@ mod tests {
     fn srgb_texels_read_back_linear_and_their_png_is_the_stored_bytes() {
         let bytes: Vec<u8> = (0..=255u8).flat_map(|b| [b, b, 255 - b, b]).collect();
         for format in [wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::TextureFormat::Bgra8UnormSrgb] {
-            let data = Layout::of(format).unwrap().to_rgba_f32(&bytes);
+            let mut data = Vec::new();
+            Layout::of(format).unwrap().extend_rgba_f32(&bytes, &mut data);
             for (b, px) in (0..=255u8).zip(data.chunks_exact(4)) {
                 let lin = |b: u8| srgb_to_linear(f32::from(b) / 255.0);
                 let (r, bl) = if format == wgpu::TextureFormat::Rgba8UnormSrgb { (b, 255 - b) } else { (255 - b, b) };
@@ -384,7 +414,25 @@ mod tests {
             .iter()
             .flat_map(|v| half::f16::from_f32(*v).to_le_bytes())
             .collect();
-        assert_eq!(l.to_rgba_f32(&bytes), [1.5, -2.0, 65504.0, 0.0]);
+        let mut out = Vec::new();
+        l.extend_rgba_f32(&bytes, &mut out);
+        assert_eq!(out, [1.5, -2.0, 65504.0, 0.0]);
+    }
+
+    #[test]
+    fn every_format_fills_rgba_in_order() {
+        use wgpu::TextureFormat as F;
+        let convert = |format, bytes: &[u8]| {
+            let mut out = vec![9.0]; // appended to, not overwritten
+            Layout::of(format).unwrap().extend_rgba_f32(bytes, &mut out);
+            out
+        };
+        assert_eq!(convert(F::Rg8Unorm, &[0, 255, 51, 102]), [9.0, 0.0, 1.0, 0.0, 1.0, 0.2, 0.4, 0.0, 1.0]);
+        assert_eq!(convert(F::Bgra8Unorm, &[0, 51, 255, 102]), [9.0, 1.0, 0.2, 0.0, 0.4]);
+        let r32: Vec<u8> = [-3.5f32, f32::NAN].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let out = convert(F::R32Float, &r32);
+        assert_eq!(out[..5], [9.0, -3.5, 0.0, 0.0, 1.0]);
+        assert!(out[5].is_nan() && out[6..] == [0.0, 0.0, 1.0]);
     }
 
     #[test]

@@ -278,7 +278,8 @@ impl PendingFrame {
             && self.timestamps.as_ref().is_none_or(|t| t.1.load(Ordering::Acquire) != MAP_PENDING)
     }
 
-    /// Converts the mapped readbacks. Call only when `ready()`.
+    /// Converts the mapped readbacks and takes their statistics: the
+    /// frame's CPU work, on any thread. Call only when `ready()`.
     pub fn finish(self) -> FrameResult {
         let mut captures = Vec::new();
         let mut tensors = Vec::new();
@@ -292,11 +293,10 @@ impl PendingFrame {
                     let layout = Layout::of(desc.format).expect("checked at copy");
                     let row = desc.width as usize * layout.bytes_per_texel();
                     let rows = (desc.height * desc.layers) as usize;
-                    let mut tight = Vec::with_capacity(row * rows);
+                    let mut data = Vec::with_capacity(desc.width as usize * rows * 4);
                     for r in mapped.chunks(*padded_row as usize).take(rows) {
-                        tight.extend_from_slice(&r[..row]);
+                        layout.extend_rgba_f32(&r[..row], &mut data);
                     }
-                    let data = layout.to_rgba_f32(&tight);
                     captures.push(CapturedImage::new(&c.pass, &c.output, self.frame, desc.width, rows as u32, desc.format, data));
                 }
                 Readback::Buffer(layout) => tensors.push(CapturedTensor::new(&c.pass, &c.output, self.frame, layout.clone(), &mapped)),

@@ -275,11 +275,16 @@ impl Session {
         let _ = self.gpu.device.poll(wgpu::PollType::Poll);
     }
 
-    /// Waits for a submitted frame and converts its readbacks.
-    pub fn wait(&self, pending: PendingFrame) -> FrameResult {
+    /// Waits until a submitted frame's readbacks have landed.
+    pub fn land(&self, pending: &PendingFrame) {
         while !pending.ready() {
             let _ = self.gpu.device.poll(wgpu::PollType::wait_indefinitely());
         }
+    }
+
+    /// Waits for a submitted frame and converts its readbacks.
+    pub fn wait(&self, pending: PendingFrame) -> FrameResult {
+        self.land(&pending);
         pending.finish()
     }
 

@@ -8,7 +8,7 @@
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::mpsc::{RecvTimeoutError, Sender};
+use std::sync::mpsc::{self, RecvTimeoutError, Sender};
 use std::time::{Duration, Instant};
 
 use super::event::{CompileResult, Event, FileBatch, FileChange, SceneCommand};
@@ -69,8 +69,17 @@ struct Succeeded {
 }
 
 /// A submitted frame on its way back.
+/// Where a submitted frame's results stand.
+enum Results {
+    /// Rendering, or being copied back.
+    Gpu(PendingFrame),
+    /// Landed, and being converted and measured on the conversion thread:
+    /// the render thread goes on submitting frames meanwhile.
+    Converting(mpsc::Receiver<FrameResult>),
+}
+
 struct InFlight {
-    pending: PendingFrame,
+    results: Results,
     /// The reloads this frame is the first to show.
     reloads: Vec<Succeeded>,
     started: Instant,
@@ -107,6 +116,9 @@ pub struct Daemon {
     /// Reloads finished since the last frame, to tag that frame with.
     finished_reloads: Vec<Succeeded>,
     in_flight: VecDeque<InFlight>,
+    /// The one thread captures are converted on, so results come back in
+    /// frame order and never more than the frames in flight.
+    converter: rayon::ThreadPool,
     dirty: bool,
     /// What each WebSocket client wants captured, by client id.
     subscriptions: BTreeMap<u64, BTreeSet<String>>,
@@ -169,6 +181,11 @@ impl Daemon {
             reloads: BTreeMap::new(),
             finished_reloads: Vec::new(),
             in_flight: VecDeque::new(),
+            converter: rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .thread_name(|_| "loupe-convert".into())
+                .build()
+                .expect("the capture conversion thread"),
             dirty: true,
             subscriptions: BTreeMap::new(),
             swapped_since_frame: BTreeSet::new(),
@@ -505,7 +522,7 @@ impl Daemon {
             .filter(|p| p.pipelines.iter().any(|k| swapped.contains(k)))
             .flat_map(|p| p.writes().map(|h| self.session.graph().resource(h).name.clone()))
             .collect();
-        self.in_flight.push_back(InFlight { pending, reloads, started, final_key, clean, replaced, trace });
+        self.in_flight.push_back(InFlight { results: Results::Gpu(pending), reloads, started, final_key, clean, replaced, trace });
     }
 
     /// Turns the uncaptured wgpu errors of the newest frame into
@@ -608,16 +625,35 @@ impl Daemon {
         }
     }
 
+    /// Hands every landed frame to the conversion thread, and publishes
+    /// converted frames in order.
     fn collect_frames(&mut self) {
-        while self.in_flight.front().is_some_and(|f| f.pending.ready()) {
+        for f in &mut self.in_flight {
+            if matches!(&f.results, Results::Gpu(p) if p.ready()) {
+                let (tx, rx) = mpsc::sync_channel(1);
+                let Results::Gpu(pending) = std::mem::replace(&mut f.results, Results::Converting(rx)) else { unreachable!("matched above") };
+                self.converter.spawn(move || {
+                    let _ = tx.send(pending.finish());
+                });
+            }
+        }
+        while let Some(Results::Converting(rx)) = self.in_flight.front().map(|f| &f.results) {
+            let result = match rx.try_recv() {
+                Ok(result) => result,
+                Err(mpsc::TryRecvError::Empty) => break,
+                Err(mpsc::TryRecvError::Disconnected) => {
+                    log::error!("a frame's conversion was lost");
+                    self.in_flight.pop_front();
+                    continue;
+                }
+            };
             let done = self.in_flight.pop_front().expect("checked");
-            self.publish_frame(done);
+            self.publish_frame(done, result);
         }
     }
 
-    fn publish_frame(&mut self, done: InFlight) {
-        let InFlight { pending, reloads, started, final_key, clean, replaced, trace } = done;
-        let result = pending.finish();
+    fn publish_frame(&mut self, done: InFlight, result: FrameResult) {
+        let InFlight { results: _, reloads, started, final_key, clean, replaced, trace } = done;
         if clean {
             self.follow_nan(&result, trace);
         }
