@@ -35,7 +35,23 @@ pub struct PassContext<'a> {
     pub(super) recorded: u32,
     /// Set when the pass drew nothing because a pipeline never built.
     pub skipped: bool,
+    /// Where each render pass counts its fragment-shader invocations
+    /// (pipeline statistics), when the frame asked for them.
+    pub(super) statistics: Option<Statistics<'a>>,
 }
+
+/// The frame's pipeline-statistics queries: one per render pass recorded.
+pub(super) struct Statistics<'a> {
+    pub set: &'a wgpu::QuerySet,
+    /// The next free query.
+    pub next: u32,
+    /// The queries this pass used.
+    pub used: Vec<u32>,
+}
+
+/// How many pipeline-statistics queries one frame may make; render passes
+/// beyond them go uncounted (and their pass reports no count).
+pub(super) const MAX_STATISTICS: u32 = 256;
 
 impl<'a> PassContext<'a> {
     fn physical(&self, h: Handle) -> &'a Physical {
@@ -132,22 +148,41 @@ impl<'a> PassContext<'a> {
         self.timestamps.map(|(qs, base)| (qs, first.then_some(base), Some(base + 1)))
     }
 
+    /// A render pass carrying this pass's stamps, counting fragment-shader
+    /// invocations when asked (then the flag is set): end it with
+    /// `end_render`.
     fn begin_render<'p>(
         &'p mut self,
         colors: &'p [Option<wgpu::RenderPassColorAttachment<'p>>],
         depth: Option<wgpu::RenderPassDepthStencilAttachment<'p>>,
-    ) -> wgpu::RenderPass<'p> {
+    ) -> (wgpu::RenderPass<'p>, bool) {
         let timestamp_writes = self.stamps().map(|(query_set, beginning_of_pass_write_index, end_of_pass_write_index)| {
             wgpu::RenderPassTimestampWrites { query_set, beginning_of_pass_write_index, end_of_pass_write_index }
         });
-        self.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        let counted = self.statistics.as_mut().filter(|s| s.next < MAX_STATISTICS).map(|s| {
+            s.used.push(s.next);
+            s.next += 1;
+            (s.set, s.next - 1)
+        });
+        let mut rp = self.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(self.pass),
             color_attachments: colors,
             depth_stencil_attachment: depth,
             timestamp_writes,
             occlusion_query_set: None,
             multiview_mask: None,
-        })
+        });
+        if let Some((set, query)) = counted {
+            rp.begin_pipeline_statistics_query(set, query);
+        }
+        (rp, counted.is_some())
+    }
+
+    /// Ends a render pass from `begin_render`.
+    fn end_render(counted: bool, mut rp: wgpu::RenderPass<'_>) {
+        if counted {
+            rp.end_pipeline_statistics_query();
+        }
     }
 
     /// A compute pass carrying this pass's stamps.
@@ -174,13 +209,14 @@ impl<'a> PassContext<'a> {
         let Some(groups) = self.bind_groups(key, |i| pipeline.get_bind_group_layout(i), bindings) else { return };
         let views: Vec<&wgpu::TextureView> = targets.iter().map(|h| self.view(*h)).collect();
         let attachments = color_attachments(&views);
-        let mut rp = self.begin_render(&attachments, None);
+        let (mut rp, counted) = self.begin_render(&attachments, None);
         rp.set_pipeline(&pipeline);
         for (i, g) in &groups {
             rp.set_bind_group(*i, g, &[]);
         }
         let vertices = if key.defs.contains(pipeline::TWO_TRIANGLES) { 6 } else { 3 };
         rp.draw(0..vertices, 0..1);
+        Self::end_render(counted, rp);
     }
 
     /// Draws every object of the scene, each with its index as the instance
@@ -199,7 +235,7 @@ impl<'a> PassContext<'a> {
             stencil_ops: None,
         });
         let scene = self.scene;
-        let mut rp = self.begin_render(&attachments, depth);
+        let (mut rp, counted) = self.begin_render(&attachments, depth);
         rp.set_pipeline(&pipeline);
         for (i, g) in &groups {
             rp.set_bind_group(*i, g, &[]);
@@ -210,6 +246,7 @@ impl<'a> PassContext<'a> {
             rp.set_index_buffer(m.indices.slice(..), wgpu::IndexFormat::Uint32);
             rp.draw_indexed(0..m.index_count, 0, object as u32..object as u32 + 1);
         }
+        Self::end_render(counted, rp);
     }
 
     /// Dispatches compute pipeline `key` over `workgroups`.

@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicU8, Ordering};
 use std::time::Instant;
 
 use super::capture::{CapturedImage, CapturedTensor, Layout};
-use super::context::PassContext;
+use super::context::{MAX_STATISTICS, PassContext, Statistics};
 use super::graph::{Graph, PassKind, Resource};
 use super::pool::ResourcePool;
 use super::resource::{Physical, PipelineKey, ResourceDesc, TensorLayout, TextureDesc};
@@ -26,6 +26,9 @@ pub struct FrameInputs<'a> {
     pub pipelines: &'a BTreeMap<PipelineKey, Pipeline>,
     /// `pass/output` names to copy out; `None` captures everything.
     pub capture: Option<&'a BTreeSet<String>>,
+    /// Count each raster pass's fragment-shader invocations (pipeline
+    /// statistics), where the adapter can.
+    pub statistics: bool,
     pub frame: u64,
     /// Seconds since the previous frame.
     pub dt: f32,
@@ -38,6 +41,8 @@ pub struct PendingFrame {
     pub cpu_record_ms: f64,
     captures: Vec<PendingCapture>,
     timestamps: Option<(wgpu::Buffer, Arc<AtomicU8>, f32)>,
+    /// The statistics readback and, per pass, the queries it used.
+    statistics: Option<(wgpu::Buffer, Arc<AtomicU8>, Vec<Vec<u32>>)>,
     pub skipped: Vec<String>,
     passes: Vec<String>,
     /// Per pass: the capture names it read and wrote, for the NaN report.
@@ -77,6 +82,9 @@ pub struct FrameResult {
     pub tensors: Vec<CapturedTensor>,
     /// Passes that drew nothing because their pipeline never built.
     pub skipped: Vec<String>,
+    /// Per raster pass, the fragment-shader invocations the adapter counted
+    /// (pipeline statistics); empty unless asked for and supported.
+    pub fragment_invocations: Vec<(String, u64)>,
     /// Where a NaN or Inf first appeared, when any output holds one.
     pub nan: Option<NanOrigin>,
 }
@@ -141,6 +149,15 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
         f.device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("pass timings"), ty: wgpu::QueryType::Timestamp, count: graph.passes.len() as u32 * 2 })
     });
 
+    let statistics_set = (f.statistics && f.features.contains(wgpu::Features::PIPELINE_STATISTICS_QUERY)).then(|| {
+        f.device.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some("fragment invocations"),
+            ty: wgpu::QueryType::PipelineStatistics(wgpu::PipelineStatisticsTypes::FRAGMENT_SHADER_INVOCATIONS),
+            count: MAX_STATISTICS,
+        })
+    });
+    let (mut next_query, mut queries) = (0, Vec::new());
+
     let mut encoder = f.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
     let mut captures = Vec::new();
     let mut skipped = Vec::new();
@@ -157,6 +174,7 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
             timestamps: query_set.as_ref().map(|qs| (qs, i as u32 * 2)),
             recorded: 0,
             skipped: false,
+            statistics: statistics_set.as_ref().map(|set| Statistics { set, next: next_query, used: Vec::new() }),
         };
         // A copy pass records no render or compute pass of its own: empty
         // compute passes around it carry its stamps.
@@ -172,6 +190,10 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
         if ctx.skipped {
             skipped.push(pass.name.clone());
         }
+        if let Some(st) = ctx.statistics.take() {
+            next_query = st.next;
+            queries.push(st.used);
+        }
         for h in pass.writes() {
             let r = graph.resource(h);
             if f.capture.is_some_and(|c| !c.contains(&r.name)) {
@@ -183,22 +205,12 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
         }
     }
     let timestamps = query_set.map(|qs| {
-        let n = graph.passes.len() as u64 * 2;
-        let resolve = f.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("timestamps"),
-            size: n * 8,
-            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let read = f.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("timestamps readback"),
-            size: n * 8,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        encoder.resolve_query_set(&qs, 0..n as u32, &resolve, 0);
-        encoder.copy_buffer_to_buffer(&resolve, 0, &read, 0, n * 8);
+        let read = resolve(f.device, &mut encoder, &qs, graph.passes.len() as u32 * 2, "timestamps");
         (read, Arc::new(AtomicU8::new(MAP_PENDING)), f.queue.get_timestamp_period())
+    });
+    let statistics = statistics_set.map(|set| {
+        let read = resolve(f.device, &mut encoder, &set, next_query, "fragment invocations");
+        (read, Arc::new(AtomicU8::new(MAP_PENDING)), queries)
     });
     f.queue.submit([encoder.finish()]);
     for c in &captures {
@@ -207,12 +219,16 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
     if let Some((buf, state, _)) = &timestamps {
         map(buf, state.clone());
     }
+    if let Some((buf, state, _)) = &statistics {
+        map(buf, state.clone());
+    }
     PendingFrame {
         frame: f.frame,
         submitted: Instant::now(),
         cpu_record_ms: start.elapsed().as_secs_f64() * 1e3,
         captures,
         timestamps,
+        statistics,
         skipped,
         passes: graph.passes.iter().map(|p| p.name.clone()).collect(),
         io: graph
@@ -224,6 +240,34 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
             })
             .collect(),
     }
+}
+
+/// Resolves the first `n` queries of `set` (one u64 each) into a buffer to
+/// read back.
+fn resolve(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, set: &wgpu::QuerySet, n: u32, label: &str) -> wgpu::Buffer {
+    // A buffer may not be empty.
+    let size = u64::from(n.max(1)) * 8;
+    let resolved = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let read = readback_buffer(device, label, size);
+    if n > 0 {
+        encoder.resolve_query_set(set, 0..n, &resolved, 0);
+        encoder.copy_buffer_to_buffer(&resolved, 0, &read, 0, size);
+    }
+    read
+}
+
+/// The little-endian u64s of a mapped query readback, unmapped after.
+fn read_u64s(buffer: &wgpu::Buffer) -> Option<Vec<u64>> {
+    let mapped = buffer.slice(..).get_mapped_range().ok()?;
+    let values = mapped.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes"))).collect();
+    drop(mapped);
+    buffer.unmap();
+    Some(values)
 }
 
 fn map(buffer: &wgpu::Buffer, state: Arc<AtomicU8>) {
@@ -276,6 +320,7 @@ impl PendingFrame {
     pub fn ready(&self) -> bool {
         self.captures.iter().all(|c| c.state.load(Ordering::Acquire) != MAP_PENDING)
             && self.timestamps.as_ref().is_none_or(|t| t.1.load(Ordering::Acquire) != MAP_PENDING)
+            && self.statistics.as_ref().is_none_or(|t| t.1.load(Ordering::Acquire) != MAP_PENDING)
     }
 
     /// Converts the mapped readbacks and takes their statistics: the
@@ -304,24 +349,27 @@ impl PendingFrame {
             drop(mapped);
             c.buffer.unmap();
         }
-        let (timings, total_ms, timing) = match &self.timestamps {
-            Some((buf, state, period)) if state.load(Ordering::Acquire) == MAP_OK && buf.slice(..).get_mapped_range().is_ok() => {
-                let mapped = buf.slice(..).get_mapped_range().expect("checked in the guard");
-                let stamps: Vec<u64> = mapped.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes"))).collect();
-                drop(mapped);
-                buf.unmap();
+        let stamps = self.timestamps.as_ref().filter(|t| t.1.load(Ordering::Acquire) == MAP_OK).and_then(|(buf, _, period)| Some((read_u64s(buf)?, *period)));
+        let (timings, total_ms, timing) = match stamps {
+            Some((stamps, period)) => {
                 let t: Vec<(String, f64)> = self
                     .passes
                     .iter()
                     .enumerate()
-                    .map(|(i, n)| (n.clone(), stamps[i * 2 + 1].saturating_sub(stamps[i * 2]) as f64 * f64::from(*period) / 1e6))
+                    .map(|(i, n)| (n.clone(), stamps[i * 2 + 1].saturating_sub(stamps[i * 2]) as f64 * f64::from(period) / 1e6))
                     .collect();
                 let total = t.iter().map(|(_, ms)| ms).sum();
                 (t, total, "gpu")
             }
-            _ => (Vec::new(), self.submitted.elapsed().as_secs_f64() * 1e3 + self.cpu_record_ms, "cpu"),
+            None => (Vec::new(), self.submitted.elapsed().as_secs_f64() * 1e3 + self.cpu_record_ms, "cpu"),
         };
+        let counts = self.statistics.as_ref().filter(|s| s.1.load(Ordering::Acquire) == MAP_OK).and_then(|(buf, _, queries)| Some((read_u64s(buf)?, queries)));
+        let fragment_invocations = counts
+            .map(|(counts, queries)| {
+                self.passes.iter().zip(queries).filter(|(_, q)| !q.is_empty()).map(|(n, q)| (n.clone(), q.iter().map(|&i| counts[i as usize]).sum())).collect()
+            })
+            .unwrap_or_default();
         let nan = nan_origin(&self.passes, &self.io, &captures, &tensors);
-        FrameResult { frame: self.frame, timings, total_ms, timing, captures, tensors, skipped: self.skipped, nan }
+        FrameResult { frame: self.frame, timings, total_ms, timing, captures, tensors, skipped: self.skipped, fragment_invocations, nan }
     }
 }

@@ -96,6 +96,8 @@ pub struct Session {
     options: FrameOptions,
     /// naga_oil composers kept warm between compiles, shared by the jobs.
     composer: Arc<ComposeCache>,
+    /// Whether frames gather quad statistics (costly: only while asked).
+    quads: bool,
 }
 
 impl Session {
@@ -105,6 +107,7 @@ impl Session {
             graph: super::build_graph(&loaded.scene, FrameOptions::default()),
             options: FrameOptions::default(),
             composer: Arc::default(),
+            quads: false,
             scene: loaded.scene.clone(),
             meshes: loaded.meshes.clone(),
             scene_gpu,
@@ -122,6 +125,11 @@ impl Session {
         self.options = options;
         self.graph = super::build_graph(&self.scene, options);
         self
+    }
+
+    /// Turns quad statistics on or off for the frames that follow.
+    pub fn set_quads(&mut self, on: bool) {
+        self.quads = on;
     }
 
     pub fn gpu(&self) -> &Gpu {
@@ -264,6 +272,7 @@ impl Session {
             graph: &self.graph,
             pipelines: &live,
             capture,
+            statistics: self.quads,
             frame: self.frame,
             dt,
         };
@@ -406,6 +415,32 @@ mod tests {
         assert_eq!(r.timing, "cpu");
         assert_eq!(r.timings, vec![], "no pass gets a time it did not measure");
         assert!(r.total_ms > 0.0, "the frame's wall clock is reported");
+    }
+
+    /// Pipeline statistics count each raster pass's fragment-shader
+    /// invocations where the adapter can (lavapipe can), only while asked.
+    #[test]
+    fn quad_statistics_count_fragment_invocations_per_raster_pass() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+        let gpu = crate::gpu::open().unwrap_or_else(|e| panic!("a GPU device (lavapipe will do): {e}"));
+        if !gpu.features.contains(wgpu::Features::PIPELINE_STATISTICS_QUERY) {
+            return;
+        }
+        let mut s = Session::new(gpu, &root, library::read_tree(&root).unwrap(), &pattern(false));
+        assert_eq!(s.install_missing(), vec![]);
+        let pixels = u64::from(s.scene().width * s.scene().height);
+        let pending = s.submit(Some(&BTreeSet::new()), 0.0);
+        assert_eq!(s.wait(pending).fragment_invocations, vec![], "not asked for");
+        s.set_quads(true);
+        let pending = s.submit(Some(&BTreeSet::new()), 0.0);
+        let counts = s.wait(pending).fragment_invocations;
+        let names: Vec<&str> = counts.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["test_pattern", "tonemap"]);
+        // Two fullscreen passes: every pixel shaded at least once, helper
+        // lanes at most a quad's worth per pixel.
+        for (name, n) in &counts {
+            assert!((pixels..=4 * pixels).contains(n), "{name}: {n} invocations for {pixels} pixels");
+        }
     }
 
     /// A module composed before a save and installed after it is that old
