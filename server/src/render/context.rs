@@ -12,6 +12,15 @@ use super::resource::{Handle, Physical, PipelineKey};
 use super::scene_gpu::SceneGpu;
 use crate::gpu::pipeline::{self, Pipeline};
 
+/// The depth target of a draw: one layer of a depth texture, cleared first
+/// or tested against what it holds.
+#[derive(Debug, Clone, Copy)]
+pub struct DepthTarget {
+    pub texture: Handle,
+    pub layer: u32,
+    pub clear: bool,
+}
+
 /// Bindings by the names the pipeline spec gives them.
 pub type Bindings<'b> = [(&'static str, wgpu::BindingResource<'b>)];
 
@@ -221,15 +230,16 @@ impl<'a> PassContext<'a> {
 
     /// Draws every object of the scene, each with its index as the instance
     /// index, into `colors` and the depth target (cleared when `clear`).
-    pub fn draw_objects(&mut self, key: &PipelineKey, bindings: &Bindings<'_>, colors: &[Handle], depth: Option<(&wgpu::TextureView, bool)>) {
+    pub fn draw_objects(&mut self, key: &PipelineKey, bindings: &Bindings<'_>, colors: &[Handle], depth: Option<DepthTarget>) {
         let Some(pipeline) = self.render_pipeline(key) else { return };
         let Some(groups) = self.bind_groups(key, |i| pipeline.get_bind_group_layout(i), bindings) else { return };
         let views: Vec<&wgpu::TextureView> = colors.iter().map(|h| self.view(*h)).collect();
         let attachments = color_attachments(&views);
-        let depth = depth.map(|(view, clear)| wgpu::RenderPassDepthStencilAttachment {
+        let depth_view = depth.map(|d| self.layer(d.texture, d.layer));
+        let depth = depth.zip(depth_view.as_ref()).map(|(d, view)| wgpu::RenderPassDepthStencilAttachment {
             view,
             depth_ops: Some(wgpu::Operations {
-                load: if clear { wgpu::LoadOp::Clear(1.0) } else { wgpu::LoadOp::Load },
+                load: if d.clear { wgpu::LoadOp::Clear(1.0) } else { wgpu::LoadOp::Load },
                 store: wgpu::StoreOp::Store,
             }),
             stencil_ops: None,

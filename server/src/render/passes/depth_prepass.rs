@@ -3,6 +3,7 @@
 
 use super::VIEW;
 use crate::gpu::pipeline::{DEPTH, Depth, Group, PipelineSpec, Stages, VERT, storage};
+use crate::render::context::DepthTarget;
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Handle, PipelineKey, TextureDesc};
 use crate::scene::Scene;
@@ -22,8 +23,8 @@ pub fn depth_prepass(g: &mut GraphBuilder, scene: &Scene) -> Handle {
     let depth = p.create("depth", TextureDesc::d2(DEPTH, scene.width, scene.height), Access::DepthTarget);
     p.execute(move |ctx| {
         let s = ctx.scene;
-        let target = ctx.view(depth);
-        ctx.draw_objects(&key, &[("view", s.view.as_entire_binding()), ("objects", s.objects.as_entire_binding())], &[], Some((target, true)));
+        let target = DepthTarget { texture: depth, layer: 0, clear: true };
+        ctx.draw_objects(&key, &[("view", s.view.as_entire_binding()), ("objects", s.objects.as_entire_binding())], &[], Some(target));
     });
     depth
 }

@@ -2,6 +2,7 @@
 
 use super::VIEW;
 use crate::gpu::pipeline::{ALL, Depth, FRAG, Group, HDR, PipelineSpec, Stages, storage};
+use crate::render::context::DepthTarget;
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Handle, PipelineKey, TextureDesc};
 use crate::scene::Scene;
@@ -35,8 +36,7 @@ pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle) -> GBuffer {
     p.execute(move |ctx| {
         let s = ctx.scene;
         let bindings = [("view", s.view.as_entire_binding()), ("objects", s.objects.as_entire_binding()), ("materials", s.materials.as_entire_binding())];
-        let depth = ctx.view(depth);
-        ctx.draw_objects(&key, &bindings, &targets, Some((depth, false)));
+        ctx.draw_objects(&key, &bindings, &targets, Some(DepthTarget { texture: depth, layer: 0, clear: false }));
     });
     gb
 }

@@ -2,6 +2,7 @@
 //! for point lights), drawn from the light.
 
 use crate::gpu::pipeline::{DEPTH, Depth, Group, PipelineSpec, Stages, VERT, sizes, storage, uniform};
+use crate::render::context::DepthTarget;
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Handle, PipelineKey, TextureDesc};
 use crate::render::scene_gpu::shadow_layout;
@@ -35,8 +36,8 @@ pub fn shadows(g: &mut GraphBuilder, scene: &Scene) -> Option<Handle> {
         let s = ctx.scene;
         for (layer, m) in s.shadow_layers.iter().enumerate() {
             let view = ctx.uniform(bytemuck::cast_slice(&m.to_cols_array()));
-            let target = ctx.layer(depth, layer as u32);
-            ctx.draw_objects(&key, &[("shadow_view", view.as_entire_binding()), ("objects", s.objects.as_entire_binding())], &[], Some((&target, true)));
+            let target = DepthTarget { texture: depth, layer: layer as u32, clear: true };
+            ctx.draw_objects(&key, &[("shadow_view", view.as_entire_binding()), ("objects", s.objects.as_entire_binding())], &[], Some(target));
         }
     });
     Some(depth)
