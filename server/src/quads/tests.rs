@@ -621,6 +621,35 @@ fn the_near_plane_clips_to_the_analytic_polygon() {
         (got.culled_triangles, got.pixels, got.quads),
         (0, want.pixels, want.quads)
     );
+
+    // Its facing is that of the visible trapezoid: A, B, Q, P runs
+    // counter-clockwise on screen, front-facing for wgpu's default.
+    let back = Some(Face::Back);
+    assert_eq!(
+        one_draw(
+            512,
+            512,
+            &Draw {
+                cull: back,
+                ..draw(&behind)
+            }
+        )
+        .rasterized,
+        got
+    );
+    let reversed = [behind[0], behind[2], behind[1]];
+    assert_eq!(
+        one_draw(
+            512,
+            512,
+            &Draw {
+                cull: back,
+                ..draw(&reversed)
+            }
+        )
+        .rasterized,
+        stats(1, 1, 0, 0)
+    );
 }
 
 // ---- depth -----------------------------------------------------------
