@@ -12,6 +12,7 @@ pub mod gpu;
 pub mod mesh;
 pub mod offline;
 pub mod protocol;
+pub mod quads;
 pub mod render;
 pub mod scene;
 pub mod serve;
