@@ -30,6 +30,9 @@ pub enum Stages {
     Compute { entry: &'static str },
 }
 
+/// The slope-scaled bias of `Depth::Biased` (shadow maps).
+pub const SHADOW_BIAS: wgpu::DepthBiasState = wgpu::DepthBiasState { constant: 2, slope_scale: 2.0, clamp: 0.0 };
+
 /// How a mesh pipeline uses its depth attachment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Depth {
@@ -314,7 +317,7 @@ pub fn create(
                     depth_write_enabled: Some(depth != Depth::Equal),
                     depth_compare: Some(if depth == Depth::Equal { wgpu::CompareFunction::LessEqual } else { wgpu::CompareFunction::Less }),
                     stencil: Default::default(),
-                    bias: if depth == Depth::Biased { wgpu::DepthBiasState { constant: 2, slope_scale: 2.0, clamp: 0.0 } } else { Default::default() },
+                    bias: if depth == Depth::Biased { SHADOW_BIAS } else { Default::default() },
                 }),
                 multisample: wgpu::MultisampleState::default(),
                 multiview_mask: None,

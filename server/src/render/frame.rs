@@ -4,14 +4,13 @@
 //! asynchronously.
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicU8, Ordering};
 use std::time::Instant;
 
 use super::capture::{CapturedImage, CapturedTensor, Layout};
 use super::context::{MAX_STATISTICS, PassContext, Statistics};
 use super::graph::{Graph, PassKind, Resource};
 use super::pool::ResourcePool;
+use super::readback::Readback;
 use super::resource::{Physical, PipelineKey, ResourceDesc, TensorLayout, TextureDesc};
 use super::scene_gpu::SceneGpu;
 use crate::gpu::pipeline::Pipeline;
@@ -40,16 +39,18 @@ pub struct PendingFrame {
     pub submitted: Instant,
     pub cpu_record_ms: f64,
     captures: Vec<PendingCapture>,
-    timestamps: Option<(wgpu::Buffer, Arc<AtomicU8>, f32)>,
-    /// The statistics readback and, per pass, the queries it used.
-    statistics: Option<(wgpu::Buffer, Arc<AtomicU8>, Vec<Vec<u32>>)>,
+    /// The timestamps and the timestamp period.
+    timestamps: Option<(Readback, f32)>,
+    /// The pipeline statistics and, per pass, the queries it used.
+    statistics: Option<(Readback, Vec<Vec<u32>>)>,
     pub skipped: Vec<String>,
     passes: Vec<String>,
     /// Per pass: the capture names it read and wrote, for the NaN report.
     io: Vec<(Vec<String>, Vec<String>)>,
 }
 
-enum Readback {
+/// What a capture copied.
+enum Copied {
     Texture { desc: TextureDesc, padded_row: u32 },
     Buffer(TensorLayout),
 }
@@ -57,14 +58,9 @@ enum Readback {
 struct PendingCapture {
     pass: String,
     output: String,
-    what: Readback,
-    buffer: wgpu::Buffer,
-    state: Arc<AtomicU8>,
+    what: Copied,
+    readback: Readback,
 }
-
-const MAP_PENDING: u8 = 0;
-const MAP_OK: u8 = 1;
-const MAP_FAILED: u8 = 2;
 
 /// A frame's results once every readback has landed.
 pub struct FrameResult {
@@ -205,22 +201,20 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
         }
     }
     let timestamps = query_set.map(|qs| {
-        let read = resolve(f.device, &mut encoder, &qs, graph.passes.len() as u32 * 2, "timestamps");
-        (read, Arc::new(AtomicU8::new(MAP_PENDING)), f.queue.get_timestamp_period())
+        (resolve(f.device, &mut encoder, &qs, graph.passes.len() as u32 * 2, "timestamps"), f.queue.get_timestamp_period())
     });
     let statistics = statistics_set.map(|set| {
-        let read = resolve(f.device, &mut encoder, &set, next_query, "fragment invocations");
-        (read, Arc::new(AtomicU8::new(MAP_PENDING)), queries)
+        (resolve(f.device, &mut encoder, &set, next_query, "fragment invocations"), queries)
     });
     f.queue.submit([encoder.finish()]);
     for c in &captures {
-        map(&c.buffer, c.state.clone());
+        c.readback.map();
     }
-    if let Some((buf, state, _)) = &timestamps {
-        map(buf, state.clone());
+    if let Some((r, _)) = &timestamps {
+        r.map();
     }
-    if let Some((buf, state, _)) = &statistics {
-        map(buf, state.clone());
+    if let Some((r, _)) = &statistics {
+        r.map();
     }
     PendingFrame {
         frame: f.frame,
@@ -244,7 +238,7 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
 
 /// Resolves the first `n` queries of `set` (one u64 each) into a buffer to
 /// read back.
-fn resolve(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, set: &wgpu::QuerySet, n: u32, label: &str) -> wgpu::Buffer {
+fn resolve(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, set: &wgpu::QuerySet, n: u32, label: &str) -> Readback {
     // A buffer may not be empty.
     let size = u64::from(n.max(1)) * 8;
     let resolved = device.create_buffer(&wgpu::BufferDescriptor {
@@ -253,74 +247,55 @@ fn resolve(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, set: &wgpu
         usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let read = readback_buffer(device, label, size);
+    let read = Readback::new(device, label, size);
     if n > 0 {
         encoder.resolve_query_set(set, 0..n, &resolved, 0);
-        encoder.copy_buffer_to_buffer(&resolved, 0, &read, 0, size);
+        encoder.copy_buffer_to_buffer(&resolved, 0, read.buffer(), 0, size);
     }
     read
 }
 
-/// The little-endian u64s of a mapped query readback, unmapped after.
-fn read_u64s(buffer: &wgpu::Buffer) -> Option<Vec<u64>> {
-    let mapped = buffer.slice(..).get_mapped_range().ok()?;
-    let values = mapped.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes"))).collect();
-    drop(mapped);
-    buffer.unmap();
-    Some(values)
-}
-
-fn map(buffer: &wgpu::Buffer, state: Arc<AtomicU8>) {
-    buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
-        state.store(if r.is_ok() { MAP_OK } else { MAP_FAILED }, Ordering::Release);
-    });
-}
-
-fn readback_buffer(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    })
+/// The little-endian u64s of a query readback.
+fn read_u64s(r: &Readback) -> Option<Vec<u64>> {
+    r.read(|bytes| bytes.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes"))).collect())
 }
 
 fn copy_out(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, physical: &Physical, r: &Resource, pass: &str) -> Option<PendingCapture> {
-    let (what, buffer) = match (&r.desc, physical) {
+    let (what, readback) = match (&r.desc, physical) {
         (ResourceDesc::Texture(desc), Physical::Texture { texture, .. }) => {
             let layout = Layout::of(desc.format)?;
             let row = desc.width * layout.bytes_per_texel() as u32;
             let padded_row = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-            let buffer = readback_buffer(device, &r.name, u64::from(padded_row) * u64::from(desc.height) * u64::from(desc.layers));
+            let readback = Readback::new(device, &r.name, u64::from(padded_row) * u64::from(desc.height) * u64::from(desc.layers));
             // Layers land one under another: an array reads back as one tall image.
             let aspect = if desc.format.has_depth_aspect() { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
             encoder.copy_texture_to_buffer(
                 wgpu::TexelCopyTextureInfo { aspect, ..texture.as_image_copy() },
                 wgpu::TexelCopyBufferInfo {
-                    buffer: &buffer,
+                    buffer: readback.buffer(),
                     layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded_row), rows_per_image: Some(desc.height) },
                 },
                 wgpu::Extent3d { width: desc.width, height: desc.height, depth_or_array_layers: desc.layers },
             );
-            (Readback::Texture { desc: desc.clone(), padded_row }, buffer)
+            (Copied::Texture { desc: desc.clone(), padded_row }, readback)
         }
         (ResourceDesc::Buffer(layout), Physical::Buffer(source)) => {
             let size = source.size();
-            let buffer = readback_buffer(device, &r.name, size);
-            encoder.copy_buffer_to_buffer(source, 0, &buffer, 0, size);
-            (Readback::Buffer(layout.clone()), buffer)
+            let readback = Readback::new(device, &r.name, size);
+            encoder.copy_buffer_to_buffer(source, 0, readback.buffer(), 0, size);
+            (Copied::Buffer(layout.clone()), readback)
         }
         _ => return None,
     };
-    Some(PendingCapture { pass: pass.to_owned(), output: r.output().to_owned(), what, buffer, state: Arc::new(AtomicU8::new(MAP_PENDING)) })
+    Some(PendingCapture { pass: pass.to_owned(), output: r.output().to_owned(), what, readback })
 }
 
 impl PendingFrame {
     /// Whether every readback has completed (call `device.poll` first).
     pub fn ready(&self) -> bool {
-        self.captures.iter().all(|c| c.state.load(Ordering::Acquire) != MAP_PENDING)
-            && self.timestamps.as_ref().is_none_or(|t| t.1.load(Ordering::Acquire) != MAP_PENDING)
-            && self.statistics.as_ref().is_none_or(|t| t.1.load(Ordering::Acquire) != MAP_PENDING)
+        self.captures.iter().all(|c| c.readback.landed())
+            && self.timestamps.as_ref().is_none_or(|t| t.0.landed())
+            && self.statistics.as_ref().is_none_or(|t| t.0.landed())
     }
 
     /// Converts the mapped readbacks and takes their statistics: the
@@ -329,12 +304,8 @@ impl PendingFrame {
         let mut captures = Vec::new();
         let mut tensors = Vec::new();
         for c in &self.captures {
-            if c.state.load(Ordering::Acquire) != MAP_OK {
-                continue;
-            }
-            let Ok(mapped) = c.buffer.slice(..).get_mapped_range() else { continue };
-            match &c.what {
-                Readback::Texture { desc, padded_row } => {
+            let converted = c.readback.read(|mapped| match &c.what {
+                Copied::Texture { desc, padded_row } => {
                     let layout = Layout::of(desc.format).expect("checked at copy");
                     let row = desc.width as usize * layout.bytes_per_texel();
                     let rows = (desc.height * desc.layers) as usize;
@@ -344,12 +315,13 @@ impl PendingFrame {
                     }
                     captures.push(CapturedImage::new(&c.pass, &c.output, self.frame, desc.width, rows as u32, desc.format, data));
                 }
-                Readback::Buffer(layout) => tensors.push(CapturedTensor::new(&c.pass, &c.output, self.frame, layout.clone(), &mapped)),
+                Copied::Buffer(layout) => tensors.push(CapturedTensor::new(&c.pass, &c.output, self.frame, layout.clone(), mapped)),
+            });
+            if converted.is_none() {
+                log::warn!("the readback of {}/{} failed", c.pass, c.output);
             }
-            drop(mapped);
-            c.buffer.unmap();
         }
-        let stamps = self.timestamps.as_ref().filter(|t| t.1.load(Ordering::Acquire) == MAP_OK).and_then(|(buf, _, period)| Some((read_u64s(buf)?, *period)));
+        let stamps = self.timestamps.as_ref().and_then(|(r, period)| Some((read_u64s(r)?, *period)));
         let (timings, total_ms, timing) = match stamps {
             Some((stamps, period)) => {
                 let t: Vec<(String, f64)> = self
@@ -363,7 +335,7 @@ impl PendingFrame {
             }
             None => (Vec::new(), self.submitted.elapsed().as_secs_f64() * 1e3 + self.cpu_record_ms, "cpu"),
         };
-        let counts = self.statistics.as_ref().filter(|s| s.1.load(Ordering::Acquire) == MAP_OK).and_then(|(buf, _, queries)| Some((read_u64s(buf)?, queries)));
+        let counts = self.statistics.as_ref().and_then(|(r, queries)| Some((read_u64s(r)?, queries)));
         let fragment_invocations = counts
             .map(|(counts, queries)| {
                 self.passes.iter().zip(queries).filter(|(_, q)| !q.is_empty()).map(|(n, q)| (n.clone(), q.iter().map(|&i| counts[i as usize]).sum())).collect()

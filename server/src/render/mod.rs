@@ -10,6 +10,8 @@ pub mod ltc;
 pub mod passes;
 pub mod pipelines;
 pub mod pool;
+pub mod quads;
+pub mod readback;
 pub mod resource;
 pub mod scene_gpu;
 pub mod session;

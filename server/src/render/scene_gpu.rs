@@ -30,6 +30,8 @@ pub struct SceneGpu {
     pub meshes: Vec<GpuMesh>,
     /// Per object, in scene order: which mesh it draws.
     pub draws: Vec<usize>,
+    /// Per object, in scene order: its name, for per-draw reports.
+    pub names: Vec<String>,
     /// The LTC tables, only for scenes with a rect light.
     pub ltc: Option<[wgpu::Texture; 2]>,
 }
@@ -307,6 +309,7 @@ impl SceneGpu {
             shadow_layers,
             meshes,
             draws,
+            names: scene.objects.iter().map(|o| o.name.clone()).collect(),
             ltc: scene.has_rect_lights().then(|| super::ltc::create_textures(device, queue)),
         }
     }

@@ -1,0 +1,187 @@
+//! Quad statistics of a frame, renderer side: while a frame is asked for
+//! them, every draw of every raster pass is recorded with the clip-space
+//! positions its own vertex stage produced (read back from the GPU) and
+//! the depth its render pass started from; once the frame has landed they
+//! are replayed, in submission order, through the exact CPU model in
+//! [`crate::quads`].
+
+use serde::Serialize;
+
+use crate::quads::{self, Compare, DepthState, Draw, DrawStats, FrontFace, QuadMaps};
+
+/// One render pass recorded for replay (a shadow pass records one per
+/// layer).
+pub struct RecordedTarget {
+    pub pass: String,
+    pub width: u32,
+    pub height: u32,
+    pub depth: Option<InitialDepth>,
+    pub draws: Vec<RecordedDraw>,
+    /// For a fullscreen pass: whether it drew two triangles, so the other
+    /// mode can be modelled beside it.
+    pub fullscreen: Option<bool>,
+}
+
+/// What a render pass's depth buffer held before its first draw.
+pub enum InitialDepth {
+    /// Cleared to this value.
+    Clear(f32),
+    /// Loaded: the depths, rows top first, copied out before the pass.
+    Loaded(Vec<f32>),
+}
+
+/// One draw: its name in the report, its positions (one per vertex
+/// invocation, in index order: every three make a triangle) and its depth
+/// state.
+pub struct RecordedDraw {
+    pub name: String,
+    pub positions: Vec<[f32; 4]>,
+    pub depth: Option<DepthState>,
+}
+
+/// One draw's figures as reports and the API show them: the keys of what
+/// ran the fragment shader at the top, and, for a pipeline that tests
+/// depth, everything rasterized before the test.
+#[derive(Debug, Clone, Serialize)]
+pub struct DrawReport {
+    pub name: String,
+    #[serde(flatten)]
+    pub shaded: quads::QuadStats,
+    /// Before the depth test; absent when the pipeline tests no depth.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rasterized: Option<quads::QuadStats>,
+}
+
+impl DrawReport {
+    fn new(name: &str, s: &DrawStats) -> Self {
+        DrawReport { name: name.to_owned(), shaded: s.shaded_or_rasterized(), rasterized: s.shaded.map(|_| s.rasterized) }
+    }
+}
+
+/// A fullscreen pass drawn the other way.
+#[derive(Debug, Clone, Serialize)]
+pub struct WhatIf {
+    /// `one_triangle` or `two_triangles`: the mode modelled.
+    pub mode: &'static str,
+    #[serde(flatten)]
+    pub quads: quads::QuadStats,
+}
+
+/// One raster pass's quad statistics.
+#[derive(Debug, Clone, Serialize)]
+pub struct PassQuads {
+    pub pass: String,
+    pub draws: Vec<DrawReport>,
+    /// The draws summed.
+    pub quads: DrawReport,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub what_if: Option<WhatIf>,
+    /// The maps of each render target of the pass, in order (a shadow
+    /// map's layers one under another).
+    #[serde(skip)]
+    pub maps: Vec<QuadMaps>,
+}
+
+impl PassQuads {
+    /// The maps stacked as one image: (width, height, quads launched per
+    /// 2×2 block spread over its pixels, helper-lane count per pixel).
+    pub fn stacked_maps(&self) -> Option<(u32, u32, Vec<f32>, Vec<f32>)> {
+        let width = self.maps.first()?.size().0;
+        let (mut height, mut quads, mut helpers) = (0, Vec::new(), Vec::new());
+        for m in self.maps.iter().filter(|m| m.size().0 == width) {
+            let (w, h) = m.size();
+            let bw = m.blocks().0 as usize;
+            for y in 0..h as usize {
+                quads.extend((0..w as usize).map(|x| m.quads()[(y / 2) * bw + x / 2] as f32));
+            }
+            helpers.extend(m.helper_lanes().iter().map(|&n| n as f32));
+            height += h;
+        }
+        Some((width, height, quads, helpers))
+    }
+}
+
+/// Replays the recorded render passes of a frame: one entry per raster pass
+/// that drew, in frame order. A target the model refuses (a size over its
+/// limit, a non-finite depth) is left out with a warning.
+pub fn replay(targets: &[RecordedTarget]) -> Vec<PassQuads> {
+    let mut out: Vec<PassQuads> = Vec::new();
+    for t in targets {
+        let Some((draws, maps)) = replay_target(t).map_err(|e| log::warn!("quad statistics of `{}`: {e}", t.pass)).ok() else { continue };
+        let what_if = t.fullscreen.and_then(|two| fullscreen_what_if(t.width, t.height, !two).ok());
+        let total: DrawStats = draws.iter().map(|(_, s)| *s).sum();
+        match out.last_mut().filter(|p| p.pass == t.pass) {
+            Some(p) => {
+                p.draws.extend(draws.iter().map(|(n, s)| DrawReport::new(n, s)));
+                let sum = total + stats_of(&p.quads);
+                p.quads = DrawReport::new("total", &sum);
+                p.maps.push(maps);
+            }
+            None => out.push(PassQuads {
+                pass: t.pass.clone(),
+                draws: draws.iter().map(|(n, s)| DrawReport::new(n, s)).collect(),
+                quads: DrawReport::new("total", &total),
+                what_if,
+                maps: vec![maps],
+            }),
+        }
+    }
+    out
+}
+
+/// A report's figures back as the model's, for summing across targets.
+fn stats_of(r: &DrawReport) -> DrawStats {
+    match r.rasterized {
+        Some(rasterized) => DrawStats { rasterized, shaded: Some(r.shaded) },
+        None => DrawStats { rasterized: r.shaded, shaded: None },
+    }
+}
+
+fn replay_target(t: &RecordedTarget) -> Result<(Vec<(String, DrawStats)>, QuadMaps), quads::QuadError> {
+    let mut pass = quads::Pass::new(t.width, t.height)?;
+    match &t.depth {
+        Some(InitialDepth::Clear(v)) => pass = pass.with_depth(vec![*v; t.width as usize * t.height as usize])?,
+        Some(InitialDepth::Loaded(d)) => pass = pass.with_depth(d.clone())?,
+        None => {}
+    }
+    let mut draws = Vec::new();
+    for d in &t.draws {
+        let stats = pass.draw(&Draw { positions: &d.positions, depth: d.depth, front_face: FrontFace::Ccw, ..Draw::default() })?;
+        draws.push((d.name.clone(), stats));
+    }
+    Ok((draws, pass.finish().1))
+}
+
+/// The clip-space corners `shaders/lib/fullscreen.wgsl` draws: one
+/// triangle covering the viewport, or two sharing its diagonal.
+pub fn fullscreen_positions(two_triangles: bool) -> Vec<[f32; 4]> {
+    let corners: &[[f32; 2]] = if two_triangles {
+        &[[-1.0, -1.0], [1.0, -1.0], [-1.0, 1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]]
+    } else {
+        &[[-1.0, -1.0], [3.0, -1.0], [-1.0, 3.0]]
+    };
+    corners.iter().map(|[x, y]| [*x, *y, 0.0, 1.0]).collect()
+}
+
+/// A fullscreen pass modelled in the other mode, from the corners that
+/// mode's shader draws.
+fn fullscreen_what_if(width: u32, height: u32, two_triangles: bool) -> Result<WhatIf, quads::QuadError> {
+    let mut pass = quads::Pass::new(width, height)?;
+    let positions = fullscreen_positions(two_triangles);
+    let s = pass.draw(&Draw { positions: &positions, ..Draw::default() })?;
+    Ok(WhatIf { mode: if two_triangles { "two_triangles" } else { "one_triangle" }, quads: s.shaded_or_rasterized() })
+}
+
+/// The depth state of a pipeline spec's depth mode, as `gpu::pipeline`
+/// creates the pipeline.
+pub fn depth_state(depth: crate::gpu::pipeline::Depth) -> DepthState {
+    use crate::gpu::pipeline::{Depth, SHADOW_BIAS};
+    match depth {
+        Depth::Write => DepthState::new(Compare::Less, true),
+        Depth::Biased => DepthState {
+            bias: quads::DepthBias { constant: SHADOW_BIAS.constant, slope_scale: SHADOW_BIAS.slope_scale, clamp: SHADOW_BIAS.clamp },
+            ..DepthState::new(Compare::Less, true)
+        },
+        Depth::Equal => DepthState::new(Compare::LessEqual, false),
+    }
+}
