@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::diag::Diagnostic;
 use crate::render::frame::NanOrigin;
 use crate::render::pipelines::{PipelineSummary, Status as PipelineStatus};
+use crate::render::quads::PassQuads;
 use crate::render::session::{PassState, PassSummary};
 use crate::scene::overrides::{Control, Overrides, Value as OverrideValue};
 
@@ -196,6 +197,32 @@ pub enum ServerEvent {
     /// A traced frame's NaN report (also `GET /api/nan`); `null` once a
     /// later frame is clean again.
     Nan { report: Option<NanReport> },
+    /// A frame's quad statistics (also `GET /api/quads`), for every frame
+    /// while some client asks for them (`quad_statistics`).
+    Quads(QuadReport),
+}
+
+/// The subscription member that stands for quad statistics in a client's
+/// set of `pass/output` keys (it has no `/`, so no output is named so).
+pub const QUAD_STATISTICS: &str = "quads";
+
+/// One frame's quad statistics: the model's figures per raster pass and
+/// draw, beside what the adapter counted.
+#[derive(Debug, Clone, Serialize)]
+pub struct QuadReport {
+    pub frame: u64,
+    /// The adapter whose fragment-shader invocations are shown.
+    pub adapter: String,
+    pub passes: Vec<PassQuadReport>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct PassQuadReport {
+    #[serde(flatten)]
+    pub quads: PassQuads,
+    /// Fragment-shader invocations the adapter counted over the pass
+    /// (pipeline statistics); `null` where it cannot count them.
+    pub fragment_invocations: Option<u64>,
 }
 
 /// Where a NaN or Inf started, from a frame that captured every output.
@@ -282,4 +309,7 @@ pub enum ClientMessage {
     /// Write the overrides into the scene file, keeping its comments and
     /// layout, and clear them.
     SaveScene {},
+    /// Start (`on: true`) or stop receiving `quads` events: the daemon
+    /// computes quad statistics while any client wants them.
+    QuadStatistics { on: bool },
 }

@@ -81,6 +81,8 @@ pub struct FrameResult {
     /// Per raster pass, the fragment-shader invocations the adapter counted
     /// (pipeline statistics); empty unless asked for and supported.
     pub fragment_invocations: Vec<(String, u64)>,
+    /// Per raster pass that drew, its quad statistics; empty unless asked.
+    pub quads: Vec<super::quads::PassQuads>,
     /// Where a NaN or Inf first appeared, when any output holds one.
     pub nan: Option<NanOrigin>,
 }
@@ -342,6 +344,6 @@ impl PendingFrame {
             })
             .unwrap_or_default();
         let nan = nan_origin(&self.passes, &self.io, &captures, &tensors);
-        FrameResult { frame: self.frame, timings, total_ms, timing, captures, tensors, skipped: self.skipped, fragment_invocations, nan }
+        FrameResult { frame: self.frame, timings, total_ms, timing, captures, tensors, skipped: self.skipped, fragment_invocations, quads: Vec::new(), nan }
     }
 }

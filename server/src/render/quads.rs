@@ -5,6 +5,8 @@
 //! are replayed, in submission order, through the exact CPU model in
 //! [`crate::quads`].
 
+use std::sync::Arc;
+
 use serde::Serialize;
 
 use crate::quads::{self, Compare, DepthState, Draw, DrawStats, FrontFace, QuadMaps};
@@ -77,9 +79,10 @@ pub struct PassQuads {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub what_if: Option<WhatIf>,
     /// The maps of each render target of the pass, in order (a shadow
-    /// map's layers one under another).
+    /// map's layers one under another); shared, as reports are cloned for
+    /// every client.
     #[serde(skip)]
-    pub maps: Vec<QuadMaps>,
+    pub maps: Arc<Vec<QuadMaps>>,
 }
 
 impl PassQuads {
@@ -115,14 +118,14 @@ pub fn replay(targets: &[RecordedTarget]) -> Vec<PassQuads> {
                 p.draws.extend(draws.iter().map(|(n, s)| DrawReport::new(n, s)));
                 let sum = total + stats_of(&p.quads);
                 p.quads = DrawReport::new("total", &sum);
-                p.maps.push(maps);
+                Arc::make_mut(&mut p.maps).push(maps);
             }
             None => out.push(PassQuads {
                 pass: t.pass.clone(),
                 draws: draws.iter().map(|(n, s)| DrawReport::new(n, s)).collect(),
                 quads: DrawReport::new("total", &total),
                 what_if,
-                maps: vec![maps],
+                maps: Arc::new(vec![maps]),
             }),
         }
     }

@@ -16,7 +16,7 @@ use super::inbox::Inbox;
 use super::shared::{self, FrameImages, Shared};
 use crate::diag::{Code, Diagnostic, Location, Severity};
 use crate::gpu::{self, Gpu};
-use crate::protocol::{self, ControlsReport, NanCount, NanReport, PassInfo, PassStatus, PassTiming, ReloadTimings, ServerEvent, Status};
+use crate::protocol::{self, ControlsReport, NanCount, NanReport, PassInfo, PassQuadReport, PassStatus, PassTiming, QUAD_STATISTICS, QuadReport, ReloadTimings, ServerEvent, Status};
 use crate::gpu::pipeline::PipelineSpec;
 use crate::render::frame::{FrameResult, PendingFrame};
 use crate::render::FrameOptions;
@@ -273,10 +273,16 @@ impl Daemon {
             }
             Event::Subscriptions { client, outputs } => {
                 let before = self.subscriptions.remove(&client).unwrap_or_default();
-                // A new output needs a frame that captures it.
+                // A new output (or quad statistics) needs a frame that
+                // captures it.
                 self.dirty |= !outputs.is_subset(&before);
                 if !outputs.is_empty() {
                     self.subscriptions.insert(client, outputs);
+                }
+                let quads = self.subscriptions.values().any(|s| s.contains(QUAD_STATISTICS));
+                self.session.set_quads(quads);
+                if !quads {
+                    shared::write(&self.shared.quads, None);
                 }
             }
             Event::Tick => self.dirty = true,
@@ -499,7 +505,7 @@ impl Daemon {
         self.last_frame = Some(started);
         self.dirty = false;
         let final_key = self.session.graph().final_name();
-        let mut capture: BTreeSet<String> = self.subscriptions.values().flatten().cloned().collect();
+        let mut capture: BTreeSet<String> = self.subscriptions.values().flatten().filter(|k| *k != QUAD_STATISTICS).cloned().collect();
         capture.extend(final_key.clone());
         capture.insert(nan_watch::OUTPUT.to_owned());
         // A traced frame captures every output.
@@ -677,6 +683,9 @@ impl Daemon {
             shared::write(&self.shared.tensors, Arc::new(tensors));
             images = Some(FrameImages::new(result.frame, final_key, this_frame));
         }
+        if clean && !result.quads.is_empty() {
+            self.publish_quads(result.frame, result.quads, &result.fragment_invocations);
+        }
         self.last_timings = result.timings;
         self.last_timing = result.timing.to_owned();
         for r in &reloads {
@@ -702,6 +711,17 @@ impl Daemon {
         if let Some(images) = images {
             self.shared.frames.send_replace(Some(Arc::new(images)));
         }
+    }
+
+    /// A frame's quad statistics, beside the adapter's own counts.
+    fn publish_quads(&mut self, frame: u64, quads: Vec<crate::render::quads::PassQuads>, invocations: &[(String, u64)]) {
+        let passes = quads
+            .into_iter()
+            .map(|q| PassQuadReport { fragment_invocations: invocations.iter().find(|(p, _)| *p == q.pass).map(|(_, n)| *n), quads: q })
+            .collect();
+        let report = QuadReport { frame, adapter: self.gpu().adapter_name(), passes };
+        shared::write(&self.shared.quads, Some(Arc::new(report.clone())));
+        self.shared.publish(ServerEvent::Quads(report));
     }
 
     /// Writes the pass list snapshot (with the newest times) and announces

@@ -9,7 +9,7 @@ use tokio::sync::{broadcast, watch};
 
 use super::inbox::Clients;
 use crate::diag::Diagnostic;
-use crate::protocol::{ControlsReport, Encoding, NanReport, PassInfo, PipelineInfo, ServerEvent, Status};
+use crate::protocol::{ControlsReport, Encoding, NanReport, PassInfo, PipelineInfo, QuadReport, ServerEvent, Status};
 use crate::render::capture::{CapturedImage, CapturedTensor};
 
 /// How many events a slow WebSocket client may fall behind before it
@@ -25,6 +25,8 @@ pub struct Shared {
     pub captures: RwLock<Arc<BTreeMap<String, Arc<CapturedImage>>>>,
     /// The newest traced frame's NaN report, while frames are not clean.
     pub nan: RwLock<Option<NanReport>>,
+    /// The newest frame's quad statistics, while some client asks for them.
+    pub quads: RwLock<Option<Arc<QuadReport>>>,
     /// Every captured buffer (as a tensor) of the newest frames, by
     /// `pass/output`.
     pub tensors: RwLock<Arc<BTreeMap<String, Arc<CapturedTensor>>>>,
@@ -96,6 +98,7 @@ impl Shared {
             last_good: RwLock::new(Arc::new(BTreeMap::new())),
             tensors: RwLock::new(Arc::new(BTreeMap::new())),
             nan: RwLock::new(None),
+            quads: RwLock::new(None),
             events: broadcast::channel(EVENT_QUEUE).0,
             frames: watch::channel(None).0,
             clients,

@@ -29,6 +29,7 @@
 
 mod api;
 mod guard;
+mod quads;
 mod sources;
 mod tensors;
 #[cfg(test)]
@@ -129,6 +130,8 @@ fn build(shared: Arc<Shared>, allowed_hosts: Vec<String>) -> (Router, watch::Sen
         .route("/api/captures/{pass}/{file}", get(api::capture))
         .route("/api/tensors", get(tensors::list))
         .route("/api/nan", get(api::nan))
+        .route("/api/quads", get(quads::report))
+        .route("/api/quads/{pass}/{file}", get(quads::map))
         .route("/api/frame/trace", post(api::trace))
         .route("/api/tensors/{pass}/{file}", get(tensors::tensor))
         .route("/api/sources/{*path}", get(sources::source))

@@ -16,7 +16,7 @@ use tokio::sync::broadcast::error::RecvError;
 
 use super::AppState;
 use super::guard::error;
-use crate::protocol::{ClientMessage, Encoding, ServerEvent, VERSION};
+use crate::protocol::{ClientMessage, Encoding, QUAD_STATISTICS, ServerEvent, VERSION};
 use crate::serve::event::SceneCommand;
 use crate::serve::inbox::{Client, Command, MAX_CONNECTIONS, Refused};
 use crate::serve::shared::{FrameImages, Shared, read};
@@ -157,6 +157,13 @@ fn client_message(
         }
         ClientMessage::Unsubscribe { pass, output } => {
             if subscriptions.remove(&format!("{pass}/{output}")).is_some() {
+                client.subscribe(subscriptions.keys().cloned().collect());
+            }
+            return Ok(());
+        }
+        ClientMessage::QuadStatistics { on } => {
+            let changed = if on { subscriptions.insert(QUAD_STATISTICS.to_owned(), Encoding::default()).is_none() } else { subscriptions.remove(QUAD_STATISTICS).is_some() };
+            if changed {
                 client.subscribe(subscriptions.keys().cloned().collect());
             }
             return Ok(());
