@@ -127,3 +127,22 @@ export async function captureF32(pass, output, { lastGood = false, fallback = nu
     format: response.headers.get('X-Loupe-Format'),
   };
 }
+
+/**
+ * A pass's quad map (`overdraw` or `helpers`): one little-endian f32 a
+ * pixel, its render targets one under another.
+ */
+export async function quadMap(pass, kind) {
+  const url = `/api/quads/${encodePath(pass)}/${kind}.f32`;
+  const response = await request(url, 'application/octet-stream');
+  const buffer = await response.arrayBuffer();
+  const width = Number(response.headers.get('X-Loupe-Width'));
+  const height = Number(response.headers.get('X-Loupe-Height'));
+  if (!(width > 0 && height > 0) || buffer.byteLength !== width * height * 4) {
+    throw new ApiError(`${url}: ${buffer.byteLength} bytes for ${width}×${height} f32`, { status: 200, url });
+  }
+  const view = new DataView(buffer);
+  const values = new Float32Array(width * height);
+  for (let i = 0; i < values.length; i++) values[i] = view.getFloat32(i * 4, true);
+  return { width, height, values };
+}

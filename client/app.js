@@ -30,6 +30,7 @@ import { Inspector } from './inspector.js';
 import { LiveFrame } from './live.js';
 import { TensorView } from './tensor.js';
 import { ControlsPanel } from './controls.js';
+import { QuadView } from './quads.js';
 import * as tex from './texture.js';
 import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
 
@@ -255,7 +256,10 @@ let conn = null; // created below; the inspector's hooks reach it lazily
 
 const inspector = new Inspector({
   fetchCaptures: () => loadCaptures(),
-  onTarget: (pass) => passList.select(pass),
+  onTarget: (pass) => {
+    passList.select(pass);
+    quadView.setPass(pass);
+  },
   // The inspector streams exact floats of what it shows.
   subscribeOnly: (wanted) => conn?.subscribeOnly(wanted, 'f32'),
   awaitCapture,
@@ -458,6 +462,9 @@ function onEvent(ev) {
     case 'nan':
       applyNan(ev.report);
       break;
+    case 'quads':
+      quadView.setReport(ev);
+      break;
     default:
       // A newer server may send events this page does not know: ignore.
       break;
@@ -531,6 +538,18 @@ $('rebuild').addEventListener('click', async () => {
     notify('rebuild', `rebuild request failed: ${errorText(err)}`, 'error', 10000);
   }
 });
+
+// ---- quad statistics -----------------------------------------------------
+
+const quadView = new QuadView(
+  { toggle: $('quad-stats'), panel: $('quad-panel'), overlay: $('quad-overlay'), legend: $('quad-legend') },
+  {
+    send: (on) => conn?.setQuads(on),
+    passList,
+    inspector,
+    fetchMap: api.quadMap,
+  },
+);
 
 // ---- scene controls ------------------------------------------------------
 

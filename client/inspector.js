@@ -551,6 +551,22 @@ export class Inspector {
     this.updateInfo();
   }
 
+  /**
+   * Lays a map over A (quad statistics): {width, height, rgba} or null.
+   * Shown only without a compare, at A's scale, from A's top-left corner.
+   */
+  setOverlay(map) {
+    if (!map) this.overlay = null;
+    else {
+      const canvas = document.createElement('canvas');
+      canvas.width = map.width;
+      canvas.height = map.height;
+      canvas.getContext('2d').putImageData(new ImageData(map.rgba, map.width, map.height), 0, 0);
+      this.overlay = { canvas, width: map.width, height: map.height, kind: map.kind };
+    }
+    this.draw();
+  }
+
   tonemapSlot(slot) {
     if (!slot.canvas) {
       slot.canvas = document.createElement('canvas');
@@ -608,6 +624,7 @@ export class Inspector {
       put(this.b);
       ctx.restore();
     } else put(this.a);
+    if (this.overlay?.canvas && mode === 'off') put(this.overlay);
 
     const shown = this.displayedSlot();
     if (shown) {
@@ -1045,6 +1062,7 @@ export class Inspector {
       frame: a?.frame ?? null,
       format: a?.format ?? null,
       stats: a ? { ...a.stats } : null,
+      overlay: this.overlay ? { kind: this.overlay.kind, width: this.overlay.width, height: this.overlay.height } : null,
       compare: {
         mode: this.mode(),
         b: this.selB.value,

@@ -65,6 +65,28 @@ export class PassList {
     return true;
   }
 
+  /** The newest quad report (null: off): totals under each raster pass. */
+  setQuads(report) {
+    this.quads = new Map((report?.passes ?? []).map((p) => [p.pass, p.quads]));
+    for (const li of this.list.querySelectorAll('li.pass')) this.showQuads(li);
+  }
+
+  showQuads(li) {
+    const q = this.quads?.get(li.dataset.pass);
+    let node = li.querySelector('.pass-quads');
+    if (!q) {
+      node?.remove();
+      return;
+    }
+    if (!node) {
+      node = el('div', { class: 'pass-quads' });
+      li.querySelector('.pass-bar').after(node);
+    }
+    const eff = q.quad_efficiency === null ? '—' : `${(q.quad_efficiency * 100).toFixed(1)} %`;
+    node.textContent = `${q.quads.toLocaleString('en-US')} quads · ${q.helper_lanes.toLocaleString('en-US')} helper lanes · ${eff} efficient`;
+    node.dataset.quads = q.quads;
+  }
+
   /** A `frame` event: new times without a new pass list. */
   updateTimings(frame) {
     if (!Array.isArray(frame.passes)) return;
@@ -89,6 +111,7 @@ export class PassList {
       rows.push(el('li', { class: 'empty' }, 'no passes yet'));
     }
     this.list.replaceChildren(...rows);
+    for (const li of this.list.querySelectorAll('li.pass')) this.showQuads(li);
     this.layoutBars();
   }
 

@@ -72,6 +72,7 @@ export class Connection {
       this.everConnected = true;
       this.setState('connected');
       for (const message of this.subscriptions.values()) this.send(message);
+      if (this.quads) this.send({ type: 'quad_statistics', on: true });
       this.safe(() => this.cb.onOpen?.());
     };
     ws.onmessage = (msg) => this.receive(msg.data);
@@ -151,6 +152,12 @@ export class Connection {
     if (!this.subscriptions.delete(key)) return false;
     this.send({ type: 'unsubscribe', pass, output });
     return true;
+  }
+
+  /** Asks for quad statistics with every frame, or stops; kept across reconnects. */
+  setQuads(on) {
+    this.quads = on;
+    this.send({ type: 'quad_statistics', on });
   }
 
   /** Subscribes to exactly `wanted` ([{pass, output}]) in `encoding`. */
