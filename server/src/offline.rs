@@ -14,6 +14,7 @@ use crate::diag::Diagnostic;
 use crate::gpu;
 use crate::render::capture::{CapturedTensor, ImageStats, TensorStats};
 use crate::render::frame::{FrameResult, NanOrigin};
+use crate::render::quads::{DrawReport, WhatIf};
 use crate::render::resource::TensorLayout;
 use crate::render::session::{PassState, PassSummary, Session};
 use crate::scene::{self, overrides::Overrides};
@@ -94,6 +95,19 @@ pub struct PassReport {
     /// `null` without timestamp queries (only the frame total is known).
     pub time_ms: Option<f64>,
     pub outputs: Vec<OutputReport>,
+    /// Raster passes: each draw's quad statistics (docs/quads.md).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub draws: Option<Vec<DrawReport>>,
+    /// The draws summed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub quads: Option<DrawReport>,
+    /// Fullscreen passes: the other mode (one triangle or two) modelled.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub what_if: Option<WhatIf>,
+    /// Fragment-shader invocations the adapter counted over the pass
+    /// (pipeline statistics), where it can.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fragment_invocations: Option<u64>,
 }
 
 #[derive(Debug, Serialize)]
@@ -129,6 +143,7 @@ pub struct CulledReport {
 /// caller writes it as JSON).
 pub fn render(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
     let mut session = prepare(job)?;
+    session.set_quads(true);
     let result = frame(&mut session, None);
     std::fs::create_dir_all(out).map_err(|e| OfflineError::Io(format!("cannot create {}: {e}", out.display())))?;
     let write = |name: String, bytes: Vec<u8>| {
@@ -153,7 +168,13 @@ pub fn render(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
             outputs.push(OutputReport::Tensor { name: t.output.clone(), layout: t.layout.clone(), stats: t.stats.clone(), npy });
         }
         let time_ms = result.timings.iter().find(|(n, _)| *n == pass.name).map(|(_, t)| *t);
-        passes.push(PassReport { pass, time_ms, outputs });
+        let fragment_invocations = result.fragment_invocations.iter().find(|(n, _)| *n == pass.name).map(|(_, c)| *c);
+        let q = result.quads.iter().find(|q| q.pass == pass.name).cloned();
+        let (draws, quads, what_if) = match q {
+            Some(q) => (Some(q.draws), Some(q.quads), q.what_if),
+            None => (None, None, None),
+        };
+        passes.push(PassReport { pass, time_ms, outputs, draws, quads, what_if, fragment_invocations });
     }
     let (width, height) = (session.scene().width, session.scene().height);
     Ok(FrameReport {

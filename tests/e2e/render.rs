@@ -6,7 +6,12 @@ use serde_json::Value;
 
 /// Renders `scene` (relative to the project) small, into `<project>/out`.
 fn render(p: &Project, scene: &str, extra: &[&str]) -> (Run, Option<Value>) {
-    let mut args = vec!["render", "--scene", scene, "--out", "out", "--size", "96x54"];
+    render_at(p, scene, "96x54", extra)
+}
+
+/// Renders `scene` at `size` (WIDTHxHEIGHT) into `<project>/out`.
+fn render_at(p: &Project, scene: &str, size: &str, extra: &[&str]) -> (Run, Option<Value>) {
+    let mut args = vec!["render", "--scene", scene, "--out", "out", "--size", size];
     args.extend_from_slice(extra);
     let run = p.run(&args);
     let report = std::fs::read_to_string(p.path("out/report.json")).ok().map(|t| serde_json::from_str(&t).expect("report.json is JSON"));
@@ -151,4 +156,97 @@ fn render_and_bench_read_the_scene_under_root_as_serve_does() {
     assert!(out.join("report.json").is_file());
     let run = loupe_tests::loupe(&elsewhere.root, &["bench", "--root", root, "--size", "32x18", "--frames", "1", "scenes/pattern.toml"]);
     run.code(0).stdout_has("scenes/pattern.toml");
+}
+
+fn pass<'a>(report: &'a Value, name: &str) -> &'a Value {
+    report["passes"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap_or_else(|| panic!("no pass {name}: {report}"))
+}
+
+/// Quad statistics of fullscreen passes, against counts derived by hand.
+/// One triangle covers every pixel of a W×H target: ⌈W/2⌉·⌈H/2⌉ quads,
+/// and the lanes past an odd edge are the only helpers. Two triangles
+/// sharing the diagonal of a 512×512 target both touch each of the 256
+/// 2×2 blocks the diagonal crosses: 256 more quads, each launched twice
+/// for its four pixels, so 4 helper lanes apiece (1,024).
+#[test]
+fn fullscreen_passes_report_quads_in_either_mode_and_the_other_as_what_if() {
+    let p = Project::copy_of_repo("render-quads-fullscreen");
+    let cases = [
+        // size, two triangles, (quads, helpers), what_if (quads, helpers)
+        ("512x512", false, (65_536, 0), (65_792, 1_024)),
+        ("512x512", true, (65_792, 1_024), (65_536, 0)),
+        // 333×211: 167·106 quads; 4·17,702 − 333·211 = 545 helper lanes.
+        ("333x211", false, (17_702, 545), two_triangles(333, 211)),
+    ];
+    for (size, two, (quads, helpers), (what_quads, what_helpers)) in cases {
+        let set = format!("post.two_triangles={two}");
+        let (run, report) = render_at(&p, "scenes/pattern.toml", size, &["--set", &set]);
+        run.code(0);
+        let r = report.expect("report.json written");
+        let (w, h): (u64, u64) = size.split_once('x').map(|(w, h)| (w.parse().unwrap(), h.parse().unwrap())).unwrap();
+        for name in ["test_pattern", "tonemap"] {
+            let pass = pass(&r, name);
+            let what = format!("{name} at {size}, two triangles {two}: {pass}");
+            let total = &pass["quads"];
+            assert_eq!((total["quads"].as_u64(), total["helper_lanes"].as_u64()), (Some(quads), Some(helpers)), "{what}");
+            assert_eq!(total["pixels"].as_u64(), Some(w * h), "{what}");
+            assert_eq!(total["triangles"].as_u64(), Some(if two { 2 } else { 1 }), "{what}");
+            let draws = pass["draws"].as_array().unwrap();
+            assert_eq!(draws.len(), 1, "{what}");
+            assert_eq!(draws[0]["quads"], total["quads"], "{what}");
+            let what_if = &pass["what_if"];
+            assert_eq!(what_if["mode"], if two { "one_triangle" } else { "two_triangles" }, "{what}");
+            assert_eq!((what_if["quads"].as_u64(), what_if["helper_lanes"].as_u64()), (Some(what_quads), Some(what_helpers)), "{what}");
+            // The adapter's own count beside the model's, where it can count
+            // (lavapipe can): at least every covered pixel once.
+            if let Some(n) = pass["fragment_invocations"].as_u64() {
+                assert!(n >= w * h, "{what}");
+            }
+        }
+    }
+}
+
+/// Quads and helper lanes of two triangles splitting a `w`×`h` target
+/// along its diagonal from the top-left corner to the bottom-right, by
+/// brute force: a 2×2 block launches one quad per triangle holding one of
+/// its pixel centres. A centre exactly on the diagonal (the centre of the
+/// 333×211 target is one) goes by the top-left rule to the triangle whose
+/// left edge the diagonal is: at any row the upper-right triangle lies to
+/// the diagonal's right, so it takes the centre.
+fn two_triangles(w: u64, h: u64) -> (u64, u64) {
+    let mut quads = 0;
+    for by in 0..h.div_ceil(2) {
+        for bx in 0..w.div_ceil(2) {
+            // Centre (x + ½, y + ½) below the line y = x·h/w, in integers.
+            let below: Vec<bool> = (0..4).map(|i| (2 * bx + i % 2, 2 * by + i / 2)).filter(|&(x, y)| x < w && y < h).map(|(x, y)| (2 * y + 1) * w > (2 * x + 1) * h).collect();
+            quads += u64::from(below.contains(&true)) + u64::from(below.contains(&false));
+        }
+    }
+    (quads, 4 * quads - w * h)
+}
+
+/// The G-buffer pass tests against the prepass's depth (less-equal, no
+/// write): it rasterizes exactly what the prepass rasterized, and shades
+/// each visible pixel once. Visible pixels are counted from the G-buffer
+/// the GPU wrote (normal.w is 1 where geometry was drawn), not from loupe's
+/// model; the two agree to within a few silhouette pixels, where the GPU's
+/// f32 depth and the model's differ (docs/quads.md, "Depth ties").
+#[test]
+fn the_gbuffer_pass_rasterizes_what_the_prepass_did_and_shades_each_visible_pixel_once() {
+    let p = Project::copy_of_repo("render-quads-gbuffer");
+    let (run, report) = render_at(&p, "scenes/minimal.toml", "640x360", &[]);
+    run.code(0);
+    let r = report.expect("report.json written");
+    let (prepass, gbuffer) = (&pass(&r, "depth_prepass")["quads"], &pass(&r, "gbuffer")["quads"]);
+    assert_eq!(gbuffer["rasterized"], prepass["rasterized"], "same draws, same positions\n{gbuffer}\n{prepass}");
+    let normal = image::open(p.path("out/gbuffer.normal.png")).unwrap().to_rgba8();
+    let visible = normal.pixels().filter(|px| px.0[3] == 255).count() as i64;
+    let shaded = gbuffer["pixels"].as_i64().unwrap();
+    let rasterized = gbuffer["rasterized"]["pixels"].as_i64().unwrap();
+    assert!(visible > 10_000, "the knot covers a good part of the frame: {visible}");
+    assert!((shaded - visible).abs() * 1000 <= visible, "shaded {shaded} vs {visible} visible pixels (more than 0.1 % apart)");
+    assert!(rasterized > shaded + visible / 2, "the knot overlaps itself: {rasterized} rasterized, {shaded} shaded");
+    // The prepass writes depth in primitive order: it shades every pixel
+    // that was nearest so far, at least each visible one.
+    assert!(prepass["pixels"].as_i64().unwrap() >= visible, "{prepass}");
 }

@@ -9,7 +9,10 @@ use std::sync::Arc;
 use wgpu::util::DeviceExt;
 
 use super::resource::{Handle, Physical, PipelineKey};
+use super::quads::{PendingDepth, PendingDraw, PendingTarget, QuadRecorder, depth_state};
+use super::readback::Readback;
 use super::scene_gpu::SceneGpu;
+use super::vertex_capture::{self, Vertices};
 use crate::gpu::pipeline::{self, Pipeline};
 
 /// The depth target of a draw: one layer of a depth texture, cleared first
@@ -47,6 +50,8 @@ pub struct PassContext<'a> {
     /// Where each render pass counts its fragment-shader invocations
     /// (pipeline statistics), when the frame asked for them.
     pub(super) statistics: Option<Statistics<'a>>,
+    /// Where draws are recorded for quad statistics, when the frame asked.
+    pub(super) quads: Option<QuadRecorder<'a>>,
 }
 
 /// The frame's pipeline-statistics queries: one per render pass recorded.
@@ -223,9 +228,74 @@ impl<'a> PassContext<'a> {
         for (i, g) in &groups {
             rp.set_bind_group(*i, g, &[]);
         }
-        let vertices = if key.defs.contains(pipeline::TWO_TRIANGLES) { 6 } else { 3 };
+        let two = key.defs.contains(pipeline::TWO_TRIANGLES);
+        let vertices = if two { 6 } else { 3 };
         rp.draw(0..vertices, 0..1);
         Self::end_render(counted, rp);
+        if self.quads.is_some() {
+            let size = self.texture(targets[0]).size();
+            let draw = vertex_capture::Draw { buffer: None, vertices: Vertices::Direct { first: 0 }, count: vertices, instance: 0 };
+            let name = if two { "two triangles" } else { "fullscreen triangle" };
+            let draws = self.capture_positions(key, bindings, &[(name.to_owned(), draw)], None);
+            self.record_target(size, None, draws, Some(two));
+        }
+    }
+
+    /// Records the positions of `draws` (named) for quad statistics; `None`
+    /// with a warning when the vertex stage cannot be captured.
+    fn capture_positions(&mut self, key: &PipelineKey, bindings: &Bindings<'_>, draws: &[(String, vertex_capture::Draw<'_>)], depth: Option<crate::quads::DepthState>) -> Option<Vec<PendingDraw>> {
+        let rec = self.quads.as_ref()?;
+        let Some(capture) = rec.captures.get(key) else {
+            log::warn!("quad statistics of `{}`: no vertex capture for pipeline {}", self.pass, key.label());
+            return None;
+        };
+        let layout = key.spec.layout(&key.defs);
+        let mut out = Vec::new();
+        for (name, draw) in draws {
+            match capture.record(self.device, self.encoder, &layout, bindings, draw) {
+                Ok(positions) => out.push(PendingDraw { name: name.clone(), positions, depth }),
+                Err(e) => {
+                    log::warn!("quad statistics of `{}`: {e}", self.pass);
+                    return None;
+                }
+            }
+        }
+        Some(out)
+    }
+
+    /// Adds one render pass's recorded draws (`None`: not capturable, so the
+    /// pass is left out rather than counted short).
+    fn record_target(&mut self, size: wgpu::Extent3d, depth: Option<PendingDepth>, draws: Option<Vec<PendingDraw>>, fullscreen: Option<bool>) {
+        let pass = self.pass.to_owned();
+        let Some(rec) = self.quads.as_mut() else { return };
+        match draws {
+            Some(draws) => rec.targets.push(PendingTarget { pass, width: size.width, height: size.height, depth, draws, fullscreen }),
+            // One layer short would misstate the pass: drop all of it.
+            None => rec.targets.retain(|t| t.pass != pass),
+        }
+    }
+
+    /// Copies layer `layer` of depth texture `h` out, before a pass that
+    /// tests against it changes nothing but still must be replayed from it.
+    fn copy_depth(&mut self, h: Handle, layer: u32) -> PendingDepth {
+        let texture = self.texture(h);
+        let size = texture.size();
+        let padded_row = (size.width * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let readback = Readback::new(self.device, "quad statistics: depth", u64::from(padded_row) * u64::from(size.height));
+        self.encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d { x: 0, y: 0, z: layer },
+                aspect: wgpu::TextureAspect::DepthOnly,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: readback.buffer(),
+                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded_row), rows_per_image: Some(size.height) },
+            },
+            wgpu::Extent3d { width: size.width, height: size.height, depth_or_array_layers: 1 },
+        );
+        PendingDepth::Loaded { readback, padded_row }
     }
 
     /// Draws every object of the scene, each with its index as the instance
@@ -235,6 +305,12 @@ impl<'a> PassContext<'a> {
         let Some(groups) = self.bind_groups(key, |i| pipeline.get_bind_group_layout(i), bindings) else { return };
         let views: Vec<&wgpu::TextureView> = colors.iter().map(|h| self.view(*h)).collect();
         let attachments = color_attachments(&views);
+        let depth_target = depth;
+        // What the depth buffer holds before the pass, for quad statistics.
+        let initial = match depth {
+            Some(d) if self.quads.is_some() => Some(if d.clear { PendingDepth::Clear(1.0) } else { self.copy_depth(d.texture, d.layer) }),
+            _ => None,
+        };
         let depth_view = depth.map(|d| self.layer(d.texture, d.layer));
         let depth = depth.zip(depth_view.as_ref()).map(|(d, view)| wgpu::RenderPassDepthStencilAttachment {
             view,
@@ -257,6 +333,34 @@ impl<'a> PassContext<'a> {
             rp.draw_indexed(0..m.index_count, 0, object as u32..object as u32 + 1);
         }
         Self::end_render(counted, rp);
+        if self.quads.is_some() {
+            let size = match (depth_target, colors.first()) {
+                (_, Some(c)) => self.texture(*c).size(),
+                (Some(d), None) => self.texture(d.texture).size(),
+                (None, None) => return,
+            };
+            let draws: Vec<(String, vertex_capture::Draw<'_>)> = scene
+                .draws
+                .iter()
+                .enumerate()
+                .map(|(object, &mesh)| {
+                    let m = &scene.meshes[mesh];
+                    let vertices = Vertices::Indexed { indices: &m.indices, first: 0, base_vertex: 0 };
+                    // Layers of one texture are one pass's targets: say which.
+                    let name = match depth_target {
+                        Some(d) if self.texture(d.texture).size().depth_or_array_layers > 1 => format!("layer {}: {}", d.layer, scene.names[object]),
+                        _ => scene.names[object].clone(),
+                    };
+                    (name, vertex_capture::Draw { buffer: Some(&m.vertices), vertices, count: m.index_count, instance: object as u32 })
+                })
+                .collect();
+            let state = match key.spec.stages {
+                pipeline::Stages::Mesh { depth: mode, .. } if depth_target.is_some() => Some(depth_state(mode)),
+                _ => None,
+            };
+            let recorded = self.capture_positions(key, bindings, &draws, state);
+            self.record_target(size, initial, recorded, None);
+        }
     }
 
     /// Dispatches compute pipeline `key` over `workgroups`.

@@ -10,7 +10,9 @@ use super::capture::{CapturedImage, CapturedTensor, Layout};
 use super::context::{MAX_STATISTICS, PassContext, Statistics};
 use super::graph::{Graph, PassKind, Resource};
 use super::pool::ResourcePool;
+use super::quads::{PendingTarget, QuadRecorder};
 use super::readback::Readback;
+use super::vertex_capture::VertexCapture;
 use super::resource::{Physical, PipelineKey, ResourceDesc, TensorLayout, TextureDesc};
 use super::scene_gpu::SceneGpu;
 use crate::gpu::pipeline::Pipeline;
@@ -28,6 +30,9 @@ pub struct FrameInputs<'a> {
     /// Count each raster pass's fragment-shader invocations (pipeline
     /// statistics), where the adapter can.
     pub statistics: bool,
+    /// Record every draw for quad statistics, capturing positions with
+    /// these (one per raster pipeline); `None`: do not.
+    pub vertex_captures: Option<&'a BTreeMap<PipelineKey, VertexCapture>>,
     pub frame: u64,
     /// Seconds since the previous frame.
     pub dt: f32,
@@ -43,6 +48,8 @@ pub struct PendingFrame {
     timestamps: Option<(Readback, f32)>,
     /// The pipeline statistics and, per pass, the queries it used.
     statistics: Option<(Readback, Vec<Vec<u32>>)>,
+    /// Render passes recorded for quad statistics.
+    quad_targets: Vec<PendingTarget>,
     pub skipped: Vec<String>,
     passes: Vec<String>,
     /// Per pass: the capture names it read and wrote, for the NaN report.
@@ -155,6 +162,7 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
         })
     });
     let (mut next_query, mut queries) = (0, Vec::new());
+    let mut quad_targets = Vec::new();
 
     let mut encoder = f.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
     let mut captures = Vec::new();
@@ -173,6 +181,7 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
             recorded: 0,
             skipped: false,
             statistics: statistics_set.as_ref().map(|set| Statistics { set, next: next_query, used: Vec::new() }),
+            quads: f.vertex_captures.map(|captures| QuadRecorder { captures, targets: Vec::new() }),
         };
         // A copy pass records no render or compute pass of its own: empty
         // compute passes around it carry its stamps.
@@ -191,6 +200,9 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
         if let Some(st) = ctx.statistics.take() {
             next_query = st.next;
             queries.push(st.used);
+        }
+        if let Some(rec) = ctx.quads.take() {
+            quad_targets.extend(rec.targets);
         }
         for h in pass.writes() {
             let r = graph.resource(h);
@@ -218,6 +230,9 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
     if let Some((r, _)) = &statistics {
         r.map();
     }
+    for t in &quad_targets {
+        t.map();
+    }
     PendingFrame {
         frame: f.frame,
         submitted: Instant::now(),
@@ -225,6 +240,7 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
         captures,
         timestamps,
         statistics,
+        quad_targets,
         skipped,
         passes: graph.passes.iter().map(|p| p.name.clone()).collect(),
         io: graph
@@ -298,6 +314,7 @@ impl PendingFrame {
         self.captures.iter().all(|c| c.readback.landed())
             && self.timestamps.as_ref().is_none_or(|t| t.0.landed())
             && self.statistics.as_ref().is_none_or(|t| t.0.landed())
+            && self.quad_targets.iter().all(PendingTarget::landed)
     }
 
     /// Converts the mapped readbacks and takes their statistics: the
@@ -343,7 +360,9 @@ impl PendingFrame {
                 self.passes.iter().zip(queries).filter(|(_, q)| !q.is_empty()).map(|(n, q)| (n.clone(), q.iter().map(|&i| counts[i as usize]).sum())).collect()
             })
             .unwrap_or_default();
+        let recorded: Vec<_> = self.quad_targets.into_iter().filter_map(PendingTarget::read).collect();
+        let quads = super::quads::replay(&recorded);
         let nan = nan_origin(&self.passes, &self.io, &captures, &tensors);
-        FrameResult { frame: self.frame, timings, total_ms, timing, captures, tensors, skipped: self.skipped, fragment_invocations, quads: Vec::new(), nan }
+        FrameResult { frame: self.frame, timings, total_ms, timing, captures, tensors, skipped: self.skipped, fragment_invocations, quads, nan }
     }
 }

@@ -15,6 +15,7 @@ pub mod readback;
 pub mod resource;
 pub mod scene_gpu;
 pub mod session;
+pub mod vertex_capture;
 
 use crate::scene::Scene;
 use graph::{Graph, GraphBuilder};

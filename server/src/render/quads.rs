@@ -9,7 +9,89 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
+use std::collections::BTreeMap;
+
+use super::readback::Readback;
+use super::resource::PipelineKey;
+use super::vertex_capture::{PendingPositions, VertexCapture};
 use crate::quads::{self, Compare, DepthState, Draw, DrawStats, FrontFace, QuadMaps};
+
+/// What a frame records for quad statistics while it is recorded: the
+/// vertex captures of its pipelines, and the render passes drawn so far.
+pub struct QuadRecorder<'a> {
+    pub captures: &'a BTreeMap<PipelineKey, VertexCapture>,
+    pub targets: Vec<PendingTarget>,
+}
+
+/// A render pass recorded, its readbacks on their way.
+pub struct PendingTarget {
+    pub pass: String,
+    pub width: u32,
+    pub height: u32,
+    pub depth: Option<PendingDepth>,
+    pub draws: Vec<PendingDraw>,
+    pub fullscreen: Option<bool>,
+}
+
+pub enum PendingDepth {
+    Clear(f32),
+    /// The depth layer copied out before the pass, rows padded to
+    /// `padded_row` bytes.
+    Loaded { readback: Readback, padded_row: u32 },
+}
+
+pub struct PendingDraw {
+    pub name: String,
+    pub positions: PendingPositions,
+    pub depth: Option<DepthState>,
+}
+
+impl PendingTarget {
+    /// Starts the readbacks: after the frame is submitted.
+    pub fn map(&self) {
+        if let Some(PendingDepth::Loaded { readback, .. }) = &self.depth {
+            readback.map();
+        }
+        for d in &self.draws {
+            d.positions.map();
+        }
+    }
+
+    pub fn landed(&self) -> bool {
+        let depth = match &self.depth {
+            Some(PendingDepth::Loaded { readback, .. }) => readback.landed(),
+            _ => true,
+        };
+        depth && self.draws.iter().all(|d| d.positions.ready())
+    }
+
+    /// The recorded pass with its data read; `None`, with a warning, when a
+    /// readback failed.
+    pub fn read(self) -> Option<RecordedTarget> {
+        let row = self.width as usize * 4;
+        let depth = match self.depth {
+            None => None,
+            Some(PendingDepth::Clear(v)) => Some(InitialDepth::Clear(v)),
+            Some(PendingDepth::Loaded { readback, padded_row }) => {
+                let depths = readback.read(|bytes| {
+                    bytes.chunks(padded_row as usize).take(self.height as usize).flat_map(|r| r[..row].chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))).collect()
+                });
+                Some(InitialDepth::Loaded(depths.or_else(|| warn_none(&self.pass, "its depth"))?))
+            }
+        };
+        let mut draws = Vec::new();
+        for d in self.draws {
+            let positions = d.positions.read().map_err(|e| log::warn!("quad statistics of `{}`: {e}", self.pass)).ok()?;
+            draws.push(RecordedDraw { name: d.name, positions, depth: d.depth });
+        }
+        Some(RecordedTarget { pass: self.pass, width: self.width, height: self.height, depth, draws, fullscreen: self.fullscreen })
+    }
+}
+
+fn warn_none<T>(pass: &str, what: &str) -> Option<T> {
+    log::warn!("quad statistics of `{pass}`: the readback of {what} failed");
+    None
+}
 
 /// One render pass recorded for replay (a shadow pass records one per
 /// layer).

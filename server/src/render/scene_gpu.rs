@@ -259,12 +259,13 @@ impl SceneGpu {
                 vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("mesh vertices"),
                     contents: &m.vertex_bytes(),
-                    usage: wgpu::BufferUsages::VERTEX,
+                    // Storage too: quad statistics read them in compute.
+                    usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
                 }),
                 indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("mesh indices"),
                     contents: bytemuck::cast_slice(&m.indices),
-                    usage: wgpu::BufferUsages::INDEX,
+                    usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE,
                 }),
                 index_count: m.indices.len() as u32,
             })

@@ -20,9 +20,10 @@ use super::pool::ResourcePool;
 use super::resource::{Lifetime, PipelineKey, ResourceDesc, TensorLayout};
 use super::FrameOptions;
 use super::scene_gpu::SceneGpu;
+use super::vertex_capture::VertexCapture;
 use crate::diag::Diagnostic;
 use crate::gpu::Gpu;
-use crate::gpu::pipeline::PipelineSpec;
+use crate::gpu::pipeline::{MESH_VERTICES, PipelineSpec, Stages};
 use crate::mesh::MeshData;
 use crate::scene::{Loaded, Scene};
 use crate::shader::{ComposeCache, Library, library};
@@ -98,6 +99,10 @@ pub struct Session {
     composer: Arc<ComposeCache>,
     /// Whether frames gather quad statistics (costly: only while asked).
     quads: bool,
+    /// The vertex captures of the frame's raster pipelines, with the
+    /// generation each was instrumented from; built while `quads` is on.
+    vertex_captures: BTreeMap<PipelineKey, VertexCapture>,
+    capture_generations: BTreeMap<PipelineKey, u64>,
 }
 
 impl Session {
@@ -108,6 +113,8 @@ impl Session {
             options: FrameOptions::default(),
             composer: Arc::default(),
             quads: false,
+            vertex_captures: BTreeMap::new(),
+            capture_generations: BTreeMap::new(),
             scene: loaded.scene.clone(),
             meshes: loaded.meshes.clone(),
             scene_gpu,
@@ -262,6 +269,9 @@ impl Session {
     /// temporal passes adapt by.
     pub fn submit(&mut self, capture: Option<&BTreeSet<String>>, dt: f32) -> PendingFrame {
         self.frame += 1;
+        if self.quads {
+            self.refresh_vertex_captures();
+        }
         let live = self.cache.live();
         let g = &self.gpu;
         let inputs = FrameInputs {
@@ -273,10 +283,43 @@ impl Session {
             pipelines: &live,
             capture,
             statistics: self.quads,
+            vertex_captures: self.quads.then_some(&self.vertex_captures),
             frame: self.frame,
             dt,
         };
         frame::submit(inputs, &mut self.pool)
+    }
+
+    /// Instruments the vertex stage of every raster pipeline the frame uses
+    /// whose current module is new since the last time: quad statistics
+    /// follow every edit. One that cannot be instrumented is left out
+    /// (its pass gets no statistics) with a warning.
+    fn refresh_vertex_captures(&mut self) {
+        let keys: BTreeSet<PipelineKey> = self.graph.passes.iter().flat_map(|p| p.pipelines.iter().cloned()).collect();
+        self.vertex_captures.retain(|k, _| keys.contains(k));
+        self.capture_generations.retain(|k, _| keys.contains(k));
+        for key in keys {
+            let (entry, layout) = match key.spec.stages {
+                Stages::Fullscreen { .. } => ("vs_fullscreen", None),
+                Stages::Mesh { vertex, .. } => (vertex, Some(&MESH_VERTICES)),
+                Stages::Compute { .. } => continue,
+            };
+            let Some(e) = self.cache.entries.get(&key) else { continue };
+            let Some(module) = e.current.as_ref().and(e.last_good.as_ref()) else { continue };
+            if self.capture_generations.get(&key) == Some(&e.generation) {
+                continue;
+            }
+            self.capture_generations.insert(key.clone(), e.generation);
+            match VertexCapture::new(&self.gpu.device, &module.module, entry, layout) {
+                Ok(c) => {
+                    self.vertex_captures.insert(key, c);
+                }
+                Err(err) => {
+                    log::warn!("quad statistics: the vertex stage of {} cannot be captured: {err}", key.label());
+                    self.vertex_captures.remove(&key);
+                }
+            }
+        }
     }
 
     /// Polls the device without blocking, so readbacks can land.
@@ -313,6 +356,8 @@ impl Session {
     pub fn replace_device(&mut self, gpu: Gpu) -> Vec<Diagnostic> {
         self.gpu = gpu;
         self.pool = ResourcePool::default();
+        self.vertex_captures.clear();
+        self.capture_generations.clear();
         self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &self.scene, &self.meshes);
         self.cache.recreate_all(&self.gpu.device, &self.lib)
     }
