@@ -388,3 +388,50 @@ async fn a_nan_made_by_a_pass_is_named_live_and_opened_at_its_pixel() {
     until(&c, &s, "the notice to clear", "document.querySelector('#nan-notice').hidden").await;
     c.close().await.unwrap();
 }
+
+/// Quad statistics in the page: with the toggle on, every raster pass of
+/// the showcase gets its totals in the pass list, its per-draw table and
+/// both maps over its output, each with a legend.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_raster_pass_has_its_quad_table_and_maps() {
+    let p = Project::copy_of_repo("browser-quads");
+    let small = p.read("scenes/showcase.toml").replacen("width = 640", "width = 320", 1).replacen("height = 360", "height = 180", 1);
+    assert!(small.contains("width = 320") && small.contains("height = 180"), "the showcase's size moved: update this test");
+    p.write("scenes/small.toml", small);
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/small.toml"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    c.find(Locator::Css("#quad-stats")).await.unwrap().click().await.unwrap();
+    let raster = c
+        .execute_async(
+            "fetch('/api/passes').then(r => r.json()).then(l => arguments[0]((l.passes || l).filter(p => p.kind === 'raster' && p.status === 'ok').map(p => [p.name, p.writes[0].name])));",
+            vec![],
+        )
+        .await
+        .unwrap();
+    let raster: Vec<(String, String)> = raster.as_array().unwrap().iter().map(|p| (p[0].as_str().unwrap().to_owned(), p[1].as_str().unwrap().to_owned())).collect();
+    assert!(raster.len() >= 6, "the showcase's raster passes: {raster:?}");
+    for (pass, _) in &raster {
+        until(&c, &s, &format!("{pass}'s totals in the pass list"), &format!("document.querySelector('#passes li[data-pass=\"{pass}\"] .pass-quads')?.dataset.quads")).await;
+    }
+    for (pass, output) in &raster {
+        let shown = c.execute_async(&format!("window.loupe.inspect('{pass}', '{output}').then(arguments[0]);"), vec![]).await.unwrap();
+        assert_eq!(shown, true, "{pass}/{output}");
+        let total = until(&c, &s, &format!("{pass}'s quad table"), &format!("document.querySelector('#quad-panel[data-pass=\"{pass}\"] #quad-table tr.total td[data-key=quads]')?.dataset.value")).await;
+        let served = c.execute_async(&format!("fetch('/api/quads').then(r => r.json()).then(q => arguments[0](q.passes.find(p => p.pass === '{pass}').quads.quads));"), vec![]).await.unwrap();
+        assert_eq!(total.as_str().unwrap(), served.to_string(), "{pass}: the table shows the server's figure");
+        if pass == "tonemap" {
+            assert_eq!(served, 160 * 90, "one fullscreen triangle over 320×180");
+        }
+        for kind in ["overdraw", "helpers"] {
+            c.execute(&format!("const s = document.querySelector('#quad-overlay'); s.value = '{kind}'; s.dispatchEvent(new Event('change'));"), vec![]).await.unwrap();
+            let size = until(&c, &s, &format!("{pass}'s {kind} map"), &format!("(o => o && o.kind === '{kind}' && [o.width, o.height])(window.loupe.state.inspector.overlay)")).await;
+            let a = c.execute("const i = window.loupe.state.inspector; return [i.width, i.height];", vec![]).await.unwrap();
+            assert_eq!(size, a, "{pass}: the {kind} map covers the inspected output");
+            let legend = c.find(Locator::Css("#quad-legend")).await.unwrap().text().await.unwrap();
+            assert!(legend.contains(if kind == "overdraw" { "quads per 2×2 block" } else { "helper-lane runs" }), "{pass}: {legend}");
+        }
+    }
+    c.close().await.unwrap();
+}
