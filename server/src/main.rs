@@ -310,6 +310,13 @@ fn run_bench(args: BenchArgs) -> ExitCode {
             "  conversion and statistics (serve: on its own thread): final only {:.2} ms; every output {:.2} ms",
             r.convert_ms_final_capture, r.convert_ms_all_captures
         );
+        println!(
+            "  quad statistics: frame {:.2} ms ({:+.1} %), model {:.2} ms ({:.2}x the frame without)",
+            r.frame_ms_quads,
+            over(r.frame_ms_quads),
+            r.convert_ms_quads,
+            r.convert_ms_quads / r.frame_ms_no_capture
+        );
     }
     ExitCode::from(exit::OK)
 }

@@ -230,6 +230,11 @@ pub struct BenchReport {
     /// statistics, which `serve` does on a thread of its own.
     pub convert_ms_final_capture: f64,
     pub convert_ms_all_captures: f64,
+    /// The same two times with quad statistics on (no captures): the
+    /// vertex captures and depth copies on the GPU, then the model's replay
+    /// on the conversion thread.
+    pub frame_ms_quads: f64,
+    pub convert_ms_quads: f64,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -246,10 +251,17 @@ pub fn bench(job: &Job, frames: u32) -> Result<BenchReport, OfflineError> {
         frame(&mut session, None);
     }
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-    let [mut t_none, mut t_final, mut t_all, mut c_none, mut c_final, mut c_all] = std::array::from_fn(|_| Vec::new());
+    let [mut t_none, mut t_final, mut t_all, mut t_quads, mut c_none, mut c_final, mut c_all, mut c_quads] = std::array::from_fn(|_| Vec::new());
     let mut timing = String::new();
     for _ in 0..frames {
-        for (set, times, converts) in [(Some(&none), &mut t_none, &mut c_none), (Some(&fin), &mut t_final, &mut c_final), (None, &mut t_all, &mut c_all)] {
+        let settings = [
+            (Some(&none), false, &mut t_none, &mut c_none),
+            (Some(&fin), false, &mut t_final, &mut c_final),
+            (None, false, &mut t_all, &mut c_all),
+            (Some(&none), true, &mut t_quads, &mut c_quads),
+        ];
+        for (set, quads, times, converts) in settings {
+            session.set_quads(quads);
             let start = Instant::now();
             let pending = session.submit(set, FRAME_DT);
             session.land(&pending);
@@ -257,7 +269,7 @@ pub fn bench(job: &Job, frames: u32) -> Result<BenchReport, OfflineError> {
             let r = pending.finish();
             times.push((landed - start).as_secs_f64() * 1e3);
             converts.push(landed.elapsed().as_secs_f64() * 1e3);
-            if set.is_some_and(BTreeSet::is_empty) {
+            if set.is_some_and(BTreeSet::is_empty) && !quads {
                 timing = r.timing.to_owned();
                 for (name, t) in r.timings {
                     per_pass.entry(name).or_default().push(t);
@@ -279,5 +291,7 @@ pub fn bench(job: &Job, frames: u32) -> Result<BenchReport, OfflineError> {
         frame_ms_all_captures: median(t_all),
         convert_ms_final_capture: median(c_final),
         convert_ms_all_captures: median(c_all),
+        frame_ms_quads: median(t_quads),
+        convert_ms_quads: median(c_quads),
     })
 }
