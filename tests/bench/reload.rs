@@ -28,7 +28,7 @@ use std::path::PathBuf;
 use std::process::{Command, ExitCode};
 
 use loupe_tests::reload::{self, Driver, Split};
-use loupe_tests::{Project, Server, repo};
+use loupe_tests::{Project, Server, machine, repo};
 
 struct Options {
     latency: bool,
@@ -74,13 +74,6 @@ fn release_binary() -> PathBuf {
     assert!(status.success(), "building the release loupe failed");
     let target = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| repo().join("target"));
     target.join("release/loupe")
-}
-
-fn machine() -> String {
-    let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
-    let model = cpuinfo.lines().find_map(|l| l.strip_prefix("model name")).map(|m| m.trim_start_matches([' ', '\t', ':']).to_owned());
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(0);
-    format!("{} ({cores} cores)", model.unwrap_or_else(|| "unknown CPU".into()))
 }
 
 fn start(bin: &std::path::Path, name: &str, render: &str) -> (Project, Server) {

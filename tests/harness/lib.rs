@@ -18,6 +18,14 @@ pub fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("tests/ is inside the repo").to_owned()
 }
 
+/// The CPU model and core count, for benchmark output.
+pub fn machine() -> String {
+    let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    let model = cpuinfo.lines().find_map(|l| l.strip_prefix("model name")).map(|m| m.trim_start_matches([' ', '\t', ':']).to_owned());
+    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(0);
+    format!("{} ({cores} cores)", model.unwrap_or_else(|| "unknown CPU".into()))
+}
+
 /// The built binary: `LOUPE_BIN`, else the workspace's debug build.
 pub fn loupe_bin() -> PathBuf {
     if let Some(p) = std::env::var_os("LOUPE_BIN") {

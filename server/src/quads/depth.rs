@@ -13,38 +13,46 @@ use std::cmp::Ordering;
 use super::input::{Compare, DepthState, Viewport};
 use super::raster;
 
-/// A primitive's depth over the screen: depth at a pixel centre (x, y) is
-/// `z0 + dx·(x - x0) + dy·(y - y0)`, plus `bias`.
+/// A primitive's depth over the screen, bias included: `c + dx·x + dy·y`
+/// at the centre (x + 0.5, y + 0.5) of pixel (x, y).
 pub(super) struct Surface {
-    x0: f64,
-    y0: f64,
-    z0: f64,
+    c: f64,
     dx: f64,
     dy: f64,
-    bias: f64,
 }
 
 pub(super) struct DepthTest<'a> {
+    /// The depth buffer's rows from `first_row` on.
     buffer: &'a mut [f32],
+    first_row: usize,
     width: usize,
     state: DepthState,
     range: [f64; 2],
+    /// Whether a fragment passes when it is less than, equal to (within the
+    /// tolerance) or greater than the stored depth.
+    passes: [bool; 3],
 }
 
 impl<'a> DepthTest<'a> {
-    /// `buffer` is the pass's depth buffer, `width` pixels a row.
+    /// `buffer` holds rows `first_row` on of the pass's depth buffer,
+    /// `width` pixels a row.
     pub fn new(
         buffer: &'a mut [f32],
+        first_row: u32,
         width: u32,
         state: DepthState,
         viewport: &Viewport,
     ) -> DepthTest<'a> {
         let range = [f64::from(viewport.min_depth), f64::from(viewport.max_depth)];
+        let passes =
+            [Ordering::Less, Ordering::Equal, Ordering::Greater].map(|o| passes(state.compare, o));
         DepthTest {
             buffer,
+            first_row: first_row as usize,
             width: width as usize,
             state,
             range,
+            passes,
         }
     }
 
@@ -72,40 +80,51 @@ impl<'a> DepthTest<'a> {
             bias = bias.max(clamp);
         }
         Surface {
-            x0,
-            y0,
-            z0: z[0],
+            c: z[0] + bias - dx * (x0 - 0.5) - dy * (y0 - 0.5),
             dx,
             dy,
-            bias,
         }
     }
 
     /// The lanes of `mask` in block (bx, by) whose fragments pass, writing
     /// their depth when the pipeline writes depth.
     pub fn shade(&mut self, s: &Surface, bx: u32, by: u32, mask: u8) -> u8 {
+        let (x, y) = (2 * bx as usize, 2 * by as usize);
+        let top_left = s.c + s.dx * x as f64 + s.dy * y as f64;
+        let at = (y - self.first_row) * self.width + x;
         let mut passed = 0;
-        for lane in (0..4).filter(|l| mask & 1 << l != 0) {
-            let (x, y) = (
-                (2 * bx + (lane & 1)) as usize,
-                (2 * by + (lane >> 1)) as usize,
-            );
-            let at =
-                s.z0 + s.dx * (x as f64 + 0.5 - s.x0) + s.dy * (y as f64 + 0.5 - s.y0) + s.bias;
-            // The fragment's depth is an f32, as a Depth32Float buffer stores it.
-            let fragment = at.clamp(self.range[0], self.range[1]) as f32;
-            let stored = &mut self.buffer[y * self.width + x];
-            if passes(
-                self.state.compare,
-                compare(fragment, *stored, self.state.tolerance),
-            ) {
+        // Lanes in order: (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1).
+        for (lane, (z, at)) in [
+            (top_left, at),
+            (top_left + s.dx, at + 1),
+            (top_left + s.dy, at + self.width),
+            (top_left + s.dx + s.dy, at + self.width + 1),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            // An uncovered lane may lie outside the target.
+            if mask & 1 << lane != 0 && self.test(z, at) {
                 passed |= 1 << lane;
-                if self.state.write {
-                    *stored = fragment;
-                }
             }
         }
         passed
+    }
+
+    /// Tests (and writes) the fragment at depth `z` of buffer entry `at`.
+    fn test(&mut self, z: f64, at: usize) -> bool {
+        // The fragment's depth is an f32, as a Depth32Float buffer stores it.
+        let fragment = z.clamp(self.range[0], self.range[1]) as f32;
+        let stored = &mut self.buffer[at];
+        let d = f64::from(fragment) - f64::from(*stored);
+        let tolerance = f64::from(self.state.tolerance);
+        // 0: less, 1: equal within the tolerance, 2: greater.
+        let class = usize::from(d >= -tolerance) + usize::from(d > tolerance);
+        let pass = self.passes[class];
+        if pass && self.state.write {
+            *stored = fragment;
+        }
+        pass
     }
 }
 
@@ -116,16 +135,7 @@ fn unit(depth: f64) -> f64 {
     2f64.powi(exponent - 23)
 }
 
-/// Fragment against stored depth, equal within `tolerance`.
-fn compare(fragment: f32, stored: f32, tolerance: f32) -> Ordering {
-    let d = f64::from(fragment) - f64::from(stored);
-    if d.abs() <= f64::from(tolerance) {
-        Ordering::Equal
-    } else {
-        d.total_cmp(&0.0)
-    }
-}
-
+/// Whether `f` passes a fragment that compares `o` to the stored depth.
 fn passes(f: Compare, o: Ordering) -> bool {
     match f {
         Compare::Never => false,

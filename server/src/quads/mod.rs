@@ -10,6 +10,7 @@
 //! submission order, each returning its `DrawStats`, while the pass keeps
 //! their sum, the quad-overdraw and helper-lane maps, and its depth buffer.
 
+mod bands;
 mod clip;
 mod depth;
 mod input;
@@ -26,8 +27,8 @@ pub use input::{
 pub use raster::SUBPIXEL_BITS;
 pub use stats::{DrawStats, QuadMaps, QuadStats};
 
-use depth::DepthTest;
-use primitive::{Launch, Rasterizer, Tally, Vertex};
+use bands::Job;
+use primitive::{Launch, Vertex};
 use raster::Rect;
 
 /// One render pass: its target size, its depth buffer if it has one, and
@@ -41,7 +42,7 @@ pub struct Pass {
     totals: DrawStats,
     /// Kept between draws for their allocations.
     vertices: Vec<Vertex>,
-    launches: Vec<Launch>,
+    launches: Vec<Vec<Launch>>,
 }
 
 impl Pass {
@@ -65,24 +66,47 @@ impl Pass {
     /// rows top first: all 1.0 for one cleared to 1, or the depth an
     /// earlier pass left (captured from the GPU).
     pub fn with_depth(mut self, initial: Vec<f32>) -> Result<Pass, QuadError> {
+        self.check_depth(&initial)?;
+        self.depth = Some(initial);
+        Ok(self)
+    }
+
+    /// Starts the pass over (no draws, maps zeroed) with `depth` as its
+    /// depth buffer (as `with_depth`) or none, reusing its memory: a pass
+    /// kept from frame to frame costs no fresh pages each frame.
+    pub fn reset(&mut self, depth: Option<&[f32]>) -> Result<(), QuadError> {
+        if let Some(values) = depth {
+            self.check_depth(values)?;
+        }
+        match (depth, &mut self.depth) {
+            (Some(values), Some(buffer)) => buffer.copy_from_slice(values),
+            (values, buffer) => *buffer = values.map(<[f32]>::to_vec),
+        }
+        self.maps.clear();
+        self.totals = DrawStats::default();
+        Ok(())
+    }
+
+    fn check_depth(&self, values: &[f32]) -> Result<(), QuadError> {
         let (width, height) = (self.width, self.height);
-        if initial.len() != width as usize * height as usize {
+        if values.len() != width as usize * height as usize {
             return Err(QuadError::DepthSize {
-                got: initial.len(),
+                got: values.len(),
                 width,
                 height,
             });
         }
-        if let Some(at) = initial.iter().position(|d| !d.is_finite()) {
-            let (x, y) = ((at % width as usize) as u32, (at / width as usize) as u32);
-            return Err(QuadError::DepthValue {
-                x,
-                y,
-                value: initial[at],
-            });
+        match values.iter().position(|d| !d.is_finite()) {
+            Some(at) => {
+                let (x, y) = ((at % width as usize) as u32, (at / width as usize) as u32);
+                Err(QuadError::DepthValue {
+                    x,
+                    y,
+                    value: values[at],
+                })
+            }
+            None => Ok(()),
         }
-        self.depth = Some(initial);
-        Ok(self)
     }
 
     /// Rasterizes one draw after those before it: its figures, which are
@@ -129,11 +153,11 @@ impl Pass {
                 });
             }
         }
-        let depth = match (draw.depth, self.depth.as_mut()) {
+        let depth = match (draw.depth, &self.depth) {
             (None, _) => None,
-            (Some(state), Some(buffer)) => {
+            (Some(state), Some(_)) => {
                 state.check()?;
-                Some(DepthTest::new(buffer, width, state, &viewport))
+                Some(state)
             }
             (Some(_), None) => return Err(QuadError::NoDepthBuffer),
         };
@@ -142,34 +166,23 @@ impl Pass {
         self.vertices.clear();
         self.vertices
             .extend(draw.positions.iter().map(|&p| Vertex::new(&frame, p)));
-        let mut raster = Rasterizer {
+        let job = Job {
+            draw,
+            vertices: &self.vertices,
+            triangles,
             rect,
-            cull: draw.cull,
-            front_face: draw.front_face,
+            viewport,
             depth,
-            tally: Tally {
-                maps: &mut self.maps,
-                rasterized: QuadStats::default(),
-                shaded: QuadStats::default(),
-            },
-            launches: &mut self.launches,
         };
-        let vertex = |t: usize, k: usize| {
-            &self.vertices[draw.indices.map_or(3 * t + k, |i| i[3 * t + k] as usize)]
-        };
-        for t in 0..triangles {
-            raster.triangle([vertex(t, 0), vertex(t, 1), vertex(t, 2)]);
-        }
-
-        let rasterized = raster.tally.rasterized;
-        let shaded = QuadStats {
-            triangles: rasterized.triangles,
-            culled_triangles: rasterized.culled_triangles,
-            ..raster.tally.shaded
-        };
+        let (rasterized, shaded) = bands::rasterize(
+            &job,
+            &mut self.maps,
+            self.depth.as_deref_mut(),
+            &mut self.launches,
+        );
         let stats = DrawStats {
             rasterized,
-            shaded: draw.depth.map(|_| shaded),
+            shaded: depth.map(|_| shaded),
         };
         self.totals += stats;
         Ok(stats)

@@ -12,7 +12,7 @@ use super::clip::{
 use super::depth::DepthTest;
 use super::input::{Face, FrontFace};
 use super::raster::{self, Rect};
-use super::stats::{QuadMaps, QuadStats};
+use super::stats::{MapRows, QuadStats};
 
 /// A draw's vertex, mapped once for every triangle that shares it.
 #[derive(Debug, Clone, Copy)]
@@ -61,7 +61,7 @@ pub(super) struct Launch {
 
 /// What a draw's launched quads add up to.
 pub(super) struct Tally<'a> {
-    pub maps: &'a mut QuadMaps,
+    pub maps: MapRows<'a>,
     pub rasterized: QuadStats,
     pub shaded: QuadStats,
 }
@@ -126,6 +126,9 @@ impl Rasterizer<'_> {
         let fixed = v.map(|v| v.fixed);
         let ndc = v.map(|v| v.ndc);
         let rect = self.rect;
+        if !raster::reaches(&fixed, rect) {
+            return true;
+        }
         let Rasterizer { depth, tally, .. } = self;
         match depth {
             None => raster::cover(&fixed, rect, |bx, by, m| tally.launch(bx, by, m, m)),

@@ -95,23 +95,34 @@ fn lanes((l, r): (i64, i64), x: i64) -> u8 {
 
 const EMPTY: (i64, i64) = (0, 0);
 
+/// The pixels of `rect` whose centres lie within the bounding box of the
+/// triangle `v`; `None` when there are none.
+fn centres(v: &[[i64; 2]; 3], rect: Rect) -> Option<Rect> {
+    let lo = |k: usize| v[0][k].min(v[1][k]).min(v[2][k]);
+    let hi = |k: usize| v[0][k].max(v[1][k]).max(v[2][k]);
+    let x0 = rect.x0.max(ceil_div(lo(0) - HALF, ONE));
+    let x1 = rect.x1.min((hi(0) - HALF).div_euclid(ONE) + 1);
+    let y0 = rect.y0.max(ceil_div(lo(1) - HALF, ONE));
+    let y1 = rect.y1.min((hi(1) - HALF).div_euclid(ONE) + 1);
+    (x0 < x1 && y0 < y1).then_some(Rect { x0, y0, x1, y1 })
+}
+
+/// Whether the triangle `v` can cover a pixel of `rect`: a cheap test
+/// before setting up anything else for it.
+pub(super) fn reaches(v: &[[i64; 2]; 3], rect: Rect) -> bool {
+    centres(v, rect).is_some()
+}
+
 /// Calls `launch(bx, by, mask)` for every 2×2 block (pixels 2bx, 2bx + 1 ×
 /// 2by, 2by + 1) where the triangle `v`, wound clockwise on screen, covers
 /// a pixel centre inside `rect`. Mask bit 0 is the block's top-left pixel,
 /// 1 top-right, 2 bottom-left, 3 bottom-right. Blocks come row by row.
 pub(super) fn cover(v: &[[i64; 2]; 3], rect: Rect, mut launch: impl FnMut(u32, u32, u8)) {
+    let Some(Rect { x0, y0, x1, y1 }) = centres(v, rect) else {
+        return;
+    };
     let [p, q, s] = *v;
     let edges = [Edge::new(p, q), Edge::new(q, s), Edge::new(s, p)];
-    let lo = |k: usize| p[k].min(q[k]).min(s[k]);
-    let hi = |k: usize| p[k].max(q[k]).max(s[k]);
-    // The pixels whose centres lie within the triangle's bounding box.
-    let x0 = rect.x0.max(ceil_div(lo(0) - HALF, ONE));
-    let x1 = rect.x1.min((hi(0) - HALF).div_euclid(ONE) + 1);
-    let y0 = rect.y0.max(ceil_div(lo(1) - HALF, ONE));
-    let y1 = rect.y1.min((hi(1) - HALF).div_euclid(ONE) + 1);
-    if x0 >= x1 {
-        return;
-    }
     // Blocks align to the target's origin: start at the even row at or above y0.
     let mut y = y0 & !1;
     while y < y1 {

@@ -6,6 +6,10 @@ use std::ops::{Add, AddAssign};
 
 use serde::ser::{Serialize, SerializeStruct, Serializer};
 
+/// Set bits of a 4-bit lane mask: `count_ones` without POPCNT (not in the
+/// x86-64 baseline) costs more than the rest of counting a quad.
+const LANES: [u8; 16] = [0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4];
+
 /// One figure of a draw (or of several, summed).
 ///
 /// Serialized with the keys `triangles`, `culled_triangles`, `pixels`,
@@ -43,7 +47,7 @@ impl QuadStats {
     pub(super) fn launch(&mut self, mask: u8) {
         if mask != 0 {
             self.quads += 1;
-            self.pixels += u64::from(mask.count_ones());
+            self.pixels += u64::from(LANES[usize::from(mask & 0xf)]);
         }
     }
 }
@@ -138,6 +142,11 @@ impl QuadMaps {
         }
     }
 
+    pub(super) fn clear(&mut self) {
+        self.quads.fill(0);
+        self.helper_lanes.fill(0);
+    }
+
     /// The target's size in pixels.
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
@@ -159,14 +168,51 @@ impl QuadMaps {
         &self.helper_lanes
     }
 
-    /// Counts a shaded quad at block (bx, by) whose shading lanes are `mask`.
+    /// The maps cut into bands of `block_rows` rows of blocks (twice as many
+    /// pixel rows), top first, for bands of the target drawn in parallel.
+    pub(super) fn bands(&mut self, block_rows: usize) -> Vec<MapRows<'_>> {
+        let (width, height) = (self.width, self.height);
+        let quads = self
+            .quads
+            .chunks_mut(block_rows * width.div_ceil(2) as usize);
+        let helpers = self
+            .helper_lanes
+            .chunks_mut(2 * block_rows * width as usize);
+        (quads.zip(helpers).enumerate())
+            .map(|(i, (quads, helper_lanes))| MapRows {
+                quads,
+                helper_lanes,
+                width,
+                height,
+                first_block_row: (i * block_rows) as u32,
+            })
+            .collect()
+    }
+}
+
+/// One band's rows of the maps.
+pub(super) struct MapRows<'a> {
+    quads: &'a mut [u32],
+    helper_lanes: &'a mut [u32],
+    width: u32,
+    height: u32,
+    first_block_row: u32,
+}
+
+impl MapRows<'_> {
+    /// Counts a shaded quad at block (bx, by), inside this band, whose
+    /// shading lanes are `mask`.
     pub(super) fn launch(&mut self, bx: u32, by: u32, mask: u8) {
-        let block = by as usize * self.width.div_ceil(2) as usize + bx as usize;
+        let row = (by - self.first_block_row) as usize;
+        let block = row * self.width.div_ceil(2) as usize + bx as usize;
         self.quads[block] = self.quads[block].saturating_add(1);
+        if mask == 0xf {
+            return;
+        }
         for lane in (0..4).filter(|l| mask & 1 << l == 0) {
             let (x, y) = (2 * bx + (lane & 1), 2 * by + (lane >> 1));
             if x < self.width && y < self.height {
-                let at = y as usize * self.width as usize + x as usize;
+                let at = (2 * row + (lane >> 1) as usize) * self.width as usize + x as usize;
                 self.helper_lanes[at] = self.helper_lanes[at].saturating_add(1);
             }
         }

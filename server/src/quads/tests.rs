@@ -902,6 +902,97 @@ fn a_pass_sums_its_draws_and_maps() {
 }
 
 #[test]
+fn a_reset_pass_starts_over_with_the_depth_it_is_given() {
+    let less = DepthState::new(Compare::Less, true);
+    let mut pass = depth_pass(64, 64, 1.0);
+    pass.draw(&with_depth(&fullscreen(0.25), less)).unwrap();
+    let half = vec![0.5; 64 * 64];
+    pass.reset(Some(&half)).unwrap();
+    assert_eq!(pass.totals(), DrawStats::default());
+    assert!(
+        pass.maps()
+            .quads()
+            .iter()
+            .chain(pass.maps().helper_lanes())
+            .all(|&n| n == 0)
+    );
+    assert_eq!(pass.depth(), Some(&half[..]));
+    // 0.75 is behind what it was given, not behind 1.0 or 0.25.
+    let s = pass.draw(&with_depth(&fullscreen(0.75), less)).unwrap();
+    assert_eq!(s.shaded, Some(stats(1, 0, 0, 0)));
+    assert_eq!(
+        pass.reset(Some(&half[1..])).unwrap_err(),
+        QuadError::DepthSize {
+            got: 4_095,
+            width: 64,
+            height: 64
+        }
+    );
+    pass.reset(None).unwrap();
+    assert_eq!(
+        pass.draw(&with_depth(&fullscreen(0.75), less)).unwrap_err(),
+        QuadError::NoDepthBuffer
+    );
+}
+
+#[test]
+fn any_number_of_threads_draws_the_same_pass() {
+    // Bands of rows, one a thread: overlapping depth-tested draws, a
+    // clipped primitive and an odd height, in pools of 1 and 5 threads
+    // (5 bands of 22 or fewer block rows over 107).
+    let (width, height) = (96, 213);
+    let mut rng = Rng(7);
+    let tris: Vec<[f32; 4]> = (0..3_000)
+        .flat_map(|_| {
+            let centre = [rng.next() * 100.0 - 2.0, rng.next() * 220.0 - 4.0];
+            let size = 0.5 + rng.next() * 30.0;
+            let z = rng.next() as f32;
+            let mut corner = || {
+                [
+                    centre[0] + (rng.next() - 0.5) * size,
+                    centre[1] + (rng.next() - 0.5) * size,
+                ]
+            };
+            [corner(), corner(), corner()].map(|p| at(width, height, p, z))
+        })
+        .chain([
+            [-1.0, -1.0, 0.5, 1.0],
+            [3.0, -1.0, 0.5, 1.0],
+            [-1.0, 3.0, -1.5, 1.0],
+        ])
+        .collect();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut pass = depth_pass(width, height, 1.0);
+            let less = DepthState::new(Compare::LessEqual, true);
+            let first = pass.draw(&with_depth(&tris, less)).unwrap();
+            let second = pass
+                .draw(&Draw {
+                    cull: Some(Face::Back),
+                    ..with_depth(&tris, less)
+                })
+                .unwrap();
+            (
+                first,
+                second,
+                pass.maps().clone(),
+                pass.depth().unwrap().to_vec(),
+            )
+        })
+    };
+    let (one, five) = (run(1), run(5));
+    assert_eq!((one.0, one.1), (five.0, five.1));
+    assert!(one.2 == five.2, "the maps differ");
+    assert!(one.3 == five.3, "the depth buffers differ");
+    // The second draw, behind or equal to the first everywhere, shades.
+    assert!(one.1.shaded.unwrap().quads > 0);
+}
+
+#[test]
 fn stats_serialize_with_the_report_keys() {
     let json = serde_json::to_value(stats(3, 1, 6, 2)).unwrap();
     assert_eq!(
