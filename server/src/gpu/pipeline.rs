@@ -48,6 +48,14 @@ pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Vertex layout of every mesh: position then normal, f32x3 each.
 pub const VERTEX_STRIDE: u64 = 24;
 
+/// The one vertex buffer of every mesh pipeline, as the pipeline reads it
+/// (and as `shader::instrument` reads it for vertex capture).
+pub const MESH_VERTICES: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: VERTEX_STRIDE,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+};
+
 /// When a bind group is part of the pipeline's layout.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum When {
@@ -291,7 +299,6 @@ pub fn create(
         }))),
         Stages::Mesh { vertex, fragment, targets, depth } => {
             let targets = color_targets(targets);
-            let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
             Pipeline::Render(Arc::new(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(spec.name),
                 layout: Some(&layout),
@@ -299,7 +306,7 @@ pub fn create(
                     module: &module,
                     entry_point: Some(vertex),
                     compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout { array_stride: VERTEX_STRIDE, step_mode: wgpu::VertexStepMode::Vertex, attributes: &attributes })],
+                    buffers: &[Some(MESH_VERTICES)],
                 },
                 fragment: fragment.map(|entry| wgpu::FragmentState {
                     module: &module,
