@@ -2,6 +2,7 @@
 
 pub mod compose;
 pub mod guard;
+pub mod instrument;
 pub mod library;
 
 pub use compose::{Compose, ComposeCache, Composed, NagaOil, ShaderDefs, defs_key};
