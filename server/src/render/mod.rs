@@ -13,6 +13,7 @@ pub mod pool;
 pub mod resource;
 pub mod scene_gpu;
 pub mod session;
+pub mod vertex_capture;
 
 use crate::scene::Scene;
 use graph::{Graph, GraphBuilder};
