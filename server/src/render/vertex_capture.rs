@@ -74,7 +74,7 @@ impl VertexCapture {
     pub fn new(device: &wgpu::Device, module: &naga::Module, entry: &str, layout: Option<&wgpu::VertexBufferLayout<'_>>) -> Result<VertexCapture, CaptureError> {
         let instrumented = instrument::instrument(module, entry, layout)?;
         let group = instrumented.group;
-        let mut resources: Vec<naga::ResourceBinding> = instrumented.module.global_variables.iter().filter_map(|(_, g)| g.binding.clone()).filter(|b| b.group != group).collect();
+        let mut resources: Vec<naga::ResourceBinding> = instrumented.module.global_variables.iter().filter_map(|(_, g)| g.binding).filter(|b| b.group != group).collect();
         resources.sort_unstable_by_key(|b| (b.group, b.binding));
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -166,21 +166,20 @@ impl VertexCapture {
             readable("vertex", vertices)?;
             own.push(wgpu::BindGroupEntry { binding: binding::VERTICES, resource: vertices.as_entire_binding() });
         }
-        // Every group up to the kernel's is set, empty ones too: the
-        // automatic layout has one for each index.
-        let bind_groups: Vec<wgpu::BindGroup> = groups
-            .iter()
-            .enumerate()
+        // A group the kernel does not read (below its own) stays unset.
+        let bind_groups: Vec<(u32, wgpu::BindGroup)> = (0..)
+            .zip(&groups)
+            .filter(|(_, entries)| !entries.is_empty())
             .map(|(i, entries)| {
-                let layout = self.pipeline.get_bind_group_layout(i as u32);
-                device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("vertex capture"), layout: &layout, entries })
+                let layout = self.pipeline.get_bind_group_layout(i);
+                (i, device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("vertex capture"), layout: &layout, entries }))
             })
             .collect();
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("vertex capture"), timestamp_writes: None });
             pass.set_pipeline(&self.pipeline);
-            for (i, g) in bind_groups.iter().enumerate() {
-                pass.set_bind_group(i as u32, g, &[]);
+            for (i, g) in &bind_groups {
+                pass.set_bind_group(*i, g, &[]);
             }
             pass.dispatch_workgroups(workgroups, 1, 1);
         }
@@ -194,7 +193,7 @@ fn readable(what: &str, buffer: &wgpu::Buffer) -> Result<(), CaptureError> {
     if !buffer.usage().contains(wgpu::BufferUsages::STORAGE) {
         return Err(CaptureError::Draw(format!("the {what} buffer lacks STORAGE usage, so it cannot be read by the capture")));
     }
-    if buffer.size() % 4 != 0 {
+    if !buffer.size().is_multiple_of(4) {
         return Err(CaptureError::Draw(format!("the {what} buffer's {} bytes are not whole words", buffer.size())));
     }
     Ok(())
@@ -234,3 +233,6 @@ impl PendingPositions {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -82,11 +82,10 @@ pub enum InstrumentError {
     Internal(String),
 }
 
-/// The instrumented module and how to bind it.
+/// The instrumented module, validated, and how to bind it.
 #[derive(Debug, Clone)]
 pub struct Instrumented {
     pub module: naga::Module,
-    pub info: ModuleInfo,
     /// The compute entry point's name.
     pub entry: String,
     /// The group of the kernel's own bindings ([`binding`]).
@@ -119,6 +118,7 @@ pub fn instrument(module: &naga::Module, entry: &str, layout: Option<&wgpu::Vert
     let prefix = free_prefix(module);
     let function = format!("{prefix}vertex");
     let (printed, group) = demote(module, index, &function)?;
+    // What the kernel calls, by the names the writer printed.
     let reread = parse(&printed)?;
     let (_, demoted) = reread
         .functions
@@ -130,23 +130,13 @@ pub fn instrument(module: &naga::Module, entry: &str, layout: Option<&wgpu::Vert
         .zip(&demoted.arguments)
         .map(|(input, arg)| input.expression(&prefix, &reread.types[arg.ty]))
         .collect::<Result<Vec<_>, _>>()?;
-    let position = match (position, &demoted.result) {
-        (None, _) => String::new(),
-        (Some(k), Some(r)) => match &reread.types[r.ty].inner {
-            TypeInner::Struct { members, .. } => match members.get(k).and_then(|m| m.name.as_deref()) {
-                Some(name) => format!(".{name}"),
-                None => return Err(InstrumentError::Internal(format!("the printed output struct lost member {k}"))),
-            },
-            _ => return Err(InstrumentError::Internal("the printed vertex function returns no struct".into())),
-        },
-        (Some(_), None) => return Err(InstrumentError::Internal("the printed vertex function returns nothing".into())),
-    };
+    let position = printed_member(&reread, demoted, position)?;
     let reads_vertices = inputs.iter().any(Input::reads_vertices);
     let stride = layout.map_or(0, |l| l.array_stride / 4);
     let source = printed + &kernel(&prefix, group, &function, &args.join(", "), &position, reads_vertices.then_some(stride));
     let module = parse(&source)?;
-    let info = validate(&module).map_err(InstrumentError::Internal)?;
-    Ok(Instrumented { module, info, entry: format!("{prefix}vertex_positions"), group, reads_vertices })
+    validate(&module).map_err(InstrumentError::Internal)?;
+    Ok(Instrumented { module, entry: format!("{prefix}vertex_positions"), group, reads_vertices })
 }
 
 fn vertex_entry(module: &naga::Module, entry: &str) -> Result<usize, InstrumentError> {
@@ -176,10 +166,10 @@ fn check_layout(layout: &wgpu::VertexBufferLayout<'_>) -> Result<(), InstrumentE
     if layout.step_mode != wgpu::VertexStepMode::Vertex {
         return Err(InstrumentError::Layout("only per-vertex attributes are read".into()));
     }
-    if layout.array_stride % 4 != 0 {
+    if !layout.array_stride.is_multiple_of(4) {
         return Err(InstrumentError::Layout(format!("a stride of {} bytes is not a multiple of 4", layout.array_stride)));
     }
-    match layout.attributes.iter().find(|a| a.offset % 4 != 0) {
+    match layout.attributes.iter().find(|a| !a.offset.is_multiple_of(4)) {
         Some(a) => Err(InstrumentError::Layout(format!("@location({}) sits at byte {}, not a multiple of 4", a.shader_location, a.offset))),
         None => Ok(()),
     }
@@ -196,7 +186,7 @@ enum Kind {
 impl Kind {
     fn of(scalar: naga::Scalar) -> Option<Kind> {
         match (scalar.kind, scalar.width) {
-            (ScalarKind::Float, _) => Some(Kind::F32),
+            (ScalarKind::Float, 4) => Some(Kind::F32),
             (ScalarKind::Uint, 4) => Some(Kind::U32),
             (ScalarKind::Sint, 4) => Some(Kind::I32),
             _ => None,
@@ -207,21 +197,13 @@ impl Kind {
     /// whose components are whole 32-bit words.
     fn of_format(format: wgpu::VertexFormat) -> Option<(Kind, u32)> {
         use wgpu::VertexFormat as F;
-        Some(match format {
-            F::Float32 => (Kind::F32, 1),
-            F::Float32x2 => (Kind::F32, 2),
-            F::Float32x3 => (Kind::F32, 3),
-            F::Float32x4 => (Kind::F32, 4),
-            F::Uint32 => (Kind::U32, 1),
-            F::Uint32x2 => (Kind::U32, 2),
-            F::Uint32x3 => (Kind::U32, 3),
-            F::Uint32x4 => (Kind::U32, 4),
-            F::Sint32 => (Kind::I32, 1),
-            F::Sint32x2 => (Kind::I32, 2),
-            F::Sint32x3 => (Kind::I32, 3),
-            F::Sint32x4 => (Kind::I32, 4),
+        let kind = match format {
+            F::Float32 | F::Float32x2 | F::Float32x3 | F::Float32x4 => Kind::F32,
+            F::Uint32 | F::Uint32x2 | F::Uint32x3 | F::Uint32x4 => Kind::U32,
+            F::Sint32 | F::Sint32x2 | F::Sint32x3 | F::Sint32x4 => Kind::I32,
             _ => return None,
-        })
+        };
+        Some((kind, (format.size() / 4) as u32))
     }
 
     fn wgsl(self) -> &'static str {
@@ -232,7 +214,7 @@ impl Kind {
         }
     }
 
-    /// Word `word` of the vertex as this kind.
+    /// `word`, a `u32` expression, as this kind.
     fn read(self, word: String) -> String {
         match self {
             Kind::U32 => word,
@@ -323,7 +305,7 @@ impl Input {
             }
             Input::Struct(members) => {
                 let name = ty.name.as_deref().ok_or_else(|| InstrumentError::Internal("a printed input struct has no name".into()))?;
-                // Members carry their own bindings; no nested structs in vertex input.
+                // Vertex input structs do not nest: members need no type.
                 let values = members.iter().map(|m| m.expression(p, ty)).collect::<Result<Vec<_>, _>>()?;
                 format!("{name}({})", values.join(", "))
             }
@@ -344,6 +326,17 @@ fn position_member(module: &naga::Module, function: &naga::Function) -> Result<O
         TypeInner::Struct { members, .. } => members.iter().position(|m| is_position(m.binding.as_ref())).map(Some).ok_or_else(missing),
         _ => Err(missing()),
     }
+}
+
+/// `.name` of member `member` of `function`'s result struct as printed;
+/// empty when the result itself is the position.
+fn printed_member(module: &naga::Module, function: &naga::Function, member: Option<usize>) -> Result<String, InstrumentError> {
+    let Some(k) = member else { return Ok(String::new()) };
+    let name = function.result.as_ref().and_then(|r| match &module.types[r.ty].inner {
+        TypeInner::Struct { members, .. } => members.get(k)?.name.as_deref(),
+        _ => None,
+    });
+    name.map(|n| format!(".{n}")).ok_or_else(|| InstrumentError::Internal(format!("the printed vertex function's result has no member {k}")))
 }
 
 /// `loupe_`, or `loupe_1_`, `loupe_2_`, …: a prefix no name in the module
