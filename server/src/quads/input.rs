@@ -150,6 +150,27 @@ pub enum QuadError {
     DepthState(DepthState),
 }
 
+impl Draw<'_> {
+    /// How many triangles the draw has, once its indices are checked.
+    pub(super) fn triangles(&self) -> Result<usize, QuadError> {
+        let triangles = self.indices.map_or(self.positions.len(), <[u32]>::len) / 3;
+        let vertices = self.positions.len();
+        let indices = self.indices.unwrap_or_default();
+        match indices
+            .iter()
+            .take(3 * triangles)
+            .position(|&i| i as usize >= vertices)
+        {
+            Some(at) => Err(QuadError::Index {
+                at,
+                value: indices[at],
+                vertices,
+            }),
+            None => Ok(triangles),
+        }
+    }
+}
+
 impl Viewport {
     /// wgpu's default: the whole target, depth 0 to 1.
     pub fn whole(width: u32, height: u32) -> Viewport {

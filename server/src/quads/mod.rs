@@ -117,42 +117,8 @@ impl Pass {
         let (width, height) = (self.width, self.height);
         let viewport = draw.viewport.unwrap_or(Viewport::whole(width, height));
         viewport.check(width, height)?;
-        // A pixel is inside the viewport when its centre is, edges included
-        // on the left and top only, as the fill rule treats clipped edges.
-        // The viewport lies inside the target (checked above).
-        let centres = |from: f32, size: f32| {
-            let edge = |at: f64| (at - 0.5).ceil() as i64;
-            (edge(from.into()), edge(f64::from(from) + f64::from(size)))
-        };
-        let ((x0, x1), (y0, y1)) = (
-            centres(viewport.x, viewport.width),
-            centres(viewport.y, viewport.height),
-        );
-        let mut rect = Rect { x0, y0, x1, y1 };
-        if let Some(s) = draw.scissor {
-            s.check(width, height)?;
-            let (x, y) = (i64::from(s.x), i64::from(s.y));
-            rect = Rect {
-                x0: rect.x0.max(x),
-                y0: rect.y0.max(y),
-                x1: rect.x1.min(x + i64::from(s.width)),
-                y1: rect.y1.min(y + i64::from(s.height)),
-            };
-        }
-        let triangles = draw.indices.map_or(draw.positions.len(), <[u32]>::len) / 3;
-        if let Some(indices) = draw.indices {
-            let vertices = draw.positions.len();
-            if let Some(at) = indices[..3 * triangles]
-                .iter()
-                .position(|&i| i as usize >= vertices)
-            {
-                return Err(QuadError::Index {
-                    at,
-                    value: indices[at],
-                    vertices,
-                });
-            }
-        }
+        let rect = covered_rect(&viewport, draw.scissor, width, height)?;
+        let triangles = draw.triangles()?;
         let depth = match (draw.depth, &self.depth) {
             (None, _) => None,
             (Some(state), Some(_)) => {
@@ -212,4 +178,36 @@ impl Pass {
     pub fn finish(self) -> (DrawStats, QuadMaps) {
         (self.totals, self.maps)
     }
+}
+
+/// The pixels a draw may cover: those whose centres are inside the viewport
+/// (its left and top edges included, as the fill rule treats clipped
+/// edges) and inside the scissor rectangle. The viewport lies inside the
+/// target (checked).
+fn covered_rect(
+    viewport: &Viewport,
+    scissor: Option<Scissor>,
+    width: u32,
+    height: u32,
+) -> Result<Rect, QuadError> {
+    let centres = |from: f32, size: f32| {
+        let edge = |at: f64| (at - 0.5).ceil() as i64;
+        (edge(from.into()), edge(f64::from(from) + f64::from(size)))
+    };
+    let ((x0, x1), (y0, y1)) = (
+        centres(viewport.x, viewport.width),
+        centres(viewport.y, viewport.height),
+    );
+    let rect = Rect { x0, y0, x1, y1 };
+    let Some(s) = scissor else {
+        return Ok(rect);
+    };
+    s.check(width, height)?;
+    let (x, y) = (i64::from(s.x), i64::from(s.y));
+    Ok(Rect {
+        x0: rect.x0.max(x),
+        y0: rect.y0.max(y),
+        x1: rect.x1.min(x + i64::from(s.width)),
+        y1: rect.y1.min(y + i64::from(s.height)),
+    })
 }

@@ -209,11 +209,22 @@ impl MapRows<'_> {
         if mask == 0xf {
             return;
         }
-        for lane in (0..4).filter(|l| mask & 1 << l == 0) {
-            let (x, y) = (2 * bx + (lane & 1), 2 * by + (lane >> 1));
-            if x < self.width && y < self.height {
-                let at = (2 * row + (lane >> 1) as usize) * self.width as usize + x as usize;
-                self.helper_lanes[at] = self.helper_lanes[at].saturating_add(1);
+        let width = self.width as usize;
+        let top = 2 * row * width + 2 * bx as usize;
+        let lanes = [top, top + 1, top + width, top + width + 1];
+        if 2 * bx + 1 < self.width && 2 * by + 1 < self.height {
+            // All four lanes inside the target: add without branching on
+            // which ones help, which a partial block makes unpredictable.
+            for (lane, at) in lanes.into_iter().enumerate() {
+                let helps = u32::from(mask >> lane & 1 == 0);
+                self.helper_lanes[at] = self.helper_lanes[at].saturating_add(helps);
+            }
+        } else {
+            for (lane, at) in lanes.into_iter().enumerate() {
+                let (x, y) = (2 * bx + (lane as u32 & 1), 2 * by + (lane as u32 >> 1));
+                if mask & 1 << lane == 0 && x < self.width && y < self.height {
+                    self.helper_lanes[at] = self.helper_lanes[at].saturating_add(1);
+                }
             }
         }
     }
