@@ -423,3 +423,37 @@ fn break_and_mend_buffer(p: &Project, s: &Server, bin: &str) {
     p.save_by_rename(bin, &good);
     s.wait_for("the diagnostic to clear", LIMIT, || s.get_json("/api/diagnostics")["diagnostics"].as_array()?.is_empty().then_some(()));
 }
+
+/// Quad statistics while a client asks: a `quads` event per frame, the
+/// same report at `GET /api/quads`, and counts that follow an edit to the
+/// vertex stage (a fullscreen "triangle" shrunk to the lower-left half of
+/// the screen launches fewer quads), gone when the client stops asking.
+#[test]
+fn quad_statistics_stream_while_asked_and_follow_a_vertex_stage_edit() {
+    let p = Project::copy_of_repo("serve-quads");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/pattern.toml"]);
+    s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
+    assert_eq!(s.get("/api/quads").0, 404, "not computed until asked");
+    let mut ws = s.ws();
+    ws.send(serde_json::json!({ "type": "quad_statistics", "on": true }));
+    let tonemap_quads = |ev: &serde_json::Value| ev["passes"].as_array()?.iter().find(|p| p["pass"] == "tonemap")?["quads"]["quads"].as_u64();
+    // pattern.toml is 960×540: one triangle launches 480·270 quads.
+    let ev = ws.event("quads", LIMIT, |_| true);
+    assert_eq!(tonemap_quads(&ev), Some(480 * 270), "{ev}");
+    assert_eq!(tonemap_quads(&s.get_json("/api/quads")), Some(480 * 270));
+    let (status, map) = s.get("/api/quads/tonemap/overdraw.f32");
+    assert_eq!((status, map.len()), (200, 960 * 540 * 4));
+
+    // (-1,-1), (1,-1), (-1,1): the lower-left half of the screen.
+    let fullscreen = p.read("shaders/lib/fullscreen.wgsl");
+    let half = fullscreen.replace("f32(vertex_index & 2u)) * 2.0 - 1.0", "f32(vertex_index & 2u)) - 1.0");
+    assert_ne!(half, fullscreen, "fullscreen.wgsl changed: update this test");
+    p.write("shaders/lib/fullscreen.wgsl", half);
+    let ev = ws.event("quads", LIMIT, |ev| tonemap_quads(ev).is_some_and(|q| q != 480 * 270));
+    let q = tonemap_quads(&ev).unwrap();
+    // Half the blocks, plus the ones the diagonal cuts.
+    assert!((480 * 270 / 2..480 * 270 / 2 + 480).contains(&q), "{q} quads for half the screen");
+
+    ws.send(serde_json::json!({ "type": "quad_statistics", "on": false }));
+    s.wait_for("the statistics to stop", LIMIT, || (s.get("/api/quads").0 == 404).then_some(()));
+}

@@ -310,12 +310,20 @@ impl Session {
                 continue;
             }
             self.capture_generations.insert(key.clone(), e.generation);
-            match VertexCapture::new(&self.gpu.device, &module.module, entry, layout) {
-                Ok(c) => {
+            // naga's compactor, writer and parser run here: a bug of theirs
+            // costs this pipeline its statistics, not the render thread.
+            let device = &self.gpu.device;
+            let built = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| VertexCapture::new(device, &module.module, entry, layout)));
+            match built {
+                Ok(Ok(c)) => {
                     self.vertex_captures.insert(key, c);
                 }
-                Err(err) => {
+                Ok(Err(err)) => {
                     log::warn!("quad statistics: the vertex stage of {} cannot be captured: {err}", key.label());
+                    self.vertex_captures.remove(&key);
+                }
+                Err(_) => {
+                    log::error!("quad statistics: instrumenting the vertex stage of {} panicked", key.label());
                     self.vertex_captures.remove(&key);
                 }
             }
