@@ -230,7 +230,7 @@ fn two_triangles(w: u64, h: u64) -> (u64, u64) {
 /// each visible pixel once. Visible pixels are counted from the G-buffer
 /// the GPU wrote (normal.w is 1 where geometry was drawn), not from loupe's
 /// model; the two agree to within a few silhouette pixels, where the GPU's
-/// f32 depth and the model's differ (docs/quads.md, "Depth ties").
+/// f32 depth and the model's differ (docs/quads.md, "Depth precision").
 #[test]
 fn the_gbuffer_pass_rasterizes_what_the_prepass_did_and_shades_each_visible_pixel_once() {
     let p = Project::copy_of_repo("render-quads-gbuffer");
