@@ -113,6 +113,9 @@ pub struct Daemon {
     workers: Arc<rayon::ThreadPool>,
     next_reload: u64,
     reloads: BTreeMap<u64, Reload>,
+    /// Per pipeline with a compile on its way, the newest reload compiling
+    /// it: results of older ones are dropped.
+    newest_compile: BTreeMap<PipelineKey, u64>,
     /// Reloads finished since the last frame, to tag that frame with.
     finished_reloads: Vec<Succeeded>,
     in_flight: VecDeque<InFlight>,
@@ -179,6 +182,7 @@ impl Daemon {
             workers: Arc::new(workers),
             next_reload: 1,
             reloads: BTreeMap::new(),
+            newest_compile: BTreeMap::new(),
             finished_reloads: Vec::new(),
             in_flight: VecDeque::new(),
             converter: rayon::ThreadPoolBuilder::new()
@@ -434,6 +438,7 @@ impl Daemon {
         self.reloads.insert(id, reload);
         let lib = self.session.library().clone();
         for key in keys {
+            self.newest_compile.insert(key.clone(), id);
             let display = self.session.shader_display(key.spec);
             let tx = self.events.clone();
             // A file that failed to load fails every pipeline built from it,
@@ -457,6 +462,17 @@ impl Daemon {
 
     fn compile_finished(&mut self, r: CompileResult) {
         let key = r.key;
+        // A compile that a newer one of the same pipeline supersedes (its
+        // sources changed again meanwhile) is never installed, whichever
+        // finishes first: it would put back what the user replaced.
+        if self.newest_compile.get(&key).is_some_and(|&newest| newest > r.reload) {
+            if let Some(reload) = self.reloads.get_mut(&r.reload) {
+                reload.pending.remove(&key);
+            }
+            self.maybe_finish_reload(r.reload);
+            return;
+        }
+        self.newest_compile.remove(&key);
         let start = Instant::now();
         // Creation under an error scope; wgpu errors keep the old pipeline.
         let installed = self.session.install(&key, r.result);
