@@ -113,8 +113,9 @@ pub struct Daemon {
     workers: Arc<rayon::ThreadPool>,
     next_reload: u64,
     reloads: BTreeMap<u64, Reload>,
-    /// Per pipeline with a compile on its way, the newest reload compiling
-    /// it: results of older ones are dropped.
+    /// Per pipeline, the newest reload that compiled it: results of older
+    /// ones are dropped, also after the newest one's has arrived (bounded by
+    /// the pipelines the specs can make).
     newest_compile: BTreeMap<PipelineKey, u64>,
     /// Reloads finished since the last frame, to tag that frame with.
     finished_reloads: Vec<Succeeded>,
@@ -472,7 +473,6 @@ impl Daemon {
             self.maybe_finish_reload(r.reload);
             return;
         }
-        self.newest_compile.remove(&key);
         let start = Instant::now();
         // Creation under an error scope; wgpu errors keep the old pipeline.
         let installed = self.session.install(&key, r.result);
