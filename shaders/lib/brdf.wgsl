@@ -49,3 +49,102 @@ fn brdf_cos(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, met
     let diffuse = (1.0 - metallic) * (1.0 - f) * base_color / PI;
     return (diffuse + specular) * n_l;
 }
+
+// ---- importance sampling (the path tracer) --------------------------------
+//
+// One direction from a mixture of the two lobes: cosine-weighted for the
+// diffuse, GGX visible normals (Heitz 2018, "Sampling the GGX Distribution
+// of Visible Normals") for the specular. The lobe is picked with a
+// probability that depends on n·v and the material only, never on the
+// sampled direction, so `brdf_pdf` gives any direction's mixture pdf:
+// what multiple importance sampling needs to weigh a light sample against
+// a BRDF sample.
+
+struct BrdfSample {
+    l: vec3<f32>,
+    // The mixture pdf of `l` (solid angle); 0 when no direction was made
+    // (the sample went below the surface): the path ends.
+    pdf: f32,
+    // brdf_cos(l) / pdf.
+    weight: vec3<f32>,
+}
+
+fn luminance_of(c: vec3<f32>) -> f32 {
+    return dot(c, vec3(0.2126, 0.7152, 0.0722));
+}
+
+// How often the specular lobe is sampled: its share of the reflected
+// energy, estimated from Fresnel at n·v against the diffuse albedo.
+fn specular_probability(n_v: f32, base_color: vec3<f32>, metallic: f32) -> f32 {
+    let f = luminance_of(f_schlick(specular_f0(base_color, metallic), n_v));
+    let d = (1.0 - metallic) * luminance_of(base_color) * (1.0 - f);
+    return clamp(f / max(f + d, 1e-6), 0.05, 1.0);
+}
+
+// An orthonormal basis around unit `n` (Duff et al. 2017, branchless).
+fn basis(n: vec3<f32>) -> mat3x3<f32> {
+    let s = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    return mat3x3(vec3(1.0 + s * n.x * n.x * a, s * b, -s * n.x), vec3(b, s + n.y * n.y * a, -n.y), n);
+}
+
+// Smith's masking of GGX for one direction.
+fn g1_smith(n_x: f32, a: f32) -> f32 {
+    let a2 = a * a;
+    return 2.0 * n_x / (n_x + sqrt(a2 + (1.0 - a2) * n_x * n_x));
+}
+
+// A visible normal for view `ve` (local frame, z along n).
+fn sample_vndf(ve: vec3<f32>, a: f32, u: vec2<f32>) -> vec3<f32> {
+    let vh = normalize(vec3(a * ve.x, a * ve.y, ve.z));
+    let len2 = vh.x * vh.x + vh.y * vh.y;
+    let t1 = select(vec3(1.0, 0.0, 0.0), vec3(-vh.y, vh.x, 0.0) * inverseSqrt(len2), len2 > 0.0);
+    let t2 = cross(vh, t1);
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    let p1 = r * cos(phi);
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
+    let nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
+    return normalize(vec3(a * nh.x, a * nh.y, max(nh.z, 0.0)));
+}
+
+// The mixture pdf (solid angle) of sampling `l` with `brdf_sample`.
+fn brdf_pdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, metallic: f32, roughness: f32) -> f32 {
+    let n_l = dot(n, l);
+    if n_l <= 0.0 {
+        return 0.0;
+    }
+    let n_v = max(dot(n, v), 1e-4);
+    let h = normalize(v + l);
+    let a = alpha(roughness);
+    // VNDF: pdf(h) = G1(v) max(v·h, 0) D(h) / n·v; the reflection's
+    // Jacobian 1 / (4 v·h) cancels the v·h.
+    let specular = g1_smith(n_v, a) * d_ggx(max(dot(n, h), 0.0), a) / (4.0 * n_v);
+    let diffuse = n_l / PI;
+    let p = specular_probability(n_v, base_color, metallic);
+    return p * specular + (1.0 - p) * diffuse;
+}
+
+// A direction from `u` (three uniform numbers in [0, 1)): u.x picks the
+// lobe, u.yz place the direction.
+fn brdf_sample(n: vec3<f32>, v: vec3<f32>, u: vec3<f32>, base_color: vec3<f32>, metallic: f32, roughness: f32) -> BrdfSample {
+    let frame = basis(n);
+    let n_v = max(dot(n, v), 1e-4);
+    var l: vec3<f32>;
+    if u.x < specular_probability(n_v, base_color, metallic) {
+        let ve = normalize(transpose(frame) * v);
+        let h = frame * sample_vndf(ve, alpha(roughness), u.yz);
+        l = reflect(-v, h);
+    } else {
+        let r = sqrt(u.y);
+        let phi = 2.0 * PI * u.z;
+        l = frame * vec3(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u.y, 0.0)));
+    }
+    let pdf = brdf_pdf(n, v, l, base_color, metallic, roughness);
+    if pdf <= 0.0 {
+        return BrdfSample(l, 0.0, vec3(0.0));
+    }
+    return BrdfSample(l, pdf, brdf_cos(n, v, l, base_color, metallic, roughness) / pdf);
+}
