@@ -72,6 +72,8 @@ pub fn build_graph(scene: &Scene, options: FrameOptions) -> Graph {
 #[cfg(test)]
 mod brdf_tests;
 #[cfg(test)]
+mod random_tests;
+#[cfg(test)]
 mod tests {
     use std::collections::{BTreeMap, BTreeSet};
 
