@@ -842,9 +842,11 @@ impl Daemon {
                 self.gpu_errors.clear();
                 self.gpu_error_files.clear();
                 self.install_lost_callback();
-                self.shared.publish(ServerEvent::DeviceLost { message: reason, recovered: problems.is_empty() });
+                // The snapshots first: a client reading `/api/status` on the
+                // event sees the new device.
                 self.dirty = true;
                 self.publish_state();
+                self.shared.publish(ServerEvent::DeviceLost { message: reason, recovered: problems.is_empty() });
             }
             Err(e) => self.shared.publish(ServerEvent::DeviceLost { message: format!("{reason}; reopening failed: {e}"), recovered: false }),
         }
