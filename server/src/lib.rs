@@ -6,6 +6,7 @@
 //! (`serve::http`) → UI (`client/`). `check` is the same chain stopped after
 //! pipeline creation, printed for CI. See ARCHITECTURE.md.
 
+pub mod bvh;
 pub mod check;
 pub mod diag;
 pub mod gpu;

@@ -234,25 +234,46 @@ fn medium_bytes(scene: &Scene) -> Vec<u8> {
     out
 }
 
+/// The meshes of a scene, one per distinct geometry (shared by every object
+/// using it), and per object which one it draws.
+fn object_meshes(scene: &Scene, loaded: &BTreeMap<String, Arc<MeshData>>) -> (Vec<Arc<MeshData>>, Vec<usize>) {
+    let mut keys: Vec<&Geometry> = Vec::new();
+    let mut draws = Vec::new();
+    for o in &scene.objects {
+        let i = keys.iter().position(|k| same_geometry(k, &o.geometry)).unwrap_or_else(|| {
+            keys.push(&o.geometry);
+            keys.len() - 1
+        });
+        draws.push(i);
+    }
+    let data = keys
+        .iter()
+        .map(|g| match g {
+            Geometry::Shape(s) => Arc::new(crate::mesh::shape(s).expect("validated shape")),
+            Geometry::Mesh { file, .. } => loaded.get(file).cloned().unwrap_or_else(|| Arc::new(crate::mesh::cube())),
+        })
+        .collect();
+    (data, draws)
+}
+
+/// Every triangle the raster draws, in world space, with its `[object,
+/// primitive]`: what the path tracer's hierarchy is built over.
+pub fn world_triangles(scene: &Scene, loaded: &BTreeMap<String, Arc<MeshData>>) -> Vec<([glam::Vec3; 3], [u32; 2])> {
+    let (data, draws) = object_meshes(scene, loaded);
+    let mut out = Vec::new();
+    for (object, (o, &mesh)) in scene.objects.iter().zip(&draws).enumerate() {
+        let (model, m) = (model_matrix(o), &data[mesh]);
+        for (primitive, t) in m.indices.as_chunks::<3>().0.iter().enumerate() {
+            let v = t.map(|i| model.transform_point3(glam::Vec3::from(m.positions[i as usize])));
+            out.push((v, [object as u32, primitive as u32]));
+        }
+    }
+    out
+}
+
 impl SceneGpu {
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene, loaded: &BTreeMap<String, Arc<MeshData>>) -> Self {
-        // One mesh per distinct geometry, shared by every object using it.
-        let mut keys: Vec<&Geometry> = Vec::new();
-        let mut draws = Vec::new();
-        for o in &scene.objects {
-            let i = keys.iter().position(|k| same_geometry(k, &o.geometry)).unwrap_or_else(|| {
-                keys.push(&o.geometry);
-                keys.len() - 1
-            });
-            draws.push(i);
-        }
-        let data: Vec<Arc<MeshData>> = keys
-            .iter()
-            .map(|g| match g {
-                Geometry::Shape(s) => Arc::new(crate::mesh::shape(s).expect("validated shape")),
-                Geometry::Mesh { file, .. } => loaded.get(file).cloned().unwrap_or_else(|| Arc::new(crate::mesh::cube())),
-            })
-            .collect();
+        let (data, draws) = object_meshes(scene, loaded);
         let meshes = data
             .iter()
             .map(|m| GpuMesh {
@@ -344,6 +365,36 @@ mod tests {
         let floats: &[f32] = bytemuck::cast_slice(&media);
         assert_eq!(floats[4 * 4 + 1], -PLANE_EXTENT, "bounds below the plane");
         assert_eq!(floats[5 * 4 + 1], 0.5, "the plane's offset caps the box at y = 0.5");
+    }
+
+    /// The path tracer's triangles are the raster's: every object's mesh
+    /// in world space, and a ray from the camera to its target finds the
+    /// object there.
+    #[test]
+    fn world_triangles_are_what_the_raster_draws() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/showcase.toml");
+        let loaded = crate::scene::load(&path).unwrap();
+        let tris = world_triangles(&loaded.scene, &loaded.meshes);
+        let (data, draws) = object_meshes(&loaded.scene, &loaded.meshes);
+        let drawn: usize = draws.iter().map(|&m| data[m].indices.len() / 3).sum();
+        assert_eq!(tris.len(), drawn);
+        assert!(loaded.scene.objects.len() > 1, "a scene of several objects");
+        for (object, o) in loaded.scene.objects.iter().enumerate() {
+            let (min, max) = data[draws[object]].bounds();
+            let model = model_matrix(o);
+            let centre = model.transform_point3((glam::Vec3::from(min) + glam::Vec3::from(max)) * 0.5);
+            let mine: Vec<_> = tris.iter().filter(|(_, id)| id[0] == object as u32).collect();
+            assert_eq!(mine.len(), data[draws[object]].indices.len() / 3, "object {object}");
+            // Its triangles sit around its transformed bounds' centre.
+            let mean = mine.iter().map(|(t, _)| (t[0] + t[1] + t[2]) / 3.0).sum::<glam::Vec3>() / mine.len() as f32;
+            let size = (model.transform_vector3(glam::Vec3::from(max) - glam::Vec3::from(min))).length();
+            assert!((mean - centre).length() <= size, "object {object}: {mean} vs {centre}");
+        }
+        let bvh = crate::bvh::Bvh::build(&tris);
+        let cam = &loaded.scene.camera;
+        let (eye, target) = (glam::Vec3::from(cam.position), glam::Vec3::from(cam.target));
+        let hit = bvh.intersect(eye, (target - eye).normalize(), 1e-4, f32::INFINITY).expect("the camera looks at something");
+        assert!(hit.t < (target - eye).length() * 2.0);
     }
 
     #[test]
