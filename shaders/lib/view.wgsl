@@ -11,6 +11,10 @@ struct View {
     params: vec4<f32>,
     // x: lights, y: media, z: volume steps, w: volume shadow steps.
     counts: vec4<u32>,
+    // rgb: the environment's radiance straight up and straight down, times
+    // its intensity (`loupe::environment`); w: unused.
+    environment_top: vec4<f32>,
+    environment_bottom: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> view: View;

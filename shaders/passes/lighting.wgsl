@@ -1,10 +1,11 @@
 // Deferred lighting: every light on every G-buffer pixel, with shadows,
 // the media's shadows on surfaces, and rect lights integrated with LTC.
-// Pixels without geometry show the sky.
+// The environment lights every surface; pixels without geometry show it.
 #import loupe::fullscreen::{FullscreenOut, fullscreen}
 #import loupe::view::{view, world_position}
 #import loupe::lights::{Light, lights, incident, light_type, LIGHT_RECT}
 #import loupe::brdf::{brdf_cos, specular_f0}
+#import loupe::environment::{environment_radiance, environment_light}
 #ifdef SHADOWS
 #import loupe::shadows::shadow
 #endif
@@ -21,15 +22,11 @@
 @group(0) @binding(3) var gbuffer_albedo: texture_2d<f32>;
 @group(0) @binding(4) var gbuffer_material: texture_2d<f32>;
 @group(0) @binding(5) var depth: texture_depth_2d;
+@group(0) @binding(6) var dfg: texture_2d<f32>;
 
 @vertex
 fn vs_fullscreen(@builtin(vertex_index) vertex_index: u32) -> FullscreenOut {
     return fullscreen(vertex_index);
-}
-
-fn sky(dir: vec3<f32>) -> vec3<f32> {
-    let t = clamp(dir.y * 0.5 + 0.5, 0.0, 1.0);
-    return mix(vec3(0.02, 0.022, 0.025), vec3(0.10, 0.16, 0.28), t);
 }
 
 // How much of a light reaches `p`: occluders' shadow maps times the media's
@@ -51,7 +48,7 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
     let z = textureLoad(depth, pixel, 0);
     if z >= 1.0 {
         let p = world_position(in.position.xy, 1.0);
-        return vec4(sky(normalize(p - view.position.xyz)), 1.0);
+        return vec4(environment_radiance(normalize(p - view.position.xyz)), 1.0);
     }
     let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
     let albedo = textureLoad(gbuffer_albedo, pixel, 0);
@@ -62,8 +59,7 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
     let p = world_position(in.position.xy, z);
     let v = normalize(view.position.xyz - p);
 
-    // A dim hemisphere ambient so unlit sides read as shapes, not holes.
-    var color = base_color * (1.0 - metallic) * mix(vec3(0.01), vec3(0.03, 0.04, 0.06), n.y * 0.5 + 0.5);
+    var color = environment_light(n, v, base_color, metallic, roughness, dfg);
     for (var i = 0u; i < view.counts.x; i++) {
         let light = lights[i];
 #ifdef LIGHT_RECT

@@ -225,7 +225,7 @@ const fn image(name: &'static str, binding: u32, sample_type: wgpu::TextureSampl
 
 /// Uniform sizes, in bytes, as the renderer writes them.
 pub mod sizes {
-    pub const VIEW: u64 = 176;
+    pub const VIEW: u64 = 208;
     pub const MAT4: u64 = 64;
     pub const VEC4: u64 = 16;
 }

@@ -92,30 +92,33 @@ pub fn create_textures(device: &wgpu::Device, queue: &wgpu::Queue) -> [wgpu::Tex
 }
 
 fn textures_from(device: &wgpu::Device, queue: &wgpu::Queue, matrix: &[f32], amplitude: &[f32]) -> [wgpu::Texture; 2] {
-    let make = |label: &str, texels: &[f32]| {
-        let size = wgpu::Extent3d { width: SIZE, height: SIZE, depth_or_array_layers: 1 };
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        // Native-endian bytes from the decoded values: the file is
-        // little-endian whatever the host is.
-        queue.write_texture(
-            texture.as_image_copy(),
-            bytemuck::cast_slice(texels),
-            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(SIZE * 16), rows_per_image: None },
-            size,
-        );
-        texture
-    };
-    [make("ltc.matrix", matrix), make("ltc.amplitude", amplitude)]
+    [upload(device, queue, "ltc.matrix", matrix), upload(device, queue, "ltc.amplitude", amplitude)]
+}
+
+/// A `SIZE` x `SIZE` table of RGBA f32 texels as a texture the renderer
+/// binds unfilterable (and copies from).
+pub fn upload(device: &wgpu::Device, queue: &wgpu::Queue, label: &str, texels: &[f32]) -> wgpu::Texture {
+    let size = wgpu::Extent3d { width: SIZE, height: SIZE, depth_or_array_layers: 1 };
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: FORMAT,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    // Native-endian bytes from the decoded values: the file is
+    // little-endian whatever the host is.
+    queue.write_texture(
+        texture.as_image_copy(),
+        bytemuck::cast_slice(texels),
+        wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(SIZE * 16), rows_per_image: None },
+        size,
+    );
+    texture
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -4,6 +4,7 @@
 
 pub mod capture;
 pub mod context;
+pub mod dfg;
 pub mod frame;
 pub mod graph;
 pub mod ltc;

@@ -34,6 +34,8 @@ pub struct SceneGpu {
     pub names: Vec<String>,
     /// The LTC tables, only for scenes with a rect light.
     pub ltc: Option<[wgpu::Texture; 2]>,
+    /// The pre-integrated GGX table of the environment's specular light.
+    pub dfg: wgpu::TextureView,
 }
 
 /// Where each light's shadow maps sit in the shadow array: the first layer
@@ -134,13 +136,17 @@ pub fn view_bytes(scene: &Scene) -> Vec<u8> {
     let aspect = scene.width as f32 / scene.height as f32;
     let view = Mat4::look_at_rh(Vec3::from(c.position), Vec3::from(c.target), Vec3::from(c.up));
     let view_proj = Mat4::perspective_rh(c.fov_deg.to_radians(), aspect, c.near, c.far) * view;
-    let mut out = Vec::with_capacity(176);
+    let mut out = Vec::with_capacity(crate::gpu::pipeline::sizes::VIEW as usize);
     push_mat4(&mut out, view_proj);
     push_mat4(&mut out, view_proj.inverse());
     push_vec4(&mut out, [c.position[0], c.position[1], c.position[2], c.near]);
     push_vec4(&mut out, [scene.width as f32, scene.height as f32, c.far, 0.0]);
     let counts = [scene.lights.len() as u32, scene.media.len() as u32, scene.quality.volume_steps, scene.quality.volume_shadow_steps];
     out.extend_from_slice(bytemuck::cast_slice(&counts));
+    let e = &scene.environment;
+    for c in [e.top, e.bottom] {
+        push_vec4(&mut out, [c[0] * e.intensity, c[1] * e.intensity, c[2] * e.intensity, 0.0]);
+    }
     out
 }
 
@@ -333,6 +339,7 @@ impl SceneGpu {
             draws,
             names: scene.objects.iter().map(|o| o.name.clone()).collect(),
             ltc: scene.has_rect_lights().then(|| super::ltc::create_textures(device, queue)),
+            dfg: super::dfg::create_texture(device, queue).create_view(&Default::default()),
         }
     }
 }

@@ -24,6 +24,8 @@ pub struct File {
     pub lights: Vec<Light>,
     #[serde(default)]
     pub media: Vec<Medium>,
+    #[serde(default)]
+    pub environment: Environment,
     /// Accepted here, read through the settings table from the document,
     /// where each key and value keeps its span.
     #[serde(default, rename = "post")]
@@ -60,6 +62,28 @@ pub struct Camera {
 impl Default for Camera {
     fn default() -> Self {
         Camera { position: [0.0, 1.5, 5.0], target: [0.0, 0.5, 0.0], up: [0.0, 1.0, 0.0], fov_deg: 45.0, near: 0.05, far: 200.0 }
+    }
+}
+
+/// `[environment]`: the light arriving from infinitely far away in every
+/// direction, a vertical gradient. Radiance from the unit direction `d` is
+/// `intensity * mix(bottom, top, d.y * 0.5 + 0.5)`; the raster shows it as
+/// the background and lights surfaces with it (`shaders/lib/environment.wgsl`).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Environment {
+    /// Linear RGB radiance straight up (before `intensity`).
+    pub top: Vec3,
+    /// Linear RGB radiance straight down (before `intensity`).
+    pub bottom: Vec3,
+    pub intensity: f32,
+}
+
+/// The sky loupe drew before the environment was part of the scene, so
+/// scenes without `[environment]` keep their background.
+impl Default for Environment {
+    fn default() -> Self {
+        Environment { top: [0.10, 0.16, 0.28], bottom: [0.02, 0.022, 0.025], intensity: 1.0 }
     }
 }
 

@@ -13,7 +13,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-pub use file::{Camera, Material, Noise, SdfShape, Vec3};
+pub use file::{Camera, Environment, Material, Noise, SdfShape, Vec3};
 pub use settings::{DebugView, Estimator, Post, Quality, Tonemap};
 
 use crate::diag::{Code, Diagnostic, LineIndex, Location};
@@ -37,6 +37,7 @@ pub struct Scene {
     pub objects: Vec<Object>,
     pub lights: Vec<Light>,
     pub media: Vec<Medium>,
+    pub environment: Environment,
     pub post: Post,
     pub quality: Quality,
 }

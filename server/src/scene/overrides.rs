@@ -164,13 +164,21 @@ impl From<Kind> for ControlKind {
 }
 
 /// The controls for `scene`: each setting of the table its scene shows,
-/// then each light's intensity.
+/// then the environment's intensity and each light's. (`[environment]` is
+/// a plain scene section, checked in `validate`, not a table of settings.)
 pub fn controls(scene: &Scene) -> Vec<Control> {
     let mut out: Vec<Control> = SETTINGS
         .iter()
         .filter(|s| (s.shown_when)(scene))
         .map(|s| Control { path: s.path.into(), label: s.label.into(), kind: s.kind.into(), value: (s.get)(scene), affects: s.affects })
         .collect();
+    out.push(Control {
+        path: "environment.intensity".into(),
+        label: "Environment intensity".into(),
+        kind: ControlKind::Slider { min: 0.0, max: 10.0, step: 0.05 },
+        value: settings::float(scene.environment.intensity),
+        affects: &["lighting"],
+    });
     for (i, l) in scene.lights.iter().enumerate() {
         let kind = match l.kind {
             LightKind::Directional { .. } => "directional",

@@ -232,7 +232,7 @@ fn controls_are_the_table_entries_the_scene_shows() {
     for text in ["", "[post]\nauto_exposure = true\n", MEDIUM, &format!("[post]\nauto_exposure = true\n{MEDIUM}")] {
         let scene = parse("s.toml", text).unwrap();
         let shown = controls(&scene);
-        let settings: Vec<_> = shown.iter().filter(|c| !c.path.starts_with("lights[")).collect();
+        let settings: Vec<_> = shown.iter().filter(|c| !c.path.starts_with("lights[") && !c.path.starts_with("environment.")).collect();
         let expected: Vec<_> = SETTINGS.iter().filter(|s| (s.shown_when)(&scene)).collect();
         assert_eq!(settings.len(), expected.len(), "{text}");
         for (c, s) in settings.iter().zip(expected) {
@@ -288,4 +288,45 @@ fn overrides_of_settings_are_checked_by_the_table() {
     let o = overrides::Overrides::from([("post.auto_exposure".to_owned(), Value::Bool(true))]);
     let s = parse("s.toml", &overrides::apply("", &o).unwrap()).unwrap();
     assert!(s.post.auto_exposure);
+}
+
+#[test]
+fn the_environment_defaults_to_the_old_sky() {
+    let s = parse("s.toml", "").unwrap();
+    assert_eq!(s.environment, Environment { top: [0.10, 0.16, 0.28], bottom: [0.02, 0.022, 0.025], intensity: 1.0 });
+    let s = parse("s.toml", "[environment]\ntop = [1, 0.5, 0.25]\nbottom = [0, 0.1, 0.2]\nintensity = 2.5\n").unwrap();
+    assert_eq!(s.environment, Environment { top: [1.0, 0.5, 0.25], bottom: [0.0, 0.1, 0.2], intensity: 2.5 });
+    let s = parse("s.toml", "[environment]\nintensity = 0\n").unwrap();
+    assert_eq!((s.environment.intensity, s.environment.top), (0.0, [0.10, 0.16, 0.28]), "the colours keep their defaults");
+}
+
+#[test]
+fn bad_environment_values_are_located() {
+    let e = err("[environment]\nintensity = -1.0\n");
+    assert!(e.message.starts_with("environment.intensity") && e.message.contains("negative"), "{}", e.message);
+    assert_eq!(at(&e), (2, 13));
+    let e = err("[environment]\nintensity = nan\n");
+    assert!(e.message.contains("finite"), "{}", e.message);
+    assert_eq!(at(&e), (2, 13));
+    let e = err("[environment]\ntop = [0.1, inf, 0.3]\n");
+    assert!(e.message.starts_with("environment.top[1]") && e.message.contains("finite"), "{}", e.message);
+    assert_eq!(at(&e), (2, 13));
+    let e = err("# sky\n[environment]\nbottom = [0.1, 0.2, -0.3]\n");
+    assert!(e.message.starts_with("environment.bottom[2]") && e.message.contains("negative"), "{}", e.message);
+    assert_eq!(at(&e), (3, 21));
+    let e = err("[environment]\ncolour = [1, 1, 1]\n");
+    assert!(e.message.contains("colour"), "{}", e.message);
+    assert_eq!(at(&e).0, 2);
+}
+
+#[test]
+fn the_environment_intensity_is_a_live_control() {
+    let s = parse("s.toml", "[environment]\nintensity = 0.5\n").unwrap();
+    let c = overrides::controls(&s);
+    let env = c.iter().find(|c| c.path == "environment.intensity").expect("a control");
+    assert_eq!(env.value, overrides::Value::Float(0.5));
+    let mut o = overrides::Overrides::new();
+    o.insert("environment.intensity".into(), overrides::Value::Float(3.0));
+    let text = overrides::apply("# no environment\n", &o).unwrap();
+    assert_eq!(parse("s.toml", &text).unwrap().environment.intensity, 3.0);
 }

@@ -75,13 +75,14 @@ impl Checker<'_> {
         Ok(v)
     }
 
+    fn non_negative(&self, path: &[Seg], v: f32) -> Checked<f32> {
+        self.finite(path, v)?;
+        if v < 0.0 { Err(self.error(path, format!("must not be negative, not {v}"))) } else { Ok(v) }
+    }
+
     fn non_negative3(&self, path: &[Seg], v: Vec3) -> Checked<Vec3> {
         for (i, c) in v.iter().enumerate() {
-            let p = with(path, Seg::Index(i));
-            self.finite(&p, *c)?;
-            if *c < 0.0 {
-                return Err(self.error(&p, format!("must not be negative, not {c}")));
-            }
+            self.non_negative(&with(path, Seg::Index(i)), *c)?;
         }
         Ok(v)
     }
@@ -252,10 +253,7 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
             if present { Err(c.error(&p(k), format!("does not apply {kind_name}"))) } else { Ok(()) }
         };
         c.non_negative3(&p("color"), l.color)?;
-        c.finite(&p("intensity"), l.intensity)?;
-        if l.intensity < 0.0 {
-            return Err(c.error(&p("intensity"), format!("must not be negative, not {}", l.intensity)));
-        }
+        c.non_negative(&p("intensity"), l.intensity)?;
         let position = |c: &Checker| -> Checked<Vec3> { c.vec3(&p("position"), c.required(&p("position"), l.position, &kind_name)?) };
         let direction = |c: &Checker| -> Checked<Vec3> { c.direction(&p("direction"), c.required(&p("direction"), l.direction, &kind_name)?) };
         if l.kind != LightType::Spot {
@@ -325,10 +323,7 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
                 }
             }
         }
-        c.finite(&p("blend"), m.blend)?;
-        if m.blend < 0.0 {
-            return Err(c.error(&p("blend"), format!("must not be negative, not {}", m.blend)));
-        }
+        c.non_negative(&p("blend"), m.blend)?;
         c.positive(&p("edge"), m.edge)?;
         c.non_negative3(&p("absorption"), m.absorption)?;
         c.non_negative3(&p("scattering"), m.scattering)?;
@@ -362,6 +357,12 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
         });
     }
 
+    let env = &f.environment;
+    let ep = |k| [K("environment"), K(k)];
+    c.non_negative3(&ep("top"), env.top)?;
+    c.non_negative3(&ep("bottom"), env.bottom)?;
+    c.non_negative(&ep("intensity"), env.intensity)?;
+
     let mut scene = Scene {
         width,
         height,
@@ -370,6 +371,7 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
         objects,
         lights,
         media,
+        environment: f.environment,
         post: Post::default(),
         quality: Quality::default(),
     };

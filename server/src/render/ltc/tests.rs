@@ -261,7 +261,7 @@ fn ggx_cos(v: V3, l: V3, alpha: f64) -> [f64; 2] {
 /// ∫ over the whole hemisphere of GGX × cos, and of the same times
 /// (1 - v·h)^5: the lobe's total, by Gauss-Legendre in (θ, φ), with
 /// `v` in the xz plane (the lobe is symmetric in y: φ over [0, π], × 2).
-fn ggx_albedo(cos_v: f64, alpha: f64) -> [f64; 2] {
+pub(crate) fn ggx_albedo(cos_v: f64, alpha: f64) -> [f64; 2] {
     let v = [(1.0 - cos_v * cos_v).sqrt(), 0.0, cos_v];
     let (nt, np) = (96, 96);
     let mut sum = [0.0; 2];

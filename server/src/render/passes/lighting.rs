@@ -1,5 +1,7 @@
 //! Direct light from every light on the G-buffer, with shadows, rect
-//! lights through LTC, and the media's transmittance toward each light.
+//! lights through LTC, and the media's transmittance toward each light; the
+//! environment's light (its irradiance and split-sum specular, with the
+//! GGX table of `render/dfg.rs`); the environment behind the geometry.
 
 use super::gbuffer::GBuffer;
 use super::{LIGHTS, MEDIA, SHADOW_GROUP, SHADOWS, TWO_TRIANGLES, VIEW, fullscreen_key};
@@ -18,7 +20,7 @@ pub static DEFERRED: PipelineSpec = PipelineSpec {
     shader: "passes/lighting.wgsl",
     stages: Stages::Fullscreen { fragment: "fs_main", targets: &[HDR] },
     groups: &[
-        Group::always(0, &[VIEW, LIGHTS, texture("gbuffer_normal", 2), texture("gbuffer_albedo", 3), texture("gbuffer_material", 4), depth_texture("depth", 5)]),
+        Group::always(0, &[VIEW, LIGHTS, texture("gbuffer_normal", 2), texture("gbuffer_albedo", 3), texture("gbuffer_material", 4), depth_texture("depth", 5), texture("dfg", 6)]),
         SHADOW_GROUP,
         Group::when(2, LIGHT_RECT, &[texture("ltc_matrix", 0), texture("ltc_amplitude", 1)]),
         Group::when(3, MEDIA_SHADOWS, MEDIA),
@@ -40,7 +42,12 @@ pub fn lighting(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle
     let color = p.create("color", TextureDesc::d2(HDR, scene.width, scene.height), Access::ColorTarget);
     p.execute(move |ctx| {
         let s = ctx.scene;
-        let mut b = vec![("view", s.view.as_entire_binding()), ("lights", s.lights.as_entire_binding()), ("media", s.media.as_entire_binding())];
+        let mut b = vec![
+            ("view", s.view.as_entire_binding()),
+            ("lights", s.lights.as_entire_binding()),
+            ("media", s.media.as_entire_binding()),
+            ("dfg", wgpu::BindingResource::TextureView(&s.dfg)),
+        ];
         b.extend(inputs.map(|(name, h)| (name, ctx.bind(h))));
         if let Some(h) = shadow_maps {
             b.extend([("shadow_maps", ctx.bind(h)), ("shadow_views", s.shadow_views.as_entire_binding())]);

@@ -90,6 +90,7 @@ impl Scene {
         let mut view: Vec<f32> = [view_proj, view_proj.inverse()].iter().flat_map(|m| m.to_cols_array()).collect();
         view.extend([0.0; 8]); // position, params
         view.extend([0.0f32; 4]); // counts: bit patterns of zero
+        view.extend([0.0; 8]); // environment
         let objects: Vec<u8> = models
             .iter()
             .flat_map(|m| [bytemuck::cast_slice(&m.to_cols_array()).to_vec(), bytemuck::cast_slice(&m.inverse().transpose().to_cols_array()).to_vec(), vec![0u8; 16]].concat())
