@@ -250,3 +250,36 @@ fn the_gbuffer_pass_rasterizes_what_the_prepass_did_and_shades_each_visible_pixe
     // that was nearest so far, at least each visible one.
     assert!(prepass["pixels"].as_i64().unwrap() >= visible, "{prepass}");
 }
+
+/// The lighting pass's colour output's statistics, per channel.
+fn lighting_stats(r: &Value) -> (Vec<f64>, Vec<f64>) {
+    let color = &pass(r, "lighting")["outputs"][0];
+    let channel = |k: &str| color["stats"][k].as_array().unwrap().iter().take(3).map(|v| v.as_f64().unwrap()).collect();
+    (channel("min"), channel("max"))
+}
+
+const SPHERE: &str = "[[materials]]\nname = \"white\"\nbase_color = [1, 1, 1]\nmetallic = 0\nroughness = 1\n\
+                      [[objects]]\nshape = \"sphere\"\nmaterial = \"white\"\nposition = [0, 0.5, 0]\n";
+
+#[test]
+fn the_environment_lights_the_scene_and_is_its_background() {
+    let p = Project::copy_of_repo("render-environment");
+    // No light and no environment: the object and the background are black.
+    p.write("scenes/dark.toml", format!("{SPHERE}[environment]\nintensity = 0\n"));
+    let (run, report) = render(&p, "scenes/dark.toml", &[]);
+    run.code(0);
+    let (_, max) = lighting_stats(&report.expect("report.json written"));
+    assert_eq!(max, [0.0; 3], "black without light");
+    // A furnace: a uniform environment of radiance 1 around a white
+    // Lambertian sphere. The background is 1; a shaded pixel is the diffuse
+    // albedo·L = 1 (to 1e-3: the irradiance is exact) plus the specular
+    // F0·scale + bias of the GGX table at roughness 1 (between 0.02 and 0.3).
+    p.write("scenes/furnace.toml", format!("{SPHERE}[environment]\ntop = [1, 1, 1]\nbottom = [1, 1, 1]\n"));
+    let (run, report) = render(&p, "scenes/furnace.toml", &[]);
+    run.code(0);
+    let (min, max) = lighting_stats(&report.expect("report.json written"));
+    for c in 0..3 {
+        assert!((min[c] - 1.0).abs() < 1e-3, "diffuse is albedo·L: min {min:?}");
+        assert!(max[c] > 1.02 && max[c] < 1.3, "the specular adds F0·DFG: max {max:?}");
+    }
+}
