@@ -150,6 +150,9 @@ pub fn view_bytes(scene: &Scene) -> Vec<u8> {
     out
 }
 
+/// One `Light` of lights.wgsl: six vec4.
+const LIGHT_BYTES: usize = 96;
+
 fn light_bytes(scene: &Scene) -> Vec<u8> {
     let (first_layer, _) = shadow_layout(scene);
     let mut out = Vec::new();
@@ -331,7 +334,9 @@ impl SceneGpu {
             }),
             objects: storage("objects", objects),
             materials: storage("materials", materials),
-            lights: storage("lights", light_bytes(scene)),
+            // A scene without lights still binds one (zeroed) light: the
+            // shader's array needs room for one element.
+            lights: storage("lights", if scene.lights.is_empty() { vec![0; LIGHT_BYTES] } else { light_bytes(scene) }),
             media: storage("media", medium_bytes(scene)),
             shadow_views: storage("shadow views", shadow_bytes),
             shadow_layers,
@@ -366,7 +371,7 @@ mod tests {
              [[media]]\nabsorption = [0, 0, 0]\nscattering = [1, 1, 1]\nshapes = [{ type = \"plane\", normal = [0, 1, 0], offset = 0.5 }]\n",
         )
         .unwrap();
-        assert_eq!(light_bytes(&s).len(), 96, "six vec4 per light");
+        assert_eq!(light_bytes(&s).len(), LIGHT_BYTES, "six vec4 per light");
         let media = medium_bytes(&s);
         assert_eq!(media.len(), 6 * 16 + 32 * 16);
         let floats: &[f32] = bytemuck::cast_slice(&media);
