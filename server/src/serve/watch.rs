@@ -733,7 +733,7 @@ mod tests {
         start_with(dir, NotifyWatcher::default())
     }
 
-    fn start_with(dir: &TempDir, mut watcher: NotifyWatcher) -> Session {
+    fn start_with(dir: &TempDir, watcher: NotifyWatcher) -> Session {
         let (tx, rx) = mpsc::channel();
         let guard = watcher
             .start(std::slice::from_ref(&dir.0), tx)
