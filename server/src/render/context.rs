@@ -10,7 +10,7 @@ use wgpu::util::DeviceExt;
 
 use super::resource::{Handle, Physical, PipelineKey};
 use super::quads::{PendingDepth, PendingDraw, PendingTarget, QuadRecorder, depth_state};
-use super::readback::Readback;
+use super::readback::copy_texture;
 use super::scene_gpu::SceneGpu;
 use super::vertex_capture::{self, Vertices};
 use crate::gpu::pipeline::{self, Pipeline};
@@ -278,24 +278,8 @@ impl<'a> PassContext<'a> {
     /// Copies layer `layer` of depth texture `h` out, before a pass that
     /// tests against it changes nothing but still must be replayed from it.
     fn copy_depth(&mut self, h: Handle, layer: u32) -> PendingDepth {
-        let texture = self.texture(h);
-        let size = texture.size();
-        let padded_row = (size.width * 4).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let readback = Readback::new(self.device, "quad statistics: depth", u64::from(padded_row) * u64::from(size.height));
-        self.encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d { x: 0, y: 0, z: layer },
-                aspect: wgpu::TextureAspect::DepthOnly,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: readback.buffer(),
-                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded_row), rows_per_image: Some(size.height) },
-            },
-            wgpu::Extent3d { width: size.width, height: size.height, depth_or_array_layers: 1 },
-        );
-        PendingDepth::Loaded { readback, padded_row }
+        let (readback, rows) = copy_texture(self.device, self.encoder, "quad statistics: depth", self.texture(h), layer, 1, 4);
+        PendingDepth::Loaded { readback, rows }
     }
 
     /// Draws every object of the scene, each with its index as the instance

@@ -11,7 +11,7 @@ use super::context::{MAX_STATISTICS, PassContext, Statistics};
 use super::graph::{Graph, PassKind, Resource};
 use super::pool::ResourcePool;
 use super::quads::{PendingTarget, QuadRecorder};
-use super::readback::Readback;
+use super::readback::{Readback, Rows, copy_texture};
 use super::vertex_capture::VertexCapture;
 use super::resource::{Physical, PipelineKey, ResourceDesc, TensorLayout, TextureDesc};
 use super::scene_gpu::SceneGpu;
@@ -58,7 +58,7 @@ pub struct PendingFrame {
 
 /// What a capture copied.
 enum Copied {
-    Texture { desc: TextureDesc, padded_row: u32 },
+    Texture { desc: TextureDesc, rows: Rows },
     Buffer(TensorLayout),
 }
 
@@ -282,20 +282,9 @@ fn copy_out(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, physical:
     let (what, readback) = match (&r.desc, physical) {
         (ResourceDesc::Texture(desc), Physical::Texture { texture, .. }) => {
             let layout = Layout::of(desc.format)?;
-            let row = desc.width * layout.bytes_per_texel() as u32;
-            let padded_row = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-            let readback = Readback::new(device, &r.name, u64::from(padded_row) * u64::from(desc.height) * u64::from(desc.layers));
             // Layers land one under another: an array reads back as one tall image.
-            let aspect = if desc.format.has_depth_aspect() { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
-            encoder.copy_texture_to_buffer(
-                wgpu::TexelCopyTextureInfo { aspect, ..texture.as_image_copy() },
-                wgpu::TexelCopyBufferInfo {
-                    buffer: readback.buffer(),
-                    layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded_row), rows_per_image: Some(desc.height) },
-                },
-                wgpu::Extent3d { width: desc.width, height: desc.height, depth_or_array_layers: desc.layers },
-            );
-            (Copied::Texture { desc: desc.clone(), padded_row }, readback)
+            let (readback, rows) = copy_texture(device, encoder, &r.name, texture, 0, desc.layers, layout.bytes_per_texel() as u32);
+            (Copied::Texture { desc: desc.clone(), rows }, readback)
         }
         (ResourceDesc::Buffer(layout), Physical::Buffer(source)) => {
             let size = source.size();
@@ -324,15 +313,14 @@ impl PendingFrame {
         let mut tensors = Vec::new();
         for c in &self.captures {
             let converted = c.readback.read(|mapped| match &c.what {
-                Copied::Texture { desc, padded_row } => {
+                Copied::Texture { desc, rows } => {
                     let layout = Layout::of(desc.format).expect("checked at copy");
-                    let row = desc.width as usize * layout.bytes_per_texel();
-                    let rows = (desc.height * desc.layers) as usize;
-                    let mut data = Vec::with_capacity(desc.width as usize * rows * 4);
-                    for r in mapped.chunks(*padded_row as usize).take(rows) {
-                        layout.extend_rgba_f32(&r[..row], &mut data);
+                    let height = desc.height * desc.layers;
+                    let mut data = Vec::with_capacity(desc.width as usize * height as usize * 4);
+                    for r in rows.of(mapped) {
+                        layout.extend_rgba_f32(r, &mut data);
                     }
-                    captures.push(CapturedImage::new(&c.pass, &c.output, self.frame, desc.width, rows as u32, desc.format, data));
+                    captures.push(CapturedImage::new(&c.pass, &c.output, self.frame, desc.width, height, desc.format, data));
                 }
                 Copied::Buffer(layout) => tensors.push(CapturedTensor::new(&c.pass, &c.output, self.frame, layout.clone(), mapped)),
             });

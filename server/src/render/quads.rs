@@ -5,13 +5,12 @@
 //! are replayed, in submission order, through the exact CPU model in
 //! [`crate::quads`].
 
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use serde::Serialize;
 
-use std::collections::BTreeMap;
-
-use super::readback::Readback;
+use super::readback::{Readback, Rows};
 use super::resource::PipelineKey;
 use super::vertex_capture::{PendingPositions, VertexCapture};
 use crate::quads::{self, Compare, DepthState, Draw, DrawStats, FrontFace, QuadMaps};
@@ -35,9 +34,8 @@ pub struct PendingTarget {
 
 pub enum PendingDepth {
     Clear(f32),
-    /// The depth layer copied out before the pass, rows padded to
-    /// `padded_row` bytes.
-    Loaded { readback: Readback, padded_row: u32 },
+    /// The depth layer copied out before the pass.
+    Loaded { readback: Readback, rows: Rows },
 }
 
 pub struct PendingDraw {
@@ -68,14 +66,11 @@ impl PendingTarget {
     /// The recorded pass with its data read; `None`, with a warning, when a
     /// readback failed.
     pub fn read(self) -> Option<RecordedTarget> {
-        let row = self.width as usize * 4;
         let depth = match self.depth {
             None => None,
             Some(PendingDepth::Clear(v)) => Some(InitialDepth::Clear(v)),
-            Some(PendingDepth::Loaded { readback, padded_row }) => {
-                let depths = readback.read(|bytes| {
-                    bytes.chunks(padded_row as usize).take(self.height as usize).flat_map(|r| r[..row].chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))).collect()
-                });
+            Some(PendingDepth::Loaded { readback, rows }) => {
+                let depths = readback.read(|bytes| rows.of(bytes).flat_map(|r| r.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))).collect());
                 Some(InitialDepth::Loaded(depths.or_else(|| warn_none(&self.pass, "its depth"))?))
             }
         };

@@ -56,3 +56,48 @@ impl Readback {
         Some(out)
     }
 }
+
+/// How a texture copy lays out its rows: tight rows of `row` bytes, each
+/// starting `padded` bytes after the previous one, as copies require.
+#[derive(Debug, Clone, Copy)]
+pub struct Rows {
+    row: usize,
+    padded: usize,
+    count: usize,
+}
+
+impl Rows {
+    /// The tight rows of a mapped copy.
+    pub fn of<'b>(&self, bytes: &'b [u8]) -> impl Iterator<Item = &'b [u8]> {
+        let row = self.row;
+        bytes.chunks(self.padded).take(self.count).map(move |r| &r[..row])
+    }
+}
+
+/// Copies `layers` layers of `texture` from `base_layer` on (the depth
+/// aspect of a depth format) into a new readback, one layer under
+/// another, texels of `bytes_per_texel`.
+pub fn copy_texture(
+    device: &wgpu::Device,
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    texture: &wgpu::Texture,
+    base_layer: u32,
+    layers: u32,
+    bytes_per_texel: u32,
+) -> (Readback, Rows) {
+    let (width, height) = (texture.width(), texture.height());
+    let row = width * bytes_per_texel;
+    let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let readback = Readback::new(device, label, u64::from(padded) * u64::from(height) * u64::from(layers));
+    let aspect = if texture.format().has_depth_aspect() { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo { texture, mip_level: 0, origin: wgpu::Origin3d { x: 0, y: 0, z: base_layer }, aspect },
+        wgpu::TexelCopyBufferInfo {
+            buffer: readback.buffer(),
+            layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(height) },
+        },
+        wgpu::Extent3d { width, height, depth_or_array_layers: layers },
+    );
+    (readback, Rows { row: row as usize, padded: padded as usize, count: (height * layers) as usize })
+}
