@@ -96,6 +96,13 @@ struct RenderArgs {
     /// Directory for the images and report.json (created if missing).
     #[arg(long)]
     out: PathBuf,
+    /// The renderer, as `--set quality.renderer=…`: `path` accumulates
+    /// `quality.path_spp` samples (one a frame) before writing.
+    #[arg(long, value_parser = ["raster", "path"])]
+    renderer: Option<String>,
+    /// Samples per pixel for the path tracer, as `--set quality.path_spp=N`.
+    #[arg(long)]
+    spp: Option<i64>,
 }
 
 #[derive(clap::Args)]
@@ -248,7 +255,15 @@ fn offline_failed(cmd: &str, e: offline::OfflineError) -> ExitCode {
 
 fn run_render(args: RenderArgs) -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    let report = match offline::render(&args.scene.job(), &args.out) {
+    let mut job = args.scene.job();
+    use loupe::scene::overrides::Value;
+    if let Some(r) = &args.renderer {
+        job.overrides.insert("quality.renderer".into(), Value::Text(r.clone()));
+    }
+    if let Some(n) = args.spp {
+        job.overrides.insert("quality.path_spp".into(), Value::Int(n));
+    }
+    let report = match offline::render(&job, &args.out) {
         Ok(r) => r,
         Err(e) => return offline_failed("render", e),
     };

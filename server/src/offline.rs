@@ -17,7 +17,7 @@ use crate::render::frame::{FrameResult, NanOrigin};
 use crate::render::quads::{DrawReport, WhatIf};
 use crate::render::resource::TensorLayout;
 use crate::render::session::{PassState, PassSummary, Session};
-use crate::scene::{self, overrides::Overrides};
+use crate::scene::{self, Renderer, overrides::Overrides};
 use crate::shader::library;
 
 #[derive(Debug, thiserror::Error)]
@@ -143,6 +143,13 @@ pub struct CulledReport {
 /// caller writes it as JSON).
 pub fn render(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
     let mut session = prepare(job)?;
+    // The path tracer adds a sample a frame: the frames before the last
+    // accumulate, uncaptured.
+    let quality = &session.scene().quality;
+    let frames = if quality.renderer == Renderer::Path { quality.path_spp } else { 1 };
+    for _ in 1..frames {
+        frame(&mut session, Some(&BTreeSet::new()));
+    }
     session.set_quads(true);
     let result = frame(&mut session, None);
     std::fs::create_dir_all(out).map_err(|e| OfflineError::Io(format!("cannot create {}: {e}", out.display())))?;

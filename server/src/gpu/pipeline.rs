@@ -195,6 +195,19 @@ pub const fn storage_rw(name: &'static str, binding: u32) -> Binding {
     buffer(name, binding, COMPUTE, wgpu::BufferBindingType::Storage { read_only: false }, 0)
 }
 
+/// A 2D texture a compute pass writes with `textureStore`.
+pub const fn storage_texture(name: &'static str, binding: u32, format: wgpu::TextureFormat) -> Binding {
+    Binding {
+        name,
+        entry: wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: COMPUTE,
+            ty: wgpu::BindingType::StorageTexture { access: wgpu::StorageTextureAccess::WriteOnly, format, view_dimension: wgpu::TextureViewDimension::D2 },
+            count: None,
+        },
+    }
+}
+
 /// An unfilterable f32 texture read with `textureLoad`: exact values, any
 /// float format, no sampler.
 pub const fn texture(name: &'static str, binding: u32) -> Binding {

@@ -9,6 +9,7 @@ pub mod frame;
 pub mod graph;
 pub mod ltc;
 pub mod passes;
+pub mod path_geometry;
 pub mod pipelines;
 pub mod pool;
 pub mod quads;
@@ -33,11 +34,18 @@ pub struct FrameOptions {
 /// Assembles the frame from the scene: only what the scene calls for.
 pub fn build_graph(scene: &Scene, options: FrameOptions) -> Graph {
     let mut g = GraphBuilder::new();
+    let raster = ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes"];
     let (hdr, gbuffer) = if scene.is_empty() {
-        for pass in ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes"] {
+        for pass in raster.iter().chain(&["path_trace"]) {
             g.cull(pass, "the scene is empty: it shows the test pattern");
         }
         (test_pattern::test_pattern(&mut g, scene), None)
+    } else if let Some(traced) = path_trace::path_trace(&mut g, scene) {
+        g.cull("test_pattern", "the scene has content to render");
+        for pass in raster {
+            g.cull(pass, "quality.renderer is path");
+        }
+        (traced.color, None)
     } else {
         g.cull("test_pattern", "the scene has content to render");
         let shadows = shadows::shadows(&mut g, scene);
@@ -54,7 +62,7 @@ pub fn build_graph(scene: &Scene, options: FrameOptions) -> Graph {
     let debug = match &gbuffer {
         Some((gb, depth)) => debug_view::debug_view(&mut g, scene, gb, *depth),
         None => {
-            g.cull("debug_view", "the scene is empty: no G-buffer to show");
+            g.cull("debug_view", "no G-buffer to show: the scene is empty or path traced");
             None
         }
     };

@@ -36,6 +36,11 @@ impl ResourcePool {
     pub fn reset_history(&mut self) {
         self.entries.retain(|k, _| k.lifetime != Lifetime::History);
     }
+
+    /// Forgets the history resources pass `pass` keeps.
+    pub fn reset_history_of(&mut self, pass: &str) {
+        self.entries.retain(|k, _| k.lifetime != Lifetime::History || k.name.split_once('/').is_none_or(|(p, _)| p != pass));
+    }
 }
 
 fn allocate(device: &wgpu::Device, r: &Resource) -> Physical {

@@ -9,8 +9,9 @@ use std::sync::Arc;
 use glam::{EulerRot, Mat4, Quat, Vec3};
 use wgpu::util::DeviceExt;
 
+use super::path_geometry::PathGeometry;
 use crate::mesh::MeshData;
-use crate::scene::{Geometry, LightKind, Scene, SdfShape};
+use crate::scene::{Geometry, LightKind, Renderer, Scene, SdfShape};
 
 pub struct GpuMesh {
     pub vertices: wgpu::Buffer,
@@ -36,6 +37,8 @@ pub struct SceneGpu {
     pub ltc: Option<[wgpu::Texture; 2]>,
     /// The pre-integrated GGX table of the environment's specular light.
     pub dfg: wgpu::TextureView,
+    /// The path tracer's geometry, when the scene is path traced.
+    pub path: Option<PathGeometry>,
 }
 
 /// Where each light's shadow maps sit in the shadow array: the first layer
@@ -269,8 +272,12 @@ fn object_meshes(scene: &Scene, loaded: &BTreeMap<String, Arc<MeshData>>) -> (Ve
 /// primitive]`: what the path tracer's hierarchy is built over.
 pub fn world_triangles(scene: &Scene, loaded: &BTreeMap<String, Arc<MeshData>>) -> Vec<([glam::Vec3; 3], [u32; 2])> {
     let (data, draws) = object_meshes(scene, loaded);
+    triangles_of(scene, &data, &draws)
+}
+
+fn triangles_of(scene: &Scene, data: &[Arc<MeshData>], draws: &[usize]) -> Vec<([glam::Vec3; 3], [u32; 2])> {
     let mut out = Vec::new();
-    for (object, (o, &mesh)) in scene.objects.iter().zip(&draws).enumerate() {
+    for (object, (o, &mesh)) in scene.objects.iter().zip(draws).enumerate() {
         let (model, m) = (model_matrix(o), &data[mesh]);
         for (primitive, t) in m.indices.as_chunks::<3>().0.iter().enumerate() {
             let v = t.map(|i| model.transform_point3(glam::Vec3::from(m.positions[i as usize])));
@@ -280,9 +287,34 @@ pub fn world_triangles(scene: &Scene, loaded: &BTreeMap<String, Arc<MeshData>>) 
     out
 }
 
+/// Per triangle of `ids` (`[object, primitive]`), its vertices' world-space
+/// normals, the material index in the first one's `w`: what a path-traced
+/// hit shades with, interpolated as the raster interpolates them.
+fn world_shading(scene: &Scene, data: &[Arc<MeshData>], draws: &[usize], ids: &[[u32; 2]]) -> Vec<[[f32; 4]; 3]> {
+    let normal_matrices: Vec<Mat4> = scene.objects.iter().map(|o| model_matrix(o).inverse().transpose()).collect();
+    ids.iter()
+        .map(|&[object, primitive]| {
+            let (o, m) = (object as usize, &data[draws[object as usize]]);
+            let material = scene.objects[o].material as f32;
+            let corner = |k: usize| {
+                let i = m.indices[3 * primitive as usize + k] as usize;
+                let n = normal_matrices[o].transform_vector3(Vec3::from(m.normals[i])).normalize_or_zero();
+                [n.x, n.y, n.z, if k == 0 { material } else { 0.0 }]
+            };
+            [corner(0), corner(1), corner(2)]
+        })
+        .collect()
+}
+
 impl SceneGpu {
-    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene, loaded: &BTreeMap<String, Arc<MeshData>>) -> Self {
+    /// `previous`: the scene's last GPU data, whose path-tracing hierarchy
+    /// is kept when the triangles are the same.
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene, loaded: &BTreeMap<String, Arc<MeshData>>, previous: Option<&SceneGpu>) -> Self {
         let (data, draws) = object_meshes(scene, loaded);
+        let path = (scene.quality.renderer == Renderer::Path).then(|| {
+            let source = triangles_of(scene, &data, &draws);
+            PathGeometry::new(device, source, previous.and_then(|p| p.path.as_ref()), |ids| world_shading(scene, &data, &draws, ids))
+        });
         let meshes = data
             .iter()
             .map(|m| GpuMesh {
@@ -345,6 +377,7 @@ impl SceneGpu {
             names: scene.objects.iter().map(|o| o.name.clone()).collect(),
             ltc: scene.has_rect_lights().then(|| super::ltc::create_textures(device, queue)),
             dfg: super::dfg::create_texture(device, queue).create_view(&Default::default()),
+            path,
         }
     }
 }

@@ -107,7 +107,7 @@ pub struct Session {
 
 impl Session {
     pub fn new(gpu: Gpu, shader_root: &Path, lib: Library, loaded: &Loaded) -> Self {
-        let scene_gpu = SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes);
+        let scene_gpu = SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes, None);
         Session {
             graph: super::build_graph(&loaded.scene, FrameOptions::default()),
             options: FrameOptions::default(),
@@ -174,10 +174,12 @@ impl Session {
     /// the new frame no longer uses are kept (switching back costs
     /// nothing), at most `KEPT_UNUSED` of them.
     pub fn set_scene(&mut self, loaded: &Loaded) {
-        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &loaded.scene, &loaded.meshes);
+        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &loaded.scene, &loaded.meshes, Some(&self.scene_gpu));
         self.scene = loaded.scene.clone();
         self.meshes = loaded.meshes.clone();
         self.graph = super::build_graph(&self.scene, self.options);
+        // History describes the old scene: accumulation starts over.
+        self.pool.reset_history();
         let wanted = self.wanted();
         let unused: Vec<PipelineKey> = self.cache.entries.keys().filter(|k| !wanted.contains(*k)).cloned().collect();
         for k in unused.iter().take(unused.len().saturating_sub(KEPT_UNUSED)) {
@@ -249,7 +251,14 @@ impl Session {
     /// built (on this thread: it owns the device).
     pub fn install(&mut self, key: &PipelineKey, result: Result<Compiled, Vec<Diagnostic>>) -> Installed {
         let display = self.shader_display(key.spec);
-        self.cache.install(&self.gpu.device, key, result, &self.lib, &display)
+        let installed = self.cache.install(&self.gpu.device, key, result, &self.lib, &display);
+        if installed == Installed::Swapped {
+            // What a pass accumulated came from the old code.
+            for pass in self.graph.passes.iter().filter(|p| p.pipelines.contains(key)) {
+                self.pool.reset_history_of(&pass.name);
+            }
+        }
+        installed
     }
 
     /// Composes and installs every pipeline the frame lacks, here and now;
@@ -366,7 +375,7 @@ impl Session {
         self.pool = ResourcePool::default();
         self.vertex_captures.clear();
         self.capture_generations.clear();
-        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &self.scene, &self.meshes);
+        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &self.scene, &self.meshes, None);
         self.cache.recreate_all(&self.gpu.device, &self.lib)
     }
 

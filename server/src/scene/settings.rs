@@ -202,6 +202,16 @@ choice!(
     }
 );
 
+choice!(
+    /// Which renderer makes the frame's HDR image.
+    Renderer {
+        /// Rasterized G-buffer, deferred lighting and the volume pass.
+        Raster = "raster",
+        /// The progressive path tracer (`path_trace`), the reference.
+        Path = "path",
+    }
+);
+
 macro_rules! or_always {
     () => {
         always
@@ -266,9 +276,24 @@ fn has_media(s: &Scene) -> bool {
     !s.media.is_empty()
 }
 
+fn path_traced(s: &Scene) -> bool {
+    s.quality.renderer == Renderer::Path
+}
+
+fn rastered(s: &Scene) -> bool {
+    !path_traced(s)
+}
+
+fn raster_media(s: &Scene) -> bool {
+    has_media(s) && rastered(s)
+}
+
 fn auto_exposure(s: &Scene) -> bool {
     s.post.auto_exposure
 }
+
+/// Every pass that makes the HDR image, raster or path traced.
+const RENDERED: [&str; 7] = ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes", "path_trace"];
 
 /// Every pass drawn as a fullscreen triangle.
 const FULLSCREEN: [&str; 6] = ["test_pattern", "lighting", "volumes", "exposure", "tonemap", "debug_view"];
@@ -298,16 +323,21 @@ settings! {
         two_triangles: bool = false, Toggle, "Fullscreen as two triangles", affects FULLSCREEN;
     }
 
-    /// `[quality]`: shadow and ray-march costs.
+    /// `[quality]`: the renderer, and shadow, ray-march and path costs.
     quality: Quality {
-        shadows: bool = true, Toggle, "Shadows", affects ["shadows", "lighting", "volumes"];
-        shadow_map_size: u32 = 1024, Int { min: 64, max: 4096, step: 64 }, "Shadow map size", affects ["shadows"];
+        renderer: Renderer = Renderer::Raster, Choice(Renderer::NAMES), "Renderer", affects RENDERED;
+        /// Samples per pixel the path tracer accumulates to, one a frame.
+        path_spp: u32 = 256, Int { min: 1, max: 65536, step: 1 }, "Path samples per pixel", affects ["path_trace"], shown_when path_traced;
+        /// Indirect bounces; 0 is direct light only.
+        path_bounces: u32 = 4, Int { min: 0, max: 64, step: 1 }, "Path bounces", affects ["path_trace"], shown_when path_traced;
+        shadows: bool = true, Toggle, "Shadows", affects ["shadows", "lighting", "volumes"], shown_when rastered;
+        shadow_map_size: u32 = 1024, Int { min: 64, max: 4096, step: 64 }, "Shadow map size", affects ["shadows"], shown_when rastered;
         /// Ray-march steps per pixel through the media.
-        volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volumes"], shown_when has_media;
+        volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volumes"], shown_when raster_media;
         /// Steps of the march toward each light (self-shadowing).
         volume_shadow_steps: u32 = 6, Int { min: 1, max: 64, step: 1 },
-            "Volume shadow steps", affects ["volumes"], shown_when has_media;
+            "Volume shadow steps", affects ["volumes"], shown_when raster_media;
         volume_estimator: Estimator = Estimator::Analytic, Choice(Estimator::NAMES),
-            "In-scattering estimator", affects ["volumes"], shown_when has_media;
+            "In-scattering estimator", affects ["volumes"], shown_when raster_media;
     }
 }

@@ -30,6 +30,7 @@ passes![
     ltc_tables,
     lighting,
     volumes,
+    path_trace,
     auto_exposure,
     exposure,
     tonemap,
@@ -91,6 +92,7 @@ mod tests {
             ("post.exposure_ev", &[Value::Float(0.0), Value::Float(1.0)]),
             ("quality.shadows", &[Value::Bool(true), Value::Bool(false)]),
             ("quality.volume_estimator", &[Value::Text("constant".into()), Value::Text("analytic".into())]),
+            ("quality.renderer", &[Value::Text("raster".into()), Value::Text("path".into())]),
         ];
         let mut used = BTreeSet::new();
         let mut scenes_seen = 0;
