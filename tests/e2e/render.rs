@@ -329,3 +329,35 @@ fn the_environment_lights_the_scene_and_is_its_background() {
         assert!(black_min[c] > 0.005 && black_max[c] < 0.3, "the specular is F0·DFG: {black_min:?}..{black_max:?}");
     }
 }
+
+/// `--renderer path --spp N` accumulates N samples per pixel and writes the
+/// path tracer's colour with its albedo and normal; the raster passes are
+/// culled with the reason, and the raster frame culls the path tracer.
+#[test]
+fn the_path_tracer_renders_offline_with_albedo_and_normal() {
+    let p = Project::copy_of_repo("render-path");
+    let (run, report) = render_at(&p, "scenes/minimal.toml", "48x27", &["--renderer", "path", "--spp", "5"]);
+    run.code(0);
+    let r = report.expect("report.json written");
+    assert_eq!(names(&r["passes"]), ["path_trace", "tonemap"], "{r}");
+    for raster in ["shadows", "depth_prepass", "gbuffer", "lighting"] {
+        assert_eq!(culled_reason(&r, raster), "quality.renderer is path");
+    }
+    let traced = pass(&r, "path_trace");
+    for output in ["color", "albedo", "normal", "samples"] {
+        assert!(p.path(&format!("out/path_trace.{output}.exr")).is_file(), "path_trace.{output}.exr missing");
+    }
+    let samples = traced["outputs"].as_array().unwrap().iter().find(|o| o["name"] == "samples").unwrap();
+    assert_eq!((samples["stats"]["min"][0].as_f64(), samples["stats"]["max"][0].as_f64()), (Some(5.0), Some(5.0)), "every pixel holds 5 samples");
+    let color = traced["outputs"].as_array().unwrap().iter().find(|o| o["name"] == "color").unwrap();
+    assert_eq!(color["format"], "Rgba32Float");
+    assert_eq!(color["stats"]["nan"], 0);
+    // The knot's paint reaches the albedo: its blue over red.
+    let albedo = traced["outputs"].as_array().unwrap().iter().find(|o| o["name"] == "albedo").unwrap();
+    assert!((albedo["stats"]["max"][2].as_f64().unwrap() - 0.8).abs() < 0.01, "{albedo}");
+    assert!(r["nan"].is_null(), "{r}");
+
+    let (run, report) = render_at(&p, "scenes/minimal.toml", "48x27", &[]);
+    run.code(0);
+    assert_eq!(culled_reason(&report.unwrap(), "path_trace"), "quality.renderer is raster");
+}

@@ -103,6 +103,9 @@ pub struct Session {
     /// generation each was instrumented from; built while `quads` is on.
     vertex_captures: BTreeMap<PipelineKey, VertexCapture>,
     capture_generations: BTreeMap<PipelineKey, u64>,
+    /// Frames submitted since the history was last forgotten: the samples
+    /// per pixel the path tracer holds.
+    accumulated: u32,
 }
 
 impl Session {
@@ -115,6 +118,7 @@ impl Session {
             quads: false,
             vertex_captures: BTreeMap::new(),
             capture_generations: BTreeMap::new(),
+            accumulated: 0,
             scene: loaded.scene.clone(),
             meshes: loaded.meshes.clone(),
             scene_gpu,
@@ -179,7 +183,7 @@ impl Session {
         self.meshes = loaded.meshes.clone();
         self.graph = super::build_graph(&self.scene, self.options);
         // History describes the old scene: accumulation starts over.
-        self.pool.reset_history();
+        self.reset_history();
         let wanted = self.wanted();
         let unused: Vec<PipelineKey> = self.cache.entries.keys().filter(|k| !wanted.contains(*k)).cloned().collect();
         for k in unused.iter().take(unused.len().saturating_sub(KEPT_UNUSED)) {
@@ -256,6 +260,9 @@ impl Session {
             // What a pass accumulated came from the old code.
             for pass in self.graph.passes.iter().filter(|p| p.pipelines.contains(key)) {
                 self.pool.reset_history_of(&pass.name);
+                if pass.name == "path_trace" {
+                    self.accumulated = 0;
+                }
             }
         }
         installed
@@ -278,6 +285,7 @@ impl Session {
     /// temporal passes adapt by.
     pub fn submit(&mut self, capture: Option<&BTreeSet<String>>, dt: f32) -> PendingFrame {
         self.frame += 1;
+        self.accumulated = self.accumulated.saturating_add(1);
         if self.quads {
             self.refresh_vertex_captures();
         }
@@ -360,6 +368,13 @@ impl Session {
     /// Forgets every history resource: the next frame starts over.
     pub fn reset_history(&mut self) {
         self.pool.reset_history();
+        self.accumulated = 0;
+    }
+
+    /// Whether frames still change with nothing else changing: the path
+    /// tracer has not reached `quality.path_spp` samples per pixel.
+    pub fn converging(&self) -> bool {
+        self.graph.passes.iter().any(|p| p.name == "path_trace") && self.accumulated < self.scene.quality.path_spp
     }
 
     /// Errors wgpu reported outside any error scope since the last call.

@@ -245,7 +245,7 @@ impl Daemon {
     }
 
     fn wants_frame(&self) -> bool {
-        self.config.mode == RenderMode::Continuous || self.dirty || !self.finished_reloads.is_empty()
+        self.config.mode == RenderMode::Continuous || self.dirty || !self.finished_reloads.is_empty() || self.session.converging()
     }
 
     /// How long until the next frame is due: at once when a reload is
