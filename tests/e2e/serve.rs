@@ -457,3 +457,51 @@ fn quad_statistics_stream_while_asked_and_follow_a_vertex_stage_edit() {
     ws.send(serde_json::json!({ "type": "quad_statistics", "on": false }));
     s.wait_for("the statistics to stop", LIMIT, || (s.get("/api/quads").0 == 404).then_some(()));
 }
+
+/// The per-pixel sample count of each `path_trace/samples` capture that
+/// arrives, in order, until `until` returns true.
+fn sample_counts(ws: &mut loupe_tests::ws::Ws, mut until: impl FnMut(&[f32]) -> bool) -> Vec<f32> {
+    let mut seen = Vec::new();
+    ws.until("path_trace/samples captures", LIMIT, |m| match m {
+        Msg::Image(h, d) if h["kind"] == "capture" && h["pass"] == "path_trace" => {
+            let values: Vec<f32> = d.chunks_exact(16).map(|px| f32::from_le_bytes(px[..4].try_into().unwrap())).collect();
+            let first = values[0];
+            assert!(values.iter().all(|v| *v == first), "every pixel holds the same count: {first}");
+            seen.push(first);
+            until(&seen).then_some(())
+        }
+        _ => None,
+    });
+    seen
+}
+
+/// `serve` accumulates the path tracer one sample a frame up to
+/// `quality.path_spp`, on-change mode included, and starts over when a
+/// setting or the shader changes.
+#[test]
+fn the_path_tracer_accumulates_to_its_samples_and_restarts_on_a_change() {
+    let p = Project::copy_of_repo("serve-path");
+    let scene = p.read("scenes/minimal.toml").replace("width = 640\nheight = 360", "width = 40\nheight = 24");
+    p.write("scenes/minimal.toml", format!("{scene}\n[quality]\nrenderer = \"path\"\npath_spp = 6\n"));
+    let s = Server::start(&p.root, &["--scene", "scenes/minimal.toml", "--render", "on-change"]);
+    let mut ws = s.ws();
+    ws.event("hello", LIMIT, |_| true);
+    ws.send(serde_json::json!({ "type": "subscribe", "pass": "path_trace", "output": "samples", "encoding": "f32" }));
+    let counts = sample_counts(&mut ws, |c| c.last() == Some(&6.0));
+    assert!(counts.windows(2).all(|w| w[1] == w[0] + 1.0), "one sample a frame: {counts:?}");
+    // Converged: an on-change server stops rendering.
+    let frame = frame_of(&s);
+    std::thread::sleep(Duration::from_millis(1500));
+    assert_eq!(frame_of(&s), frame, "no frames once the samples are reached");
+
+    // A setting changes: accumulation starts over.
+    ws.send(serde_json::json!({ "type": "set_override", "path": "lights[0].intensity", "value": 20.0 }));
+    let counts = sample_counts(&mut ws, |c| c.last() == Some(&6.0));
+    assert!(counts[0] < 6.0, "restarted after the override: {counts:?}");
+
+    // The pass's shader changes: its history is forgotten too.
+    let shader = p.read("shaders/passes/path_trace.wgsl");
+    p.save_by_rename("shaders/passes/path_trace.wgsl", shader.replace("const ROULETTE_AFTER: u32 = 3u;", "const ROULETTE_AFTER: u32 = 2u;"));
+    let counts = sample_counts(&mut ws, |c| c.len() > 1 && c.last() == Some(&6.0));
+    assert!(counts.iter().any(|c| *c < 6.0), "restarted after the edit: {counts:?}");
+}
