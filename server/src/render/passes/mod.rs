@@ -38,6 +38,11 @@ passes![
     nan_watch,
 ];
 
+/// The denoiser's kernels; a pass of the frame once the network is wired.
+pub mod denoise {
+    pub mod kernels;
+}
+
 /// The spec named `name`.
 pub fn spec(name: &str) -> Option<&'static PipelineSpec> {
     specs().find(|s| s.name == name)
