@@ -15,6 +15,8 @@
 //   #inspect-a, #channel (rgb|r|g|b|a|luminance), #exposure (EV), #range-min,
 //   #range-max, #auto-fit, #overlay-nan, #overlay-inf, #overlay-neg, #srgb,
 //   #compare-mode (off|split|diff), #compare-b (last_good | "pass/output"), #live
+//   #renderer-raster, #renderer-path, #path-samples, #path-difference,
+//                      #path-difference-stats: see path.js
 //   window.loupe       see the end of this file
 //
 // Source of truth: the HTTP API. Events say *that* something changed (and
@@ -31,6 +33,7 @@ import { LiveFrame } from './live.js';
 import { TensorView } from './tensor.js';
 import { ControlsPanel } from './controls.js';
 import { QuadView } from './quads.js';
+import { PathView } from './path.js';
 import * as tex from './texture.js';
 import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
 
@@ -254,6 +257,9 @@ const diagnostics = new DiagnosticsPanel($('diagnostics'), $('diag-count'), (pat
 
 let conn = null; // created below; the inspector's hooks reach it lazily
 
+/** Streams exactly `wanted` ([{pass, output}]) as f32 for `owner`. */
+const streamF32 = (owner) => (wanted) => conn?.want(owner, wanted.map(({ pass, output }) => ({ pass, output, encoding: 'f32' })));
+
 const inspector = new Inspector({
   fetchCaptures: () => loadCaptures(),
   onTarget: (pass) => {
@@ -261,11 +267,12 @@ const inspector = new Inspector({
     quadView.setPass(pass);
   },
   // The inspector streams exact floats of what it shows.
-  subscribeOnly: (wanted) => conn?.subscribeOnly(wanted, 'f32'),
+  subscribeOnly: streamF32('inspector'),
   awaitCapture,
 });
 
-const tensors = new TensorView((wanted) => conn?.subscribeOnly(wanted, 'f32'));
+// The tensor view takes the inspector's place: one set of outputs for both.
+const tensors = new TensorView(streamF32('inspector'));
 $('tensor-close').addEventListener('click', () => {
   tensors.hide();
   $('inspector').hidden = false;
@@ -275,6 +282,7 @@ $('tensor-close').addEventListener('click', () => {
 /** Returns whether the pass structure changed (not just the times). */
 function applyPasses(passes) {
   state.passes = Array.isArray(passes) ? passes : [];
+  pathView.setPasses(state.passes);
   if (!passList.set(state.passes)) return false;
   const broken = state.passes.filter((p) => p.status === 'stale' || p.status === 'failed');
   const badge = $('frame-badge');
@@ -312,6 +320,7 @@ function applyDiagnostics(list) {
 function applyCaptures(list) {
   state.captures = Array.isArray(list) ? list : [];
   inspector.setCaptures(state.captures);
+  pathView.setCaptures(state.captures);
   autoInspect();
 }
 
@@ -324,7 +333,7 @@ function applyPipelines(list) {
 const refetchStatus = latestOnly(api.status, fetched('status', applyStatus), fetchFailed('status'));
 const refetchPasses = latestOnly(api.passes, fetched('passes', applyPasses), fetchFailed('passes'));
 const refetchPipelines = latestOnly(api.pipelines, fetched('pipelines', applyPipelines), fetchFailed('pipelines'));
-const refetchControls = latestOnly(() => api.getJson('/api/controls'), fetched('controls', (r) => controls.apply(r)), fetchFailed('controls'));
+const refetchControls = latestOnly(() => api.getJson('/api/controls'), fetched('controls', applyControls), fetchFailed('controls'));
 const refetchDiagnostics = latestOnly(
   api.diagnostics,
   fetched('diagnostics', applyDiagnostics),
@@ -392,7 +401,7 @@ function onEvent(ev) {
   }
   switch (ev.type) {
     case 'controls':
-      controls.apply(ev);
+      applyControls(ev);
       break;
     case 'hello':
       state.protocol = ev.protocol;
@@ -429,6 +438,7 @@ function onEvent(ev) {
       for (const w of [...frameWaiters]) w(true);
       inspector.onFrame();
       tensors.onFrame();
+      pathView.onFrame(ev.frame);
       break;
     case 'passes':
       // Sent when the pass list or a status changed; a new structure can
@@ -473,9 +483,13 @@ function onEvent(ev) {
 
 function onBinary(hdr, bytes) {
   // `frame`: the final output, for the live view; `capture`: an output the
-  // inspector subscribed to. Other kinds are for newer pages.
+  // inspector or the path view subscribed to. Other kinds are for newer
+  // pages.
   if (hdr.kind === 'frame') live.push(hdr, bytes);
-  else if (hdr.kind === 'capture') inspector.onCapture(hdr, bytes);
+  else if (hdr.kind === 'capture') {
+    inspector.onCapture(hdr, bytes);
+    pathView.onCapture(hdr, bytes);
+  }
 }
 
 // Clicking the live frame inspects the final output.
@@ -555,6 +569,19 @@ const quadView = new QuadView(
 
 const controls = new ControlsPanel($('scene-panel'), (message) => conn.send(message));
 
+// ---- renderer switch, samples, path − raster -----------------------------
+
+const pathView = new PathView({
+  send: (message) => conn.send(message),
+  want: (wanted) => conn?.want('path', wanted),
+  refreshCaptures: refetchCapturesSoon,
+});
+
+function applyControls(report) {
+  controls.apply(report);
+  pathView.setControls(report);
+}
+
 // ---- start ---------------------------------------------------------------
 
 const wsUrl = `${location.protocol === 'https:' ? 'wss:' : 'ws:'}//${location.host}/ws`;
@@ -614,6 +641,7 @@ window.loupe = {
       liveFrame: live.shown ? { ...live.shown } : null,
       liveImages: { received: live.received, skipped: live.skipped, failed: live.failed, rate: live.rate() },
       inspector: inspector.snapshot(),
+      path: pathView.snapshot(),
     };
   },
   tex,

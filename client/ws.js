@@ -41,6 +41,8 @@ export class Connection {
      * message. Sent again after each reconnect: a restarted server has
      * forgotten them. */
     this.subscriptions = new Map();
+    /** What each panel wants streamed (`want`): owner → [{pass, output, encoding}]. */
+    this.wants = new Map();
     this.everConnected = false;
   }
 
@@ -160,12 +162,24 @@ export class Connection {
     this.send({ type: 'quad_statistics', on });
   }
 
-  /** Subscribes to exactly `wanted` ([{pass, output}]) in `encoding`. */
-  subscribeOnly(wanted, encoding) {
-    const keys = new Set(wanted.map(({ pass, output }) => `${pass}/${output}`));
-    for (const message of [...this.subscriptions.values()]) {
-      if (!keys.has(`${message.pass}/${message.output}`)) this.unsubscribe(message.pass, message.output);
+  /**
+   * Sets what `owner` (a panel) wants streamed: [{pass, output, encoding}].
+   * The server holds one set per connection, so the page subscribes to the
+   * union of every owner's; an output two owners want in different
+   * encodings comes as f32, the one every consumer can read exactly.
+   */
+  want(owner, wanted) {
+    this.wants.set(owner, wanted);
+    const union = new Map();
+    for (const list of this.wants.values()) {
+      for (const { pass, output, encoding } of list) {
+        const key = `${pass}/${output}`;
+        if (!union.has(key) || encoding === 'f32') union.set(key, { pass, output, encoding });
+      }
     }
-    for (const { pass, output } of wanted) this.subscribe(pass, output, encoding);
+    for (const message of [...this.subscriptions.values()]) {
+      if (!union.has(`${message.pass}/${message.output}`)) this.unsubscribe(message.pass, message.output);
+    }
+    for (const { pass, output, encoding } of union.values()) this.subscribe(pass, output, encoding);
   }
 }

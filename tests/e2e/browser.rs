@@ -436,3 +436,87 @@ async fn every_raster_pass_has_its_quad_table_and_maps() {
     }
     c.close().await.unwrap();
 }
+
+/// The renderer switch in the page: path traced from its button, the
+/// samples counted up to convergence, the difference from the raster image
+/// the page kept equal to what the two captures give, and back to raster.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_renderer_switch_counts_samples_and_measures_path_against_raster() {
+    let p = Project::copy_of_repo("browser-path");
+    // Small, with few samples: lavapipe traces it in a few frames.
+    let small = p.read("scenes/minimal.toml").replacen("width = 640", "width = 96", 1).replacen("height = 360", "height = 54", 1);
+    assert!(small.contains("width = 96") && small.contains("height = 54") && !small.contains("[quality]"), "minimal.toml's settings moved: update this test");
+    p.write("scenes/small.toml", small + "\n[quality]\npath_spp = 8\n");
+    // Continuous: the path tracer adds one sample per frame rendered.
+    let s = Server::start(&p.root, &["--render", "continuous", "--scene", "scenes/small.toml"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    until(&c, &s, "the switch showing raster", "document.querySelector('#renderer-raster').getAttribute('aria-pressed') === 'true'").await;
+    assert_eq!(c.execute("return document.querySelector('#path-panel').hidden;", vec![]).await.unwrap(), true, "no path tracing panel while rastering");
+    until(&c, &s, "the raster image kept by the page", "window.loupe.state.path.reference").await;
+
+    c.find(Locator::Css("#renderer-path")).await.unwrap().click().await.unwrap();
+    until(&c, &s, "the switch showing path traced", "document.querySelector('#renderer-path').getAttribute('aria-pressed') === 'true'").await;
+    let control = c.execute("return document.querySelector('#controls [data-path=\"quality.renderer\"]').value;", vec![]).await.unwrap();
+    assert_eq!(control, "path", "the Scene panel's control shows the override too");
+    until(&c, &s, "the raster passes culled", "document.querySelector('#passes li[data-pass=\"lighting\"][data-status=\"culled\"]') && document.querySelector('#passes li[data-pass=\"path_trace\"][data-status=\"ok\"]')").await;
+    let counted = until(&c, &s, "some samples counted", "(n => n >= 2 && n)(Number(document.querySelector('#path-samples').dataset.samples))").await;
+    assert!(counted.as_u64().unwrap() <= 8);
+    let text = until(&c, &s, "convergence", "document.querySelector('#path-samples[data-converged=\"true\"]')?.textContent").await;
+    assert_eq!(text, "8 / 8 samples · converged");
+    let served = s.get_json("/api/captures");
+    let samples = served.as_array().unwrap().iter().find(|c| c["pass"] == "path_trace" && c["output"] == "samples").expect("path_trace/samples captured");
+    assert_eq!(samples["stats"]["min"][0], 8.0, "the count shown is the capture's");
+
+    // The difference, against the page's raster image. Converged, the
+    // path-traced image stays as it is, and the raster one is the same in
+    // every frame of this scene: the server's last captures of both are
+    // what the page compared.
+    c.find(Locator::Css("#path-difference")).await.unwrap().click().await.unwrap();
+    until(&c, &s, "the difference", "document.querySelector('#path-difference-stats').dataset.rmse").await;
+    let shown = c
+        .execute(
+            "const s = document.querySelector('#path-difference-stats'); const m = document.querySelector('#path-difference-map');
+             return [s.textContent, Number(s.dataset.rmse), Number(s.dataset.relative), m.width, m.height, document.querySelector('#path-difference-legend').textContent];",
+            vec![],
+        )
+        .await
+        .unwrap();
+    let raster = s.capture_f32("lighting/color").expect("the last raster image is still captured");
+    let traced = s.capture_f32("path_trace/color").expect("the path-traced image");
+    assert!(raster.frame < traced.frame && (raster.width, raster.height) == (96, 54) && (traced.width, traced.height) == (96, 54));
+    let (mut squares, mut relative, mut channels) = (0.0f64, 0.0f64, 0.0f64);
+    for (t, r) in traced.data.chunks_exact(4).zip(raster.data.chunks_exact(4)) {
+        assert!(t.iter().chain(r).all(|v| v.is_finite()), "finite images");
+        for ch in 0..3 {
+            let d = (f64::from(t[ch]) - f64::from(r[ch])).abs();
+            squares += d * d;
+            relative += d / (f64::from(r[ch]).abs() + 0.01);
+            channels += 1.0;
+        }
+    }
+    let (rmse, relative) = ((squares / channels).sqrt(), relative / channels);
+    assert!(rmse > 0.0, "the path tracer and the raster differ");
+    let text = shown[0].as_str().unwrap();
+    let number = |after: &str| -> f64 { text.split(after).nth(1).and_then(|t| t.split_whitespace().next()).and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("no number after {after:?} in {text:?}")) };
+    let close = |got: f64, want: f64, tolerance: f64| (got - want).abs() <= tolerance * want.abs();
+    // Three significant digits shown: within half a unit of the third.
+    assert!(close(number("RMSE "), rmse, 0.0051) && close(number("mean relative "), 100.0 * relative, 0.0051), "{text:?}: RMSE {rmse}, mean relative {}%", 100.0 * relative);
+    assert!(close(shown[1].as_f64().unwrap(), rmse, 1e-9) && close(shown[2].as_f64().unwrap(), relative, 1e-9), "exact figures {shown}: RMSE {rmse}, relative {relative}");
+    assert_eq!((shown[3].as_u64(), shown[4].as_u64()), (Some(96), Some(54)), "a heat-map pixel per image pixel");
+    assert!(shown[5].as_str().unwrap().contains("|path − raster|"), "the legend says what it shows: {}", shown[5]);
+
+    // Back to raster: the raster passes render again, and the page keeps
+    // their image anew.
+    let traced_frame = traced.frame;
+    c.find(Locator::Css("#renderer-raster")).await.unwrap().click().await.unwrap();
+    until(&c, &s, "the switch showing raster again", "document.querySelector('#renderer-raster').getAttribute('aria-pressed') === 'true'").await;
+    until(&c, &s, "lighting live again", "document.querySelector('#passes li[data-pass=\"lighting\"][data-status=\"ok\"]') && document.querySelector('#passes li[data-pass=\"path_trace\"][data-status=\"culled\"]')").await;
+    until(&c, &s, "a new raster image kept", &format!("window.loupe.state.path.reference.frame > {traced_frame}")).await;
+    assert_eq!(c.execute("return document.querySelector('#path-panel').hidden;", vec![]).await.unwrap(), true, "no samples or difference while rastering");
+    // Set in the Scene panel instead, the switch follows.
+    c.execute("const s = document.querySelector('#controls [data-path=\"quality.renderer\"]'); s.value = 'path'; s.dispatchEvent(new Event('change')); return true;", vec![]).await.unwrap();
+    until(&c, &s, "the switch following the Scene panel", "document.querySelector('#renderer-path').getAttribute('aria-pressed') === 'true'").await;
+    c.close().await.unwrap();
+}
