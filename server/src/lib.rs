@@ -8,7 +8,9 @@
 
 pub mod bvh;
 pub mod check;
+pub mod denoise;
 pub mod diag;
+pub mod files;
 pub mod gpu;
 pub mod mesh;
 pub mod offline;

@@ -104,6 +104,8 @@ pub enum Code {
     ProjectFile,
     #[serde(rename = "gpu")]
     Gpu,
+    #[serde(rename = "weights")]
+    Weights,
 }
 
 impl Code {
@@ -127,6 +129,7 @@ impl Code {
             Code::UnusedModule => "unused-module",
             Code::ProjectFile => "project-file",
             Code::Gpu => "gpu",
+            Code::Weights => "weights",
         }
     }
 
@@ -151,10 +154,11 @@ impl Code {
             Code::UnusedModule => "a file has no entry point and no #define_import_path: nothing can use it",
             Code::ProjectFile => "the project file loupe.toml is invalid",
             Code::Gpu => "the GPU rejected commands while a frame was recorded or submitted (an error no error scope caught)",
+            Code::Weights => "the denoiser's weights file (.tza) is malformed or is not a U-Net loupe can run",
         }
     }
 
-    pub const ALL: [Code; 18] = [
+    pub const ALL: [Code; 19] = [
         Code::Io,
         Code::Encoding,
         Code::EmptyFile,
@@ -173,6 +177,7 @@ impl Code {
         Code::UnusedModule,
         Code::ProjectFile,
         Code::Gpu,
+        Code::Weights,
     ];
 }
 

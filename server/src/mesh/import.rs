@@ -9,7 +9,6 @@
 //! in a .gltf, points at where it is written.
 
 use std::borrow::Cow;
-use std::io::Read;
 use std::path::Path;
 
 use gltf::json::accessor::{ComponentType, GenericComponentType, Type};
@@ -22,6 +21,7 @@ use super::math::{self, IDENTITY, Mat4, NormalTransform, Vec3};
 use super::uri::{self, Uri, UriError};
 use super::{MAX_FILE_BYTES, MAX_TRIANGLES, MAX_VERTICES, MeshData, glb};
 use crate::diag::{Code, Diagnostic, LineIndex, Location};
+use crate::files::read_capped;
 
 /// Caps on what one load may produce; tests lower them.
 pub(super) struct Limits {
@@ -44,7 +44,7 @@ pub fn load_gltf(path: &Path, display: &str) -> Result<MeshData, Diagnostic> {
 }
 
 pub(super) fn load(path: &Path, display: &str, limits: &Limits) -> Result<MeshData, Diagnostic> {
-    let bytes = read_file(path, limits.file_bytes)
+    let bytes = read_capped(path, limits.file_bytes)
         .map_err(|e| e.diagnostic("file", limits.file_bytes).at(Location::file_start(display)))?;
     let is_glb = bytes.starts_with(glb::MAGIC);
     if !is_glb && path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) {
@@ -71,39 +71,6 @@ pub(super) fn load(path: &Path, display: &str, limits: &Limits) -> Result<MeshDa
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = load_buffers(&doc, &root, base, bin, limits)?;
     Flattener { doc: &doc, root: &root, buffers: &buffers, limits, meshes: vec![None; root.meshes.len()] }.run()
-}
-
-/// Why a file could not be read.
-enum ReadError {
-    Io(std::io::Error),
-    TooLarge(u64),
-}
-
-impl ReadError {
-    fn diagnostic(self, what: &str, limit: u64) -> Diagnostic {
-        match self {
-            ReadError::Io(e) => Diagnostic::error(Code::Io, format!("cannot read {what}: {e}")),
-            ReadError::TooLarge(len) => {
-                Diagnostic::error(Code::FileTooLarge, format!("{what} is {len} bytes; the limit is {limit} bytes"))
-            }
-        }
-    }
-}
-
-/// Reads at most `limit` bytes: the length is checked before reading, and
-/// the read is capped in case the file grows meanwhile.
-fn read_file(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
-    let file = std::fs::File::open(path).map_err(ReadError::Io)?;
-    let len = file.metadata().map_err(ReadError::Io)?.len();
-    if len > limit {
-        return Err(ReadError::TooLarge(len));
-    }
-    let mut bytes = Vec::with_capacity(len as usize);
-    file.take(limit + 1).read_to_end(&mut bytes).map_err(ReadError::Io)?;
-    if bytes.len() as u64 > limit {
-        return Err(ReadError::TooLarge(bytes.len() as u64));
-    }
-    Ok(bytes)
 }
 
 fn not_utf8(display: &str, bytes: &[u8], e: std::str::Utf8Error) -> Diagnostic {
@@ -201,7 +168,7 @@ fn load_buffers<'a>(
             }
             (Some(u), _) => match uri::parse(u) {
                 Ok(Uri::Data(bytes)) => Cow::Owned(bytes),
-                Ok(Uri::Relative(file)) => Cow::Owned(read_file(&base.join(&file), budget).map_err(|e| {
+                Ok(Uri::Relative(file)) => Cow::Owned(read_capped(&base.join(&file), budget).map_err(|e| {
                     let what = format!("`{file}`, the data of {path}");
                     e.diagnostic(&what, budget).at(doc.at(&path.field("uri")))
                 })?),

@@ -1,0 +1,29 @@
+//! The denoiser: OIDN's U-Net (Open Image Denoise, Intel, Apache-2.0) run
+//! on OIDN's own weights files.
+//!
+//! `tza` reads a weights file; `network` builds the U-Net it describes from
+//! its tensor names and shapes, as an ordered list of ops over named tensors
+//! that a backend walks.
+
+pub mod network;
+pub mod tza;
+
+use crate::diag::{Code, Diagnostic, Location};
+
+/// How tensors are stored between ops. Accumulation is f32 either way;
+/// `F16` rounds every tensor to half precision when it is stored, as the
+/// GPU's f16 storage does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Precision {
+    F16,
+    F32,
+}
+
+/// A problem in a weights file: a binary file has no lines, so the location
+/// is the file and the message says the byte.
+fn weights_error(display: &str, at: u64, message: String) -> Diagnostic {
+    Diagnostic::error(Code::Weights, format!("at byte {at}: {message}")).at(Location::file_start(display))
+}
+
+#[cfg(test)]
+mod testing;
