@@ -26,4 +26,4 @@ fn weights_error(display: &str, at: u64, message: String) -> Diagnostic {
 }
 
 #[cfg(test)]
-mod testing;
+pub(crate) mod testing;

@@ -61,6 +61,12 @@ pub fn archive(layers: &[Layer], seed: u64) -> Vec<u8> {
     super::tza::write(&entries)
 }
 
+/// The network of `archive(layers, seed)`.
+pub fn network(layers: &[Layer], seed: u64) -> super::network::Network {
+    let archive = super::tza::Archive::parse(archive(layers, seed)).expect("a well-formed archive");
+    super::network::Network::from_archive(&archive).expect("a U-Net")
+}
+
 /// xorshift64*: reproducible numbers without a dependency.
 pub struct Rng(pub u64);
 

@@ -26,6 +26,8 @@ pub struct File {
     pub media: Vec<Medium>,
     #[serde(default)]
     pub environment: Environment,
+    #[serde(default)]
+    pub denoiser: Option<Denoiser>,
     /// Accepted here, read through the settings table from the document,
     /// where each key and value keeps its span.
     #[serde(default, rename = "post")]
@@ -85,6 +87,40 @@ impl Default for Environment {
     fn default() -> Self {
         Environment { top: [0.10, 0.16, 0.28], bottom: [0.02, 0.022, 0.025], intensity: 1.0 }
     }
+}
+
+/// `[denoiser]`: OIDN's U-Net run on the path tracer's output.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Denoiser {
+    /// An OIDN weights file (.tza), relative to the scene file.
+    pub weights: String,
+    /// How tensors are stored between layers; accumulation is f32 either way.
+    #[serde(default)]
+    pub precision: Precision,
+    #[serde(default)]
+    pub mode: DenoiseMode,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Precision {
+    F16,
+    #[default]
+    F32,
+}
+
+/// The range the weights were trained for: OIDN ships `hdr` and `ldr`
+/// variants of each network, and the colour goes through that variant's
+/// transfer function.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DenoiseMode {
+    /// Linear radiance of any magnitude: OIDN's autoexposure, then the PU curve.
+    #[default]
+    Hdr,
+    /// Linear values clamped to [0, 1], then sRGB-encoded.
+    Ldr,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize)]

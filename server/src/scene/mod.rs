@@ -13,9 +13,11 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-pub use file::{Camera, Environment, Material, Noise, SdfShape, Vec3};
+pub use file::{Camera, DenoiseMode, Environment, Material, Noise, SdfShape, Vec3};
 pub use settings::{DebugView, Estimator, Post, Quality, Renderer, Tonemap};
 
+use crate::denoise::Precision;
+use crate::denoise::network::Network;
 use crate::diag::{Code, Diagnostic, LineIndex, Location};
 use crate::mesh::MeshData;
 
@@ -38,8 +40,20 @@ pub struct Scene {
     pub lights: Vec<Light>,
     pub media: Vec<Medium>,
     pub environment: Environment,
+    pub denoiser: Option<Denoiser>,
     pub post: Post,
     pub quality: Quality,
+}
+
+/// `[denoiser]`: OIDN's U-Net run on the path tracer's output.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Denoiser {
+    /// The weights file as written, relative to the scene file.
+    pub weights: String,
+    /// Where `weights` is written, for diagnostics about the file.
+    pub at: Location,
+    pub precision: Precision,
+    pub mode: DenoiseMode,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -134,14 +148,16 @@ fn syntax_error(display: &str, text: &str, message: &str, span: Option<std::ops:
     }
 }
 
-/// A scene and the meshes it references, read from disk.
+/// A scene and the meshes and weights it references, read from disk.
 #[derive(Debug, Clone)]
 pub struct Loaded {
     pub scene: Scene,
     /// Mesh data by the file name as written in the scene.
     pub meshes: BTreeMap<String, Arc<MeshData>>,
-    /// Every file this scene was read from (itself and its meshes), for the
-    /// watcher's dependency graph.
+    /// The network `[denoiser]` names, built from its weights.
+    pub denoiser: Option<Arc<Network>>,
+    /// Every file this scene was read from (itself, its meshes and
+    /// weights), for the watcher's dependency graph.
     pub files: Vec<PathBuf>,
 }
 
@@ -177,7 +193,25 @@ pub fn load_with(path: &Path, overrides: &overrides::Overrides) -> Result<Loaded
         let mesh = crate::mesh::load_gltf(&mesh_path, &mesh_display).map_err(|d| d.with_label(at.clone(), "referenced here", false))?;
         meshes.insert(name.to_owned(), Arc::new(mesh));
     }
-    Ok(Loaded { scene, meshes, files })
+    let denoiser = match &scene.denoiser {
+        Some(d) => Some(Arc::new(load_weights(dir, d, &mut files)?)),
+        None => None,
+    };
+    Ok(Loaded { scene, meshes, denoiser, files })
+}
+
+/// Reads the `[denoiser]` weights and builds the network they describe. A
+/// missing file is an error at `weights`; a malformed one is the weights
+/// file's own diagnostic, with `weights` as a second label.
+fn load_weights(dir: &Path, d: &Denoiser, files: &mut Vec<PathBuf>) -> Result<Network, Diagnostic> {
+    let path = dir.join(&d.weights);
+    let display = crate::shader::library::display_path(&path);
+    files.push(path.clone());
+    if !path.is_file() {
+        return Err(Diagnostic::error(Code::Scene, format!("weights file `{display}` does not exist")).with_label(d.at.clone(), "named here", true));
+    }
+    let archive = crate::denoise::tza::read(&path, &display).map_err(|e| e.with_label(d.at.clone(), "named here", false))?;
+    Network::from_archive(&archive).map_err(|e| e.diagnostic(&display).with_label(d.at.clone(), "named here", false))
 }
 
 #[cfg(test)]

@@ -363,6 +363,22 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
     c.non_negative3(&ep("bottom"), env.bottom)?;
     c.non_negative(&ep("intensity"), env.intensity)?;
 
+    let denoiser = match &f.denoiser {
+        Some(d) => {
+            let path = [K("denoiser"), K("weights")];
+            if d.weights.trim().is_empty() {
+                return Err(c.error(&path, "must name a weights file (.tza)"));
+            }
+            let precision = match d.precision {
+                file::Precision::F16 => Precision::F16,
+                file::Precision::F32 => Precision::F32,
+            };
+            let at = c.location(&path).unwrap_or_else(|| Location::file_start(display));
+            Some(Denoiser { weights: d.weights.clone(), at, precision, mode: d.mode })
+        }
+        None => None,
+    };
+
     let mut scene = Scene {
         width,
         height,
@@ -372,6 +388,7 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
         lights,
         media,
         environment: f.environment,
+        denoiser,
         post: Post::default(),
         quality: Quality::default(),
     };

@@ -160,7 +160,7 @@ impl Daemon {
             Ok(l) => (l, None),
             Err(d) => {
                 let empty = scene::parse("", "").expect("the empty scene is valid");
-                (scene::Loaded { scene: empty, meshes: Default::default(), files: vec![config.scene_path.clone()] }, Some(d))
+                (scene::Loaded { scene: empty, meshes: Default::default(), denoiser: None, files: vec![config.scene_path.clone()] }, Some(d))
             }
         };
         let workers = rayon::ThreadPoolBuilder::new()
