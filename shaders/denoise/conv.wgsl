@@ -1,6 +1,7 @@
 // One 3×3 convolution layer of the denoiser's U-Net, "same" zero padding,
 // bias, optional ReLU. Tensors are channels-last with channels padded to a
-// multiple of 4, one vec4 per (pixel, block of 4 channels). The input is
+// multiple of 4, one vec4 per (pixel, block of 4 channels), stored as f32
+// or (F16) as halves (`lib/tensor.wgsl`); sums are f32. The input is
 // `a`, optionally read 2× nearest-upsampled (UPSAMPLE), followed along
 // channels by `b` when CONCAT: upsample + concat + conv fused in one pass,
 // so the upsampled and concatenated tensors are never stored.
@@ -24,14 +25,29 @@ struct Layer {
     relu: u32,
 }
 
+#import loupe::tensor::{load, store}
+#ifdef F16
+#import loupe::tensor::overflows
+#endif
+
+#ifdef F16
+alias Stored = vec2<u32>;
+#else
+alias Stored = vec4<f32>;
+#endif
+
 @group(0) @binding(0) var<uniform> layer: Layer;
-@group(0) @binding(1) var<storage, read> a: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read> a: array<Stored>;
 #ifdef CONCAT
-@group(1) @binding(0) var<storage, read> b: array<vec4<f32>>;
+@group(1) @binding(0) var<storage, read> b: array<Stored>;
 #endif
 @group(0) @binding(3) var<storage, read> weights: array<mat4x4<f32>>;
 @group(0) @binding(4) var<storage, read> bias: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read_write> out: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read_write> out: array<Stored>;
+#ifdef F16
+// Values of this layer too large for an f16, counted before the store.
+@group(2) @binding(0) var<storage, read_write> overflow: atomic<u32>;
+#endif
 
 // Output blocks per invocation: each input vec4 read serves this many.
 const BLOCKS: u32 = 4u;
@@ -62,7 +78,7 @@ fn conv(@builtin(global_invocation_id) id: vec3<u32>) {
         let a_pixel = u32(sy) * layer.a_width + u32(sx);
 #endif
         for (var ci = 0u; ci < layer.a_blocks; ci++) {
-            let v = a[a_pixel * layer.a_blocks + ci];
+            let v = load(a[a_pixel * layer.a_blocks + ci]);
             let row = (tap * in_blocks + ci) * layer.out_blocks + first;
             for (var k = 0u; k < count; k++) {
                 acc[k] += weights[row + k] * v;
@@ -71,7 +87,7 @@ fn conv(@builtin(global_invocation_id) id: vec3<u32>) {
 #ifdef CONCAT
         let b_pixel = u32(sy) * layer.width + u32(sx);
         for (var ci = 0u; ci < layer.b_blocks; ci++) {
-            let v = b[b_pixel * layer.b_blocks + ci];
+            let v = load(b[b_pixel * layer.b_blocks + ci]);
             let row = (tap * in_blocks + layer.a_blocks + ci) * layer.out_blocks + first;
             for (var k = 0u; k < count; k++) {
                 acc[k] += weights[row + k] * v;
@@ -80,11 +96,23 @@ fn conv(@builtin(global_invocation_id) id: vec3<u32>) {
 #endif
     }
     let pixel = id.y * layer.width + id.x;
+#ifdef F16
+    var over = 0u;
+#endif
     for (var k = 0u; k < count; k++) {
         var v = acc[k];
         if layer.relu != 0u {
             v = max(v, vec4(0.0));
         }
-        out[pixel * layer.out_blocks + first + k] = v;
+#ifdef F16
+        over += overflows(v);
+#endif
+        out[pixel * layer.out_blocks + first + k] = store(v);
     }
+#ifdef F16
+    // Rare: one atomic per invocation that overflowed, none otherwise.
+    if over > 0u {
+        atomicAdd(&overflow, over);
+    }
+#endif
 }

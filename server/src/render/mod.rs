@@ -4,6 +4,7 @@
 
 pub mod capture;
 pub mod context;
+pub mod denoise_weights;
 pub mod dfg;
 pub mod frame;
 pub mod graph;
@@ -19,6 +20,7 @@ pub mod scene_gpu;
 pub mod session;
 pub mod vertex_capture;
 
+use crate::denoise::network::Network;
 use crate::scene::Scene;
 use graph::{Graph, GraphBuilder};
 use passes::*;
@@ -31,22 +33,26 @@ pub struct FrameOptions {
     pub nan_watch: bool,
 }
 
-/// Assembles the frame from the scene: only what the scene calls for.
-pub fn build_graph(scene: &Scene, options: FrameOptions) -> Graph {
+/// Assembles the frame from the scene and the network its `[denoiser]`
+/// names (`Loaded::denoiser`): only what the scene calls for.
+pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOptions) -> Graph {
     let mut g = GraphBuilder::new();
     let raster = ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes"];
     let (hdr, gbuffer) = if scene.is_empty() {
+        let empty = "the scene is empty: it shows the test pattern";
         for pass in raster.iter().chain(&["path_trace"]) {
-            g.cull(pass, "the scene is empty: it shows the test pattern");
+            g.cull(pass, empty);
         }
+        denoise::cull(&mut g, scene, empty);
         (test_pattern::test_pattern(&mut g, scene), None)
     } else if let Some(traced) = path_trace::path_trace(&mut g, scene) {
         g.cull("test_pattern", "the scene has content to render");
         for pass in raster {
             g.cull(pass, "quality.renderer is path");
         }
-        (traced.color, None)
+        (denoise::denoise(&mut g, scene, denoiser, &traced), None)
     } else {
+        denoise::cull(&mut g, scene, "quality.renderer is raster");
         g.cull("test_pattern", "the scene has content to render");
         let shadows = shadows::shadows(&mut g, scene);
         let depth = depth_prepass::depth_prepass(&mut g, scene);

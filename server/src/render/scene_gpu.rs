@@ -9,7 +9,9 @@ use std::sync::Arc;
 use glam::{EulerRot, Mat4, Quat, Vec3};
 use wgpu::util::DeviceExt;
 
+use super::denoise_weights::DenoiseWeights;
 use super::path_geometry::PathGeometry;
+use crate::denoise::network::Network;
 use crate::mesh::MeshData;
 use crate::scene::{Geometry, LightKind, Renderer, Scene, SdfShape};
 
@@ -39,6 +41,8 @@ pub struct SceneGpu {
     pub dfg: wgpu::TextureView,
     /// The path tracer's geometry, when the scene is path traced.
     pub path: Option<PathGeometry>,
+    /// The denoiser's weights, when the path-traced frame is denoised.
+    pub denoiser: Option<DenoiseWeights>,
 }
 
 /// Where each light's shadow maps sit in the shadow array: the first layer
@@ -307,14 +311,27 @@ fn world_shading(scene: &Scene, data: &[Arc<MeshData>], draws: &[usize], ids: &[
 }
 
 impl SceneGpu {
-    /// `previous`: the scene's last GPU data, whose path-tracing hierarchy
-    /// is kept when the triangles are the same.
-    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene, loaded: &BTreeMap<String, Arc<MeshData>>, previous: Option<&SceneGpu>) -> Self {
+    /// `network`: what the scene's `[denoiser]` names. `previous`: the
+    /// scene's last GPU data, whose path-tracing hierarchy is kept when the
+    /// triangles are the same, and whose denoiser weights when the network
+    /// and its fusion are.
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &Scene,
+        loaded: &BTreeMap<String, Arc<MeshData>>,
+        network: Option<&Arc<Network>>,
+        previous: Option<&SceneGpu>,
+    ) -> Self {
         let (data, draws) = object_meshes(scene, loaded);
         let path = (scene.quality.renderer == Renderer::Path).then(|| {
             let source = triangles_of(scene, &data, &draws);
             PathGeometry::new(device, source, previous.and_then(|p| p.path.as_ref()), |ids| world_shading(scene, &data, &draws, ids))
         });
+        let denoised = scene.quality.renderer == Renderer::Path && scene.denoiser.is_some();
+        let denoiser = network
+            .filter(|_| denoised)
+            .map(|n| DenoiseWeights::new(device, n, scene.quality.denoiser_fused, previous.and_then(|p| p.denoiser.as_ref())));
         let meshes = data
             .iter()
             .map(|m| GpuMesh {
@@ -378,6 +395,7 @@ impl SceneGpu {
             ltc: scene.has_rect_lights().then(|| super::ltc::create_textures(device, queue)),
             dfg: super::dfg::create_texture(device, queue).create_view(&Default::default()),
             path,
+            denoiser,
         }
     }
 }

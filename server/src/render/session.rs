@@ -21,6 +21,7 @@ use super::resource::{Lifetime, PipelineKey, ResourceDesc, TensorLayout};
 use super::FrameOptions;
 use super::scene_gpu::SceneGpu;
 use super::vertex_capture::VertexCapture;
+use crate::denoise::network::Network;
 use crate::diag::Diagnostic;
 use crate::gpu::Gpu;
 use crate::gpu::pipeline::{MESH_VERTICES, PipelineSpec, Stages};
@@ -89,6 +90,8 @@ pub struct Session {
     scene: Scene,
     /// Kept to rebuild the scene's GPU data on a new device.
     meshes: BTreeMap<String, Arc<MeshData>>,
+    /// The network the scene's `[denoiser]` names.
+    network: Option<Arc<Network>>,
     scene_gpu: SceneGpu,
     graph: Graph,
     cache: PipelineCache,
@@ -110,9 +113,9 @@ pub struct Session {
 
 impl Session {
     pub fn new(gpu: Gpu, shader_root: &Path, lib: Library, loaded: &Loaded) -> Self {
-        let scene_gpu = SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes, None);
+        let scene_gpu = SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes, loaded.denoiser.as_ref(), None);
         Session {
-            graph: super::build_graph(&loaded.scene, FrameOptions::default()),
+            graph: super::build_graph(&loaded.scene, loaded.denoiser.as_deref(), FrameOptions::default()),
             options: FrameOptions::default(),
             composer: Arc::default(),
             quads: false,
@@ -121,6 +124,7 @@ impl Session {
             accumulated: 0,
             scene: loaded.scene.clone(),
             meshes: loaded.meshes.clone(),
+            network: loaded.denoiser.clone(),
             scene_gpu,
             shader_root: shader_root.to_owned(),
             lib: Arc::new(lib),
@@ -134,7 +138,7 @@ impl Session {
     /// Builds frames with `options` from now on.
     pub fn with_options(mut self, options: FrameOptions) -> Self {
         self.options = options;
-        self.graph = super::build_graph(&self.scene, options);
+        self.graph = super::build_graph(&self.scene, self.network.as_deref(), options);
         self
     }
 
@@ -178,10 +182,11 @@ impl Session {
     /// the new frame no longer uses are kept (switching back costs
     /// nothing), at most `KEPT_UNUSED` of them.
     pub fn set_scene(&mut self, loaded: &Loaded) {
-        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &loaded.scene, &loaded.meshes, Some(&self.scene_gpu));
+        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &loaded.scene, &loaded.meshes, loaded.denoiser.as_ref(), Some(&self.scene_gpu));
         self.scene = loaded.scene.clone();
         self.meshes = loaded.meshes.clone();
-        self.graph = super::build_graph(&self.scene, self.options);
+        self.network = loaded.denoiser.clone();
+        self.graph = super::build_graph(&self.scene, self.network.as_deref(), self.options);
         // History describes the old scene: accumulation starts over.
         self.reset_history();
         let wanted = self.wanted();
@@ -390,7 +395,7 @@ impl Session {
         self.pool = ResourcePool::default();
         self.vertex_captures.clear();
         self.capture_generations.clear();
-        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &self.scene, &self.meshes, None);
+        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &self.scene, &self.meshes, self.network.as_ref(), None);
         self.cache.recreate_all(&self.gpu.device, &self.lib)
     }
 

@@ -288,6 +288,10 @@ fn raster_media(s: &Scene) -> bool {
     has_media(s) && rastered(s)
 }
 
+fn denoised(s: &Scene) -> bool {
+    path_traced(s) && s.denoiser.is_some()
+}
+
 fn auto_exposure(s: &Scene) -> bool {
     s.post.auto_exposure
 }
@@ -339,5 +343,11 @@ settings! {
             "Volume shadow steps", affects ["volumes"], shown_when raster_media;
         volume_estimator: Estimator = Estimator::Analytic, Choice(Estimator::NAMES),
             "In-scattering estimator", affects ["volumes"], shown_when raster_media;
+        /// Run each decoder level's 2× upsample and concatenation inside the
+        /// convolution that reads them (the `upsample<L>` and `concat<L>`
+        /// tensors are never stored); off, each is a pass of its own whose
+        /// tensor can be inspected. The denoised image is the same.
+        denoiser_fused: bool = true, Toggle, "Denoiser: fuse upsample + concat into the convolution",
+            affects ["denoise"], shown_when denoised;
     }
 }

@@ -311,7 +311,7 @@ fn controls_are_the_table_entries_the_scene_shows() {
 fn every_affected_pass_is_a_pass_of_the_frame() {
     // The showcase declares every pass: live, or culled with a reason.
     let showcase = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/showcase.toml");
-    let graph = crate::render::build_graph(&load(&showcase).unwrap().scene, Default::default());
+    let graph = crate::render::build_graph(&load(&showcase).unwrap().scene, None, Default::default());
     let passes: Vec<&str> = graph.passes.iter().map(|p| p.name.as_str()).chain(graph.culled.iter().map(|c| c.name.as_str())).collect();
     for s in SETTINGS {
         for pass in s.affects {

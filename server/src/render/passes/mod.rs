@@ -31,17 +31,13 @@ passes![
     lighting,
     volumes,
     path_trace,
+    denoise,
     auto_exposure,
     exposure,
     tonemap,
     debug_view,
     nan_watch,
 ];
-
-/// The denoiser's kernels; a pass of the frame once the network is wired.
-pub mod denoise {
-    pub mod kernels;
-}
 
 /// The spec named `name`.
 pub fn spec(name: &str) -> Option<&'static PipelineSpec> {
@@ -113,7 +109,7 @@ mod tests {
                     let loaded = crate::scene::load_with(&path, &overrides).unwrap_or_else(|d| panic!("{d}"));
                     for nan_watch in [false, true] {
                         let options = crate::render::FrameOptions { nan_watch };
-                        for k in crate::render::build_graph(&loaded.scene, options).pipelines() {
+                        for k in crate::render::build_graph(&loaded.scene, loaded.denoiser.as_deref(), options).pipelines() {
                             assert!(specs().any(|s| std::ptr::eq(s, k.spec)), "{} is built by a frame but not listed for loupe check", k.label());
                             used.insert(k.spec.name);
                         }
@@ -122,6 +118,20 @@ mod tests {
             }
         }
         assert!(scenes_seen >= 4, "the bundled scenes are found");
+        // No bundled scene names weights (they are not in the repository):
+        // a denoised frame on a small random network, in each of its modes.
+        let network = crate::denoise::testing::network(&crate::denoise::testing::small_unet(9), 1);
+        for (precision, mode, fused) in [("f32", "hdr", true), ("f16", "ldr", false), ("f16", "hdr", true), ("f32", "ldr", false)] {
+            let text = format!(
+                "[quality]\nrenderer = \"path\"\ndenoiser_fused = {fused}\n[denoiser]\nweights = \"w.tza\"\nprecision = \"{precision}\"\nmode = \"{mode}\"\n\
+                 [[materials]]\nname = \"m\"\n[[objects]]\nshape = \"sphere\"\nmaterial = \"m\"\n"
+            );
+            let scene = crate::scene::parse("denoised.toml", &text).unwrap_or_else(|d| panic!("{d}"));
+            for k in crate::render::build_graph(&scene, Some(&network), Default::default()).pipelines() {
+                assert!(specs().any(|s| std::ptr::eq(s, k.spec)), "{} is built by a frame but not listed for loupe check", k.label());
+                used.insert(k.spec.name);
+            }
+        }
         let listed: BTreeSet<&str> = specs().map(|s| s.name).collect();
         assert_eq!(listed, used, "every listed spec is used by some frame");
     }

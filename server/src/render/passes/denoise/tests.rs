@@ -5,6 +5,7 @@
 use wgpu::util::DeviceExt;
 
 use super::*;
+use crate::render::denoise_weights::{BLOCK, blocks, pack_conv};
 use crate::gpu::Gpu;
 use crate::gpu::pipeline::Pipeline;
 use crate::render::resource::PipelineKey;
