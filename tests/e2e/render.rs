@@ -361,3 +361,109 @@ fn the_path_tracer_renders_offline_with_albedo_and_normal() {
     run.code(0);
     assert_eq!(culled_reason(&report.unwrap(), "path_trace"), "quality.renderer is raster");
 }
+
+/// OIDN's LDR colour + albedo + normal weights, beside the repository
+/// (CI has them; they are never copied into it).
+fn oidn_weights() -> std::path::PathBuf {
+    let path = loupe_tests::repo().join("../shared/weights/oidn/rt_ldr_alb_nrm.tza");
+    assert!(path.is_file(), "{} is missing: the tests read OIDN's weights from ../shared/weights/oidn/", path.display());
+    path
+}
+
+/// A small lit scene whose path-traced colour stays within [0, 1], what
+/// the LDR weights expect; `denoiser` is its `[denoiser]` section, if any.
+fn denoised_scene(denoiser: &str) -> String {
+    format!(
+        "[camera]\nposition = [0.0, 1.2, 3.5]\ntarget = [0.0, 0.4, 0.0]\n\
+         [environment]\ntop = [0.5, 0.6, 0.8]\nbottom = [0.2, 0.2, 0.2]\n\
+         [[materials]]\nname = \"red\"\nbase_color = [0.8, 0.2, 0.15]\nroughness = 0.4\n\
+         [[materials]]\nname = \"floor\"\nbase_color = [0.6, 0.6, 0.6]\nroughness = 0.8\n\
+         [[objects]]\nshape = \"sphere\"\nmaterial = \"red\"\nposition = [0.0, 0.5, 0.0]\nscale = 0.5\n\
+         [[objects]]\nshape = \"plane\"\nmaterial = \"floor\"\nscale = 4.0\n\
+         [[lights]]\ntype = \"point\"\nposition = [1.0, 2.0, 1.5]\nintensity = 6.0\n{denoiser}"
+    )
+}
+
+/// RGB of an EXR `loupe render` wrote, clamped to [0, 1]: the range the
+/// LDR weights denoise.
+fn exr_rgb(path: &std::path::Path) -> Vec<[f32; 3]> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |size, _| (size.width(), vec![[0.0f32; 3]; size.width() * size.height()]),
+        |(w, px): &mut (usize, Vec<[f32; 3]>), at, (r, g, b, _): (f32, f32, f32, f32)| px[at.y() * *w + at.x()] = [r, g, b].map(|v| v.clamp(0.0, 1.0)),
+    )
+    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    image.layer_data.channel_data.pixels.1
+}
+
+fn mse(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| f64::from(x - y).powi(2)).sum::<f64>() / (3 * a.len()) as f64
+}
+
+/// A path-traced scene with `[denoiser]`: OIDN's U-Net runs after the path
+/// tracer, every layer a pass whose tensor is written as `.npy`, the
+/// upsamples and concatenations fused unless `quality.denoiser_fused` is
+/// off; the 2-spp image denoised is closer to a 256-spp render than the
+/// noisy one is.
+#[test]
+fn the_denoiser_runs_after_the_path_tracer_and_writes_every_tensor() {
+    let p = Project::copy_of_repo("render-denoise");
+    let weights = oidn_weights();
+    let section = format!("[denoiser]\nweights = {:?}\nmode = \"ldr\"\n", weights.display().to_string());
+    p.write("scenes/denoised.toml", denoised_scene(&section));
+    p.write("scenes/reference.toml", denoised_scene(""));
+    let (run, report) = render_at(&p, "scenes/denoised.toml", "64x48", &["--renderer", "path", "--spp", "2"]);
+    run.code(0);
+    let r = report.expect("report.json written");
+    let layers = [
+        "enc_conv0", "enc_conv1", "pool1", "enc_conv2", "pool2", "enc_conv3", "pool3", "enc_conv4", "pool4", "enc_conv5a", "enc_conv5b",
+        "dec_conv4a", "dec_conv4b", "dec_conv3a", "dec_conv3b", "dec_conv2a", "dec_conv2b", "dec_conv1a", "dec_conv1b", "dec_conv0",
+    ];
+    let mut expected = vec!["path_trace".to_owned(), "denoise_input".to_owned()];
+    expected.extend(layers.iter().map(|l| format!("denoise.{l}")));
+    expected.extend(["denoise".to_owned(), "tonemap".to_owned()]);
+    assert_eq!(names(&r["passes"]), expected, "{r}");
+    assert_eq!(culled_reason(&r, "denoise_autoexposure"), "denoiser.mode is ldr: the input scale is 1");
+    assert_eq!(culled_reason(&r, "denoise.concat1"), "fused into denoise.dec_conv1a (quality.denoiser_fused)");
+    assert!(p.path("out/denoise.color.exr").is_file() && p.path("out/denoise.color.png").is_file());
+    // Every tensor: [y, x, channel] of the padded image (64×48 is a
+    // multiple of 16 already), channels padded to blocks of 4.
+    let input = pass(&r, "denoise_input");
+    assert_eq!(input["outputs"][0]["layout"]["dims"], serde_json::json!([["y", 48], ["x", 64], ["channel", 12]]), "{input}");
+    for t in expected.iter().filter(|n| n.starts_with("denoise.") || *n == "denoise_input") {
+        let out = &pass(&r, t)["outputs"][0];
+        assert_eq!(out["name"], "tensor", "{t}: {out}");
+        let file = p.path(&format!("out/{t}.tensor.npy"));
+        let len: u64 = out["layout"]["dims"].as_array().unwrap().iter().map(|d| d[1].as_u64().unwrap()).product();
+        assert_eq!(npy_f32(&file).len() as u64, len, "{t}");
+        assert_eq!(out["stats"]["nan"], 0, "{t}");
+    }
+    let denoised = pass(&r, "denoise")["outputs"][0].clone();
+    assert_eq!((denoised["name"].as_str(), denoised["width"].as_u64(), denoised["height"].as_u64()), (Some("color"), Some(64), Some(48)));
+    assert!(r["nan"].is_null(), "{r}");
+    let noisy = exr_rgb(&p.path("out/path_trace.color.exr"));
+    let clean = exr_rgb(&p.path("out/denoise.color.exr"));
+
+    // Upsample and concatenation as passes of their own: their tensors too.
+    let (run, report) = render_at(&p, "scenes/denoised.toml", "64x48", &["--renderer", "path", "--spp", "2", "--set", "quality.denoiser_fused=false"]);
+    run.code(0);
+    let r = report.unwrap();
+    let names = names(&r["passes"]);
+    for t in ["upsample4", "concat4", "upsample1", "concat1"] {
+        assert!(names.contains(&format!("denoise.{t}").as_str()), "{t}: {names:?}");
+        assert!(p.path(&format!("out/denoise.{t}.tensor.npy")).is_file(), "{t}");
+    }
+    let concat1 = &pass(&r, "denoise.concat1")["outputs"][0]["layout"]["dims"];
+    assert_eq!(concat1[2], serde_json::json!(["channel", 76]), "64 + 9 channels, padded");
+    let separate = exr_rgb(&p.path("out/denoise.color.exr"));
+    assert!(mse(&separate, &clean) < 1e-10, "fused or not, the same image: {}", mse(&separate, &clean));
+
+    let (run, _) = render_at(&p, "scenes/reference.toml", "64x48", &["--renderer", "path", "--spp", "256"]);
+    run.code(0);
+    let reference = exr_rgb(&p.path("out/path_trace.color.exr"));
+    let (before, after) = (mse(&noisy, &reference), mse(&clean, &reference));
+    eprintln!("MSE against 256 spp: 2 spp {before:.5}, denoised {after:.5}");
+    assert!(after < before * 0.5, "denoising the 2-spp image brings it closer to the 256-spp one: MSE {before} before, {after} after");
+}

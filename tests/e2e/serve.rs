@@ -424,6 +424,43 @@ fn break_and_mend_buffer(p: &Project, s: &Server, bin: &str) {
     s.wait_for("the diagnostic to clear", LIMIT, || s.get_json("/api/diagnostics")["diagnostics"].as_array()?.is_empty().then_some(()));
 }
 
+/// A scene's denoiser weights are one of its files: a broken save is the
+/// weights diagnostic in that file while the last good scene, denoiser
+/// included, keeps rendering; the mended file clears it. (The weights are
+/// copied into the temporary project, outside `scenes/`.)
+#[test]
+fn broken_denoiser_weights_keep_the_last_good_denoiser_rendering() {
+    let p = Project::copy_of_repo("serve-weights");
+    let weights = std::fs::read(loupe_tests::repo().join("../shared/weights/oidn/rt_ldr_alb_nrm.tza")).expect("OIDN's weights in ../shared/weights/oidn/");
+    p.write("weights/rt_ldr_alb_nrm.tza", &weights);
+    let scene = p.read("scenes/minimal.toml").replace("width = 640\nheight = 360", "width = 64\nheight = 48")
+        + "\n[quality]\nrenderer = \"path\"\npath_spp = 2\n\n[denoiser]\nweights = \"../weights/rt_ldr_alb_nrm.tza\"\nmode = \"ldr\"\n";
+    p.write("scenes/denoised.toml", scene);
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/denoised.toml"]);
+    s.wait_for("a denoised frame", LIMIT, || (pass_status(&s, "denoise.dec_conv0")? == "ok" && frame_of(&s) > 0).then_some(()));
+    assert_eq!(pass_status(&s, "denoise").as_deref(), Some("ok"));
+
+    p.save_by_rename("weights/rt_ldr_alb_nrm.tza", &weights[..weights.len() / 2]);
+    let diagnostic = s.wait_for("the truncated weights reported", LIMIT, || {
+        let d = s.get_json("/api/diagnostics");
+        d["diagnostics"].as_array()?.iter().find(|d| d["code"] == "weights").cloned()
+    });
+    // As the scene names it, relative to the scene's folder.
+    assert_eq!(diagnostic["location"]["file"], "scenes/../weights/rt_ldr_alb_nrm.tza", "{diagnostic}");
+    assert!(diagnostic["labels"].as_array().unwrap().iter().any(|l| l["file"] == "scenes/denoised.toml"), "and where the scene names it: {diagnostic}");
+    assert_eq!(pass_status(&s, "denoise").as_deref(), Some("ok"), "the last good denoiser still runs");
+    // A frame rendered after the break still has every layer.
+    let before = frame_of(&s);
+    let (status, _) = s.post("/api/reload");
+    assert_eq!(status, 202);
+    s.wait_for("a frame after the break", LIMIT, || (frame_of(&s) > before).then_some(()));
+    assert_eq!(pass_status(&s, "denoise.enc_conv0").as_deref(), Some("ok"));
+
+    p.save_by_rename("weights/rt_ldr_alb_nrm.tza", &weights);
+    s.wait_for("the diagnostic to clear", LIMIT, || s.get_json("/api/diagnostics")["diagnostics"].as_array()?.is_empty().then_some(()));
+    assert_eq!(pass_status(&s, "denoise").as_deref(), Some("ok"));
+}
+
 /// Quad statistics while a client asks: a `quads` event per frame, the
 /// same report at `GET /api/quads`, and counts that follow an edit to the
 /// vertex stage (a fullscreen "triangle" shrunk to the lower-left half of
