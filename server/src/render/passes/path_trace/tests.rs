@@ -182,7 +182,9 @@ const FURNACE_SPP: u32 = 256;
 /// the furnace: each pixel converges to FURNACE × albedo(n·v), at the n·v
 /// of the shading normal the pixel's samples hit (the `normal` output).
 /// Tolerances:
-/// - each pixel within 12 %: above 5σ of the noisiest material's noise;
+/// - each pixel within 12 %: 5σ of the noisiest material's noise (the
+///   glossy reflections' errors have long tails: the worst measured is
+///   8.9 %, smooth dielectric; 7.5 % metal; 2.4 % rough dielectric);
 /// - the mean over a tenth of n·v within 1 %, and over every pixel within
 ///   0.5 %: the noise of those means is below 0.15 %, and what is not
 ///   noise is small: the tessellated sphere's facets clip the shading
@@ -244,8 +246,9 @@ fn a_sphere_in_a_white_furnace_reflects_the_brdfs_directional_albedo() {
         assert!(all.len() > 2500, "{}: {} pixel channels compared", m.name, all.len());
         let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
         let rms = (all.iter().map(|e| e * e).sum::<f64>() / all.len() as f64).sqrt();
+        let worst = all.iter().fold(0.0f64, |w, e| w.max(e.abs()));
         let by_bin: Vec<String> = bins.iter().map(|b| if b.is_empty() { "-".into() } else { format!("{:+.4}", mean(b)) }).collect();
-        eprintln!("{}: {} pixel channels, mean error {:+.4}, rms {rms:.4}; by n·v tenth from 0.2: {}", m.name, all.len(), mean(&all), by_bin.join(" "));
+        eprintln!("{}: {} pixel channels, mean error {:+.4}, rms {rms:.4}, worst {worst:.4}; by n·v tenth from 0.2: {}", m.name, all.len(), mean(&all), by_bin.join(" "));
         assert!(mean(&all).abs() < 0.005, "{}: the mean relative error is {:+.4}", m.name, mean(&all));
         for (k, b) in bins.iter().enumerate().filter(|(_, b)| b.len() >= 60) {
             let e = mean(b);
