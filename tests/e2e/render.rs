@@ -75,7 +75,7 @@ fn showcase_renders_every_pass() {
         ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes", "exposure_histogram", "exposure_adapt", "exposure", "tonemap", "debug_view"],
         "{r}"
     );
-    assert_eq!(names(&r["culled"]), ["test_pattern", "path_trace"]);
+    assert_eq!(names(&r["culled"]), ["path_trace", "test_pattern"]);
     // Auto exposure: compute passes whose buffers are written as tensors.
     let pass = |name: &str| r["passes"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap().clone();
     assert_eq!(pass("exposure_histogram")["kind"], "compute");
