@@ -12,6 +12,7 @@ use glam::Vec3;
 use super::PathGeometry;
 use crate::bvh::Bvh;
 use crate::gpu::testing::Kernel;
+use crate::testing::Rng;
 
 const KERNEL: &str = r"
 #import loupe::bvh::{trace, occluded}
@@ -59,27 +60,6 @@ struct Out {
     ids: [u32; 4],
 }
 
-/// A small PCG: the same rays every run.
-struct Rng(u64);
-
-impl Rng {
-    fn f(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-        let x = (((self.0 >> 18) ^ self.0) >> 27) as u32;
-        (x.rotate_right((self.0 >> 59) as u32) >> 8) as f32 / (1u32 << 24) as f32
-    }
-    fn in_box(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        lo + (hi - lo) * Vec3::new(self.f(), self.f(), self.f())
-    }
-    fn dir(&mut self) -> Vec3 {
-        loop {
-            let d = Vec3::new(self.f(), self.f(), self.f()) * 2.0 - 1.0;
-            if d.length_squared() > 1e-4 && d.length_squared() <= 1.0 {
-                return d.normalize();
-            }
-        }
-    }
-}
 
 /// The torus knot, placed as `scenes/minimal.toml` places it, but rotated
 /// and scaled off the axes.
