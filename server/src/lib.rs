@@ -13,6 +13,7 @@ pub mod diag;
 pub mod files;
 pub mod gpu;
 pub mod mesh;
+pub mod npy;
 pub mod offline;
 pub mod protocol;
 pub mod quads;

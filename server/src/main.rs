@@ -53,6 +53,66 @@ enum Command {
     /// Time each pass of a scene and the cost of captures (median over
     /// frames, captures none / final / all measured interleaved).
     Bench(BenchArgs),
+    /// Denoise an image with an OIDN U-Net, as OIDN's `oidnDenoise` does,
+    /// on OIDN's weights files (.tza). Runs the CPU reference until the GPU
+    /// network lands.
+    ///
+    /// Images: PFM, OpenEXR or PNG (by extension). PFM and EXR hold linear
+    /// values; a PNG colour is sRGB-decoded and the output PNG encoded,
+    /// unless --srgb; a PNG albedo is decoded; normals are read as stored.
+    ///
+    /// Exit codes: 0 denoised; 1 a malformed weights file or image, or
+    /// images that do not fit the weights or each other; 2 bad usage, an
+    /// unreadable input or an unwritable output.
+    Denoise(DenoiseArgs),
+}
+
+#[derive(clap::Args)]
+#[command(group(clap::ArgGroup::new("range").required(true).args(["ldr", "hdr"])))]
+struct DenoiseArgs {
+    /// The weights: an OIDN .tza file whose network takes the inputs given.
+    #[arg(long)]
+    weights: PathBuf,
+    /// The noisy colour.
+    #[arg(long)]
+    color: PathBuf,
+    /// The albedo (first-hit surface colour), in [0, 1].
+    #[arg(long)]
+    albedo: Option<PathBuf>,
+    /// The first-hit normal, in [-1, 1]; needs --albedo.
+    #[arg(long, requires = "albedo")]
+    normal: Option<PathBuf>,
+    /// The colour is low dynamic range, in [0, 1].
+    #[arg(long)]
+    ldr: bool,
+    /// The colour is high dynamic range: any magnitude.
+    #[arg(long, conflicts_with = "srgb")]
+    hdr: bool,
+    /// The LDR colour (and output) are sRGB-encoded, not linear: the
+    /// network sees them as they are.
+    #[arg(long)]
+    srgb: bool,
+    /// Multiplies the colour before the network and divides the output
+    /// [default: in HDR OIDN's autoexposure, else 1].
+    #[arg(long, value_parser = parse_scale)]
+    input_scale: Option<f32>,
+    /// Storage of the tensors between layers (accumulation is f32 either way).
+    #[arg(long, value_enum, default_value = "f32")]
+    precision: loupe::denoise::Precision,
+    /// The denoised image: .pfm, .exr or .png.
+    #[arg(short = 'o', long)]
+    output: PathBuf,
+    /// Write every tensor of the network into this directory as
+    /// `<name>.npy` (height, width, channels of the padded image).
+    #[arg(long, value_name = "DIR")]
+    dump_tensors: Option<PathBuf>,
+}
+
+fn parse_scale(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("`{s}` is not a positive number")),
+    }
 }
 
 #[derive(clap::Args)]
@@ -233,6 +293,7 @@ fn main() -> ExitCode {
         Command::Serve(args) => run_serve(args),
         Command::Render(args) => run_render(args),
         Command::Bench(args) => run_bench(args),
+        Command::Denoise(args) => run_denoise(args),
     }
 }
 
@@ -294,6 +355,50 @@ fn run_render(args: RenderArgs) -> ExitCode {
         }
         None if !report.gpu_errors.is_empty() => ExitCode::from(exit::ERRORS),
         None => ExitCode::from(exit::OK),
+    }
+}
+
+fn run_denoise(args: DenoiseArgs) -> ExitCode {
+    use loupe::denoise::{offline, process::Mode};
+    let mode = match (args.hdr, args.srgb) {
+        (true, _) => Mode::Hdr,
+        (false, true) => Mode::LdrSrgb,
+        (false, false) => Mode::Ldr,
+    };
+    let job = offline::Job {
+        weights: args.weights,
+        color: args.color,
+        albedo: args.albedo,
+        normal: args.normal,
+        mode,
+        input_scale: args.input_scale,
+        precision: args.precision,
+        output: args.output,
+        dump_tensors: args.dump_tensors,
+    };
+    match offline::run(&job) {
+        Ok(r) => {
+            let dumped = match &job.dump_tensors {
+                Some(dir) => format!(", {} tensors in {}", r.tensors_dumped, dir.display()),
+                None => String::new(),
+            };
+            println!(
+                "{}: {}x{}, {}, input scale {}, network {:.3} s on the CPU reference{dumped}",
+                job.output.display(),
+                r.width,
+                r.height,
+                r.inputs.describe(),
+                r.input_scale,
+                r.network_seconds
+            );
+            ExitCode::from(exit::OK)
+        }
+        Err(d) => {
+            use loupe::diag::Code;
+            print_diagnostics(std::slice::from_ref(&d));
+            let unreadable = matches!(d.code, Code::Io | Code::FileTooLarge);
+            ExitCode::from(if unreadable { exit::USAGE } else { exit::ERRORS })
+        }
     }
 }
 

@@ -12,7 +12,7 @@ use serde::Serialize;
 
 use crate::diag::Diagnostic;
 use crate::gpu;
-use crate::render::capture::{CapturedTensor, ImageStats, TensorStats};
+use crate::render::capture::{ImageStats, TensorStats};
 use crate::render::frame::{FrameResult, NanOrigin};
 use crate::render::quads::{DrawReport, WhatIf};
 use crate::render::resource::TensorLayout;
@@ -171,7 +171,8 @@ pub fn render(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
             outputs.push(OutputReport::Image { name: c.output.clone(), format: c.format.clone(), width: c.width, height: c.height, stats: c.stats.clone(), png, exr });
         }
         for t in result.tensors.iter().filter(|t| t.pass == pass.name) {
-            let npy = write(format!("{}.{}.npy", t.pass, t.output), npy(t))?;
+            let shape: Vec<usize> = t.layout.dims.iter().map(|&(_, n)| n as usize).collect();
+            let npy = write(format!("{}.{}.npy", t.pass, t.output), crate::npy::encode(&shape, &t.data))?;
             outputs.push(OutputReport::Tensor { name: t.output.clone(), layout: t.layout.clone(), stats: t.stats.clone(), npy });
         }
         let time_ms = result.timings.iter().find(|(n, _)| *n == pass.name).map(|(_, t)| *t);
@@ -197,23 +198,6 @@ pub fn render(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
         nan: result.nan.clone(),
         gpu_errors: session.take_uncaptured(),
     })
-}
-
-/// A tensor as a NumPy `.npy` (version 1.0, little-endian f32, C order),
-/// which every array tool reads.
-fn npy(t: &CapturedTensor) -> Vec<u8> {
-    let shape: Vec<String> = t.layout.dims.iter().map(|(_, n)| n.to_string()).collect();
-    let shape = if shape.len() == 1 { format!("({},)", shape[0]) } else { format!("({})", shape.join(", ")) };
-    let mut header = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': {shape}, }}");
-    // Magic (6) + version (2) + length (2) + header + newline: a multiple of 64.
-    let pad = (64 - (10 + header.len() + 1) % 64) % 64;
-    header.push_str(&" ".repeat(pad));
-    header.push('\n');
-    let mut out = b"\x93NUMPY\x01\x00".to_vec();
-    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    out.extend_from_slice(header.as_bytes());
-    out.extend_from_slice(&t.raw_f32());
-    out
 }
 
 /// Per-pass times and capture overhead of one scene.

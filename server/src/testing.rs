@@ -9,3 +9,35 @@ pub fn line_col(text: &str, needle: &str, k: usize) -> (u32, u32) {
     let column = text[..at].rsplit('\n').next().unwrap().chars().count() + 1;
     (line as u32, column as u32)
 }
+
+/// A small PCG: the same random scenes and rays on every run.
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// Uniform in [0, 1).
+    pub fn f(&mut self) -> f32 {
+        self.0 = self.0.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        let x = (((self.0 >> 18) ^ self.0) >> 27) as u32;
+        (x.rotate_right((self.0 >> 59) as u32) >> 8) as f32 / (1u32 << 24) as f32
+    }
+
+    /// Uniform in the box from `lo` to `hi`.
+    pub fn in_box(&mut self, lo: glam::Vec3, hi: glam::Vec3) -> glam::Vec3 {
+        lo + (hi - lo) * glam::Vec3::new(self.f(), self.f(), self.f())
+    }
+
+    /// Uniform in the cube of side `side` centred on the origin.
+    pub fn centered(&mut self, side: f32) -> glam::Vec3 {
+        glam::Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5) * side
+    }
+
+    /// A uniform unit direction (rejection from the unit ball).
+    pub fn dir(&mut self) -> glam::Vec3 {
+        loop {
+            let d = glam::Vec3::new(self.f(), self.f(), self.f()) * 2.0 - 1.0;
+            if d.length_squared() > 1e-4 && d.length_squared() <= 1.0 {
+                return d.normalize();
+            }
+        }
+    }
+}

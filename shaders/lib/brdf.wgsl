@@ -20,8 +20,12 @@ fn v_smith(n_v: f32, n_l: f32, a: f32) -> f32 {
     return 0.5 / max(gv + gl, 1e-7);
 }
 
+// The base is clamped: v·h (or n·v) of unit vectors can round past 1, and
+// pow of a negative base is NaN. With light coming back along the view
+// (l = v to rounding: a light at the camera) one evaluation in five was
+// NaN: NaN pixels in the raster, light the path tracer silently dropped.
 fn f_schlick(f0: vec3<f32>, v_h: f32) -> vec3<f32> {
-    return f0 + (1.0 - f0) * pow(1.0 - v_h, 5.0);
+    return f0 + (1.0 - f0) * pow(clamp(1.0 - v_h, 0.0, 1.0), 5.0);
 }
 
 fn specular_f0(base_color: vec3<f32>, metallic: f32) -> vec3<f32> {

@@ -67,9 +67,13 @@ fn finite(v: vec3<f32>) -> bool {
     return all(exponent != vec3(0x7f800000u));
 }
 
+// a² / (a² + b²), written with the ratio b / a: a tiny rect light's area
+// pdf (d² / (area · cos), past 1e19) squared is infinite in f32, and
+// inf / inf made every sample that saw it NaN, which the guard in
+// `path_trace` then dropped as black. a = 0 gives b / a = inf and weight 0.
 fn power_heuristic(a: f32, b: f32) -> f32 {
-    let a2 = a * a;
-    return select(a2 / (a2 + b * b), 1.0, b <= 0.0);
+    let r = b / a;
+    return select(1.0 / (1.0 + r * r), 1.0, b <= 0.0);
 }
 
 fn max3(v: vec3<f32>) -> f32 {
@@ -84,12 +88,17 @@ fn offset(p: vec3<f32>, ng: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
 
 // ---- media ----------------------------------------------------------------
 
-// A bound on the extinction anywhere: densities are at most 1.
+// A bound on the extinction anywhere: densities are at most 1. A medium
+// that emits counts at least 1 per unit length: its emission is collected
+// at tentative collisions, and where it neither absorbs nor scatters a
+// bound of 0 made none, so an emission-only medium was invisible (the
+// extra null collisions keep both trackers unbiased).
 fn majorant() -> f32 {
     var m = 0.0;
 #ifdef MEDIA
     for (var i = 0u; i < view.counts.y; i++) {
-        m += max3(media[i].scattering.rgb + media[i].absorption.rgb);
+        let emits = max3(media[i].emission.rgb) > 0.0;
+        m += max(max3(media[i].scattering.rgb + media[i].absorption.rgb), select(0.0, 1.0, emits));
     }
 #endif
     return m;

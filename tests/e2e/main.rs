@@ -3,6 +3,7 @@
 
 mod browser;
 mod check;
+mod denoise;
 mod golden;
 mod render;
 mod serve;

@@ -64,8 +64,9 @@ fn minimal_scene_builds_only_what_it_needs() {
 #[test]
 fn showcase_renders_every_pass() {
     let p = Project::copy_of_repo("render-showcase");
-    // With the debug view on, no pass of the renderer is culled but the
-    // test pattern (the scene has content).
+    // With the debug view on, no raster pass is culled: only the test
+    // pattern (the scene has content) and the path tracer (the renderer is
+    // the raster).
     let (run, report) = render(&p, "scenes/showcase.toml", &["--set", "post.debug_view=normal"]);
     run.code(0);
     let r = report.expect("report.json written");
@@ -74,7 +75,7 @@ fn showcase_renders_every_pass() {
         ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes", "exposure_histogram", "exposure_adapt", "exposure", "tonemap", "debug_view"],
         "{r}"
     );
-    assert_eq!(names(&r["culled"]), ["test_pattern"]);
+    assert_eq!(names(&r["culled"]), ["path_trace", "denoise_autoexposure", "denoise_input", "denoise", "test_pattern"]);
     // Auto exposure: compute passes whose buffers are written as tensors.
     let pass = |name: &str| r["passes"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap().clone();
     assert_eq!(pass("exposure_histogram")["kind"], "compute");

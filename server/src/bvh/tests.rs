@@ -4,35 +4,15 @@
 use glam::Vec3;
 
 use super::*;
+use crate::testing::Rng;
 
-/// A small PCG: the same scenes and rays every run.
-struct Rng(u64);
-
-impl Rng {
-    fn f(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-        let x = (((self.0 >> 18) ^ self.0) >> 27) as u32;
-        (x.rotate_right((self.0 >> 59) as u32) >> 8) as f32 / (1u32 << 24) as f32
-    }
-    fn v(&mut self, scale: f32) -> Vec3 {
-        Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5) * scale
-    }
-    fn dir(&mut self) -> Vec3 {
-        loop {
-            let d = self.v(2.0);
-            if d.length_squared() > 1e-4 && d.length_squared() <= 1.0 {
-                return d.normalize();
-            }
-        }
-    }
-}
 
 /// `n` triangles of size about `size` scattered in a cube of side `spread`.
 fn soup(rng: &mut Rng, n: usize, spread: f32, size: f32) -> Vec<([Vec3; 3], [u32; 2])> {
     (0..n as u32)
         .map(|i| {
-            let c = rng.v(spread);
-            ([c + rng.v(size), c + rng.v(size), c + rng.v(size)], [i % 7, i])
+            let c = rng.centered(spread);
+            ([c + rng.centered(size), c + rng.centered(size), c + rng.centered(size)], [i % 7, i])
         })
         .collect()
 }
@@ -57,7 +37,7 @@ fn closest_hits_and_occlusion_equal_brute_force() {
         let mut hits = 0;
         for _ in 0..2000 {
             // Half the rays aimed at a triangle, so there are hits to find.
-            let origin = rng.v(spread * 1.5);
+            let origin = rng.centered(spread * 1.5);
             let dir = if rng.f() < 0.5 {
                 let [a, b, c] = tris[(rng.f() * n as f32) as usize % n].0;
                 ((a + b + c) / 3.0 - origin).normalize()

@@ -3,9 +3,16 @@
 //!
 //! `tza` reads a weights file; `network` builds the U-Net it describes from
 //! its tensor names and shapes, as an ordered list of ops over named tensors
-//! that a backend walks.
+//! that a backend walks; `cpu` is the plain f32 reference of that walk;
+//! `process` is OIDN's pre- and post-processing around it (transfer
+//! functions, autoexposure, padding); `image` reads and writes the files
+//! `loupe denoise` takes; `offline` is that command.
 
+pub mod cpu;
+pub mod image;
 pub mod network;
+pub mod offline;
+pub mod process;
 pub mod tza;
 
 use crate::diag::{Code, Diagnostic, Location};
@@ -13,7 +20,7 @@ use crate::diag::{Code, Diagnostic, Location};
 /// How tensors are stored between ops. Accumulation is f32 either way;
 /// `F16` rounds every tensor to half precision when it is stored, as the
 /// GPU's f16 storage does.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Precision {
     F16,
     F32,

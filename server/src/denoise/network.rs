@@ -160,48 +160,18 @@ impl Network {
 
     pub fn from_archive(archive: &Archive) -> Result<Network, NetworkError> {
         let layers = Layers::read(archive)?;
-        let mut b = Builder { archive, tensors: Vec::new(), ops: Vec::new() };
-        let enc_levels: Vec<u32> = layers.encoder.keys().copied().collect();
-        let bottleneck = *enc_levels.last().ok_or_else(|| missing(archive, "enc_conv1"))?;
-        let first = if enc_levels[0] == 0 { 0 } else { 1 };
-        for (i, &level) in enc_levels.iter().enumerate() {
-            if level != first + i as u32 {
-                return Err(missing(archive, &format!("enc_conv{}", first + i as u32)));
-            }
-        }
-        if bottleneck < 2 {
-            return Err(missing(archive, "enc_conv2"));
-        }
-        let pools = bottleneck - 1;
-        let dec_levels: Vec<u32> = layers.decoder.keys().rev().copied().collect();
-        let expected: Vec<u32> = (1..=pools).rev().chain(dec_levels.last().filter(|&&l| l == 0).copied()).collect();
-        if let Some((&found, _)) = layers.decoder.iter().find(|(l, _)| !expected.contains(l)) {
-            let (name, t) = &layers.decoder[&found][0];
-            let message = format!("layer `{name}` is at decoder level {found}, but the encoder pools {pools} times: decoder levels run {pools}..=1 (and 0)");
-            return Err(NetworkError { at: t.entry_at, message });
-        }
-        if let Some(l) = expected.iter().find(|l| !layers.decoder.contains_key(l)) {
-            return Err(missing(archive, &format!("dec_conv{l}")));
-        }
+        let (first, pools) = layers.encoder_levels(archive)?;
+        let decoder_levels = layers.decoder_levels(archive, pools)?;
+        let inputs = layers.inputs(first)?;
+        let last = layers.last().0.clone();
 
-        let input_channels = layers.first_in_channels(first)?;
-        let inputs = match input_channels {
-            3 => Inputs::Color,
-            6 => Inputs::ColorAlbedo,
-            9 => Inputs::ColorAlbedoNormal,
-            n => {
-                let (name, t) = &layers.encoder[&first][0];
-                let message = format!("the first layer `{name}` takes {n} input channels: expected 3 (colour), 6 (+ albedo) or 9 (+ normal)");
-                return Err(NetworkError { at: t.entry_at, message });
-            }
-        };
-        let input = b.tensor("input", input_channels, 0);
+        let mut b = Builder { archive, tensors: Vec::new(), ops: Vec::new() };
+        let input = b.tensor("input", inputs.channels(), 0);
         let mut x = input;
         let mut skips = BTreeMap::from([(0, input)]);
-        let last = layers.last().0.clone();
         for (&level, convs) in &layers.encoder {
             for conv in convs {
-                    x = b.conv(conv, x, conv.0 != last)?;
+                x = b.conv(conv, x, conv.0 != last)?;
             }
             if (1..=pools).contains(&level) {
                 let t = b.tensors[x.0].clone();
@@ -211,7 +181,7 @@ impl Network {
                 skips.insert(level, x);
             }
         }
-        for level in expected {
+        for level in decoder_levels {
             if level > 0 {
                 let (t, skip) = (b.tensors[x.0].clone(), skips[&(level - 1)]);
                 let up = b.tensor(&format!("upsample{level}"), t.channels, t.level - 1);
@@ -292,15 +262,59 @@ impl<'a> Layers<'a> {
         Ok(layers)
     }
 
+    /// The first encoder level (0 or 1) and the number of pools: levels
+    /// must run without a gap from the first to the bottleneck, at least 2.
+    fn encoder_levels(&self, archive: &Archive) -> Result<(u32, u32), NetworkError> {
+        let first = if self.encoder.contains_key(&0) { 0 } else { 1 };
+        let mut expected = first;
+        for &level in self.encoder.keys() {
+            if level != expected {
+                return Err(missing(archive, &format!("enc_conv{expected}")));
+            }
+            expected += 1;
+        }
+        match expected - 1 {
+            bottleneck if expected > 2 => Ok((first, bottleneck - 1)),
+            _ => Err(missing(archive, &format!("enc_conv{expected}"))),
+        }
+    }
+
+    /// The decoder levels in the order they run: `pools` down to 1, then 0
+    /// when there is one.
+    fn decoder_levels(&self, archive: &Archive, pools: u32) -> Result<Vec<u32>, NetworkError> {
+        let levels: Vec<u32> = (1..=pools).rev().chain(self.decoder.contains_key(&0).then_some(0)).collect();
+        if let Some((&found, layers)) = self.decoder.iter().find(|(l, _)| !levels.contains(l)) {
+            let (name, t) = &layers[0];
+            let message = format!(
+                "layer `{name}` is at decoder level {found}, but the encoder pools {pools} times: decoder levels run {pools}..=1 (and 0)"
+            );
+            return Err(NetworkError { at: t.entry_at, message });
+        }
+        match levels.iter().find(|l| !self.decoder.contains_key(l)) {
+            Some(l) => Err(missing(archive, &format!("dec_conv{l}"))),
+            None => Ok(levels),
+        }
+    }
+
+    /// What the network takes, from its first convolution's input channels.
+    fn inputs(&self, first: u32) -> Result<Inputs, NetworkError> {
+        let (name, w) = &self.encoder[&first][0];
+        let n = *w.dims.get(1).ok_or_else(|| shape_error(w, "4 dimensions [out, in, 3, 3]"))?;
+        match n {
+            3 => Ok(Inputs::Color),
+            6 => Ok(Inputs::ColorAlbedo),
+            9 => Ok(Inputs::ColorAlbedoNormal),
+            n => {
+                let message = format!("the first layer `{name}` takes {n} input channels: expected 3 (colour), 6 (+ albedo) or 9 (+ normal)");
+                Err(NetworkError { at: w.entry_at, message })
+            }
+        }
+    }
+
     /// The last convolution (no ReLU after it): the last of the lowest
     /// decoder level. `from_archive` checked the decoder has levels.
     fn last(&self) -> &(String, &'a TensorInfo) {
         self.decoder.values().next().and_then(|v| v.last()).expect("decoder levels hold a layer")
-    }
-
-    fn first_in_channels(&self, first: u32) -> Result<usize, NetworkError> {
-        let (_, w) = &self.encoder[&first][0];
-        Ok(*w.dims.get(1).ok_or_else(|| shape_error(w, "4 dimensions [out, in, 3, 3]"))? as usize)
     }
 }
 

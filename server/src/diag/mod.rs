@@ -106,6 +106,8 @@ pub enum Code {
     Gpu,
     #[serde(rename = "weights")]
     Weights,
+    #[serde(rename = "image")]
+    Image,
 }
 
 impl Code {
@@ -130,6 +132,7 @@ impl Code {
             Code::ProjectFile => "project-file",
             Code::Gpu => "gpu",
             Code::Weights => "weights",
+            Code::Image => "image",
         }
     }
 
@@ -155,10 +158,11 @@ impl Code {
             Code::ProjectFile => "the project file loupe.toml is invalid",
             Code::Gpu => "the GPU rejected commands while a frame was recorded or submitted (an error no error scope caught)",
             Code::Weights => "the denoiser's weights file (.tza) is malformed or is not a U-Net loupe can run",
+            Code::Image => "an image file is malformed, or does not fit the images it goes with",
         }
     }
 
-    pub const ALL: [Code; 19] = [
+    pub const ALL: [Code; 20] = [
         Code::Io,
         Code::Encoding,
         Code::EmptyFile,
@@ -178,6 +182,7 @@ impl Code {
         Code::ProjectFile,
         Code::Gpu,
         Code::Weights,
+        Code::Image,
     ];
 }
 

@@ -21,7 +21,9 @@
 //! One invocation per output element is dispatched; the element types'
 //! array strides must equal the Rust types' sizes. Textures are bound as the
 //! renderer binds its read-only ones: unfilterable float, read with
-//! `textureLoad`.
+//! `textureLoad`. Read-only storage buffers the library's modules declare
+//! at group 1 (`loupe::bvh`'s nodes and triangles) are bound from buffers
+//! the caller gives `Kernel::run_bound`, in binding order.
 
 use std::path::Path;
 
@@ -64,6 +66,8 @@ pub struct Kernel {
     input_stride: u64,
     output_stride: u64,
     textures: usize,
+    /// The layout of group 1 and its buffer count, when the shader binds any.
+    group1: Option<(wgpu::BindGroupLayout, usize)>,
 }
 
 /// Composes `source` (which may import `shaders/lib/`) and runs `entry` over
@@ -92,6 +96,7 @@ impl Kernel {
         let input_stride = array_stride(&module, 0, StorageAccess::LOAD)?;
         let output_stride = array_stride(&module, 1, StorageAccess::LOAD | StorageAccess::STORE)?;
         let textures = texture_count(&module)?;
+        let buffers = group1_count(&module)?;
 
         let device = &gpu.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -102,9 +107,15 @@ impl Kernel {
         let mut entries = vec![pipeline::storage("inputs", 0, wgpu::ShaderStages::COMPUTE).entry, read_write(1)];
         entries.extend((0..textures as u32).map(|k| pipeline::texture("texture", 2 + k).entry));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("test kernel"), entries: &entries });
+        let group1 = (buffers > 0).then(|| {
+            let entries: Vec<_> = (0..buffers as u32).map(|b| pipeline::storage("group 1", b, wgpu::ShaderStages::COMPUTE).entry).collect();
+            (device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("test kernel group 1"), entries: &entries }), buffers)
+        });
+        let mut layouts = vec![Some(&layout)];
+        layouts.extend(group1.as_ref().map(|(l, _)| Some(l)));
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("test kernel"),
-            bind_group_layouts: &[Some(&layout)],
+            bind_group_layouts: &layouts,
             immediate_size: 0,
         });
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -118,7 +129,7 @@ impl Kernel {
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Wgpu(e.to_string()));
         }
-        Ok(Kernel { pipeline, layout, workgroup_width, input_stride, output_stride, textures })
+        Ok(Kernel { pipeline, layout, workgroup_width, input_stride, output_stride, textures, group1 })
     }
 
     /// Runs the kernel once per output element with `textures` bound at
@@ -130,7 +141,23 @@ impl Kernel {
         output_len: usize,
         textures: &[&wgpu::TextureView],
     ) -> Result<Vec<U>, Error> {
+        self.run_bound(gpu, inputs, output_len, textures, &[])
+    }
+
+    /// `run`, with `buffers` bound at group 1, bindings 0, 1, ….
+    pub fn run_bound<T: bytemuck::Pod, U: bytemuck::Pod>(
+        &self,
+        gpu: &Gpu,
+        inputs: &[T],
+        output_len: usize,
+        textures: &[&wgpu::TextureView],
+        buffers: &[&wgpu::Buffer],
+    ) -> Result<Vec<U>, Error> {
         let request = |m: String| Err(Error::Request(m));
+        let declared = self.group1.as_ref().map_or(0, |(_, n)| *n);
+        if buffers.len() != declared {
+            return request(format!("{} buffers given for group 1; the shader declares {declared}", buffers.len()));
+        }
         if size_of::<T>() as u64 != self.input_stride {
             return request(format!("input elements are {} bytes; the shader's array stride is {}", size_of::<T>(), self.input_stride));
         }
@@ -172,11 +199,18 @@ impl Kernel {
             textures.iter().zip(2..).map(|(view, binding)| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) }),
         );
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("test kernel"), layout: &self.layout, entries: &entries });
+        let group1 = self.group1.as_ref().map(|(layout, _)| {
+            let entries: Vec<_> = buffers.iter().zip(0..).map(|(b, binding)| wgpu::BindGroupEntry { binding, resource: b.as_entire_binding() }).collect();
+            device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("test kernel group 1"), layout, entries: &entries })
+        });
         let mut encoder = device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
+            if let Some(g) = &group1 {
+                pass.set_bind_group(1, g, &[]);
+            }
             pass.dispatch_workgroups(groups as u32, 1, 1);
         }
         encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, out_bytes);
@@ -238,8 +272,11 @@ fn texture_count(module: &naga::Module) -> Result<usize, Error> {
     let mut bindings: Vec<u32> = Vec::new();
     for (_, g) in module.global_variables.iter() {
         let Some(b) = &g.binding else { continue };
+        if b.group == 1 {
+            continue;
+        }
         if b.group != 0 {
-            return Err(Error::Interface(format!("@group({}): only group 0 is bound", b.group)));
+            return Err(Error::Interface(format!("@group({}): only groups 0 and 1 are bound", b.group)));
         }
         if b.binding < 2 {
             continue;
@@ -256,6 +293,24 @@ fn texture_count(module: &naga::Module) -> Result<usize, Error> {
     bindings.sort_unstable();
     if bindings.iter().zip(2..).any(|(b, want)| *b != want) {
         return Err(Error::Interface(format!("textures must sit at consecutive bindings from 2, not {bindings:?}")));
+    }
+    Ok(bindings.len())
+}
+
+/// How many buffers the shader binds at group 1; they must be
+/// `var<storage, read>` at consecutive bindings from 0.
+fn group1_count(module: &naga::Module) -> Result<usize, Error> {
+    let mut bindings: Vec<u32> = Vec::new();
+    for (_, g) in module.global_variables.iter() {
+        let Some(b) = g.binding.as_ref().filter(|b| b.group == 1) else { continue };
+        if g.space != (AddressSpace::Storage { access: StorageAccess::LOAD }) {
+            return Err(Error::Interface(format!("@group(1) @binding({}) must be a var<storage, read>", b.binding)));
+        }
+        bindings.push(b.binding);
+    }
+    bindings.sort_unstable();
+    if bindings.iter().zip(0..).any(|(b, want)| *b != want) {
+        return Err(Error::Interface(format!("group 1's buffers must sit at consecutive bindings from 0, not {bindings:?}")));
     }
     Ok(bindings.len())
 }
@@ -340,6 +395,19 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         assert!(e.to_string().contains("no @compute entry point `nope`"), "{e}");
         let e = Kernel::new(&gpu, &DOUBLE.replace("storage, read>", "storage, read_write>"), "main").err().expect("input written");
         assert!(e.to_string().contains("@binding(0) must be a var<storage, read>"), "{e}");
+        // A module that binds buffers at group 1 (the BVH's) needs them.
+        let traced = "#import loupe::bvh::occluded
+@group(0) @binding(0) var<storage, read> input: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read_write> output: array<u32>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x < arrayLength(&output) {
+        output[id.x] = select(0u, 1u, occluded(input[id.x].xyz, vec3(0.0, 0.0, 1.0), 0.0, 1.0));
+    }
+}";
+        let bvh = Kernel::new(&gpu, traced, "main").unwrap();
+        let e = bvh.run::<[f32; 4], u32>(&gpu, &[[0.0; 4]], 1, &[]).expect_err("no buffers for group 1");
+        assert!(e.to_string().contains("0 buffers given for group 1; the shader declares 2"), "{e}");
         // The kernel still works after all that.
         assert_eq!(kernel.run::<f32, f32>(&gpu, &[1.5], 1, &[]).unwrap(), [3.0]);
     }

@@ -117,3 +117,6 @@ mod tests {
         assert!(raster.path.is_none(), "the raster traces nothing, so nothing is built");
     }
 }
+
+#[cfg(test)]
+mod traversal_tests;

@@ -159,6 +159,8 @@ pub fn view_bytes(scene: &Scene) -> Vec<u8> {
 
 /// One `Light` of lights.wgsl: six vec4.
 const LIGHT_BYTES: usize = 96;
+/// One `Material` of geometry.wgsl: two vec4.
+const MATERIAL_BYTES: usize = 32;
 
 fn light_bytes(scene: &Scene) -> Vec<u8> {
     let (first_layer, _) = shadow_layout(scene);
@@ -382,7 +384,11 @@ impl SceneGpu {
                 usage: wgpu::BufferUsages::UNIFORM,
             }),
             objects: storage("objects", objects),
-            materials: storage("materials", materials),
+            // Likewise one (zeroed) material: the path tracer binds them in
+            // a compute pass, where the binding is checked against the
+            // shader's 32-byte struct even when no triangle reads one (a
+            // path-traced scene of media alone failed every dispatch).
+            materials: storage("materials", if materials.is_empty() { vec![0; MATERIAL_BYTES] } else { materials }),
             // A scene without lights still binds one (zeroed) light: the
             // shader's array needs room for one element.
             lights: storage("lights", if scene.lights.is_empty() { vec![0; LIGHT_BYTES] } else { light_bytes(scene) }),

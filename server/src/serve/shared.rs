@@ -21,7 +21,8 @@ pub struct Shared {
     pub passes: RwLock<Vec<PassInfo>>,
     pub pipelines: RwLock<Vec<PipelineInfo>>,
     pub diagnostics: RwLock<Vec<Diagnostic>>,
-    /// Every captured output of the newest frame, by `pass/output`.
+    /// The newest capture of every output captured so far, by
+    /// `pass/output`: bounded by the outputs passes declare.
     pub captures: RwLock<Arc<BTreeMap<String, Arc<CapturedImage>>>>,
     /// The newest traced frame's NaN report, while frames are not clean.
     pub nan: RwLock<Option<NanReport>>,

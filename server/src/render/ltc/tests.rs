@@ -259,12 +259,18 @@ fn ggx_cos(v: V3, l: V3, alpha: f64) -> [f64; 2] {
 }
 
 /// ∫ over the whole hemisphere of GGX × cos, and of the same times
-/// (1 - v·h)^5: the lobe's total, by Gauss-Legendre in (θ, φ), with
-/// `v` in the xz plane (the lobe is symmetric in y: φ over [0, π], × 2).
+/// (1 - v·h)^5: the lobe's total.
 pub(crate) fn ggx_albedo(cos_v: f64, alpha: f64) -> [f64; 2] {
+    hemisphere_integral(cos_v, |v, l| ggx_cos(v, l, alpha))
+}
+
+/// ∫ over the hemisphere (normal +z) of `f(v, l)`, by Gauss-Legendre in
+/// (θ, φ), with `v` in the xz plane at `cos_v` (`f` must be symmetric in
+/// y: φ over [0, π], × 2).
+pub(crate) fn hemisphere_integral<const N: usize>(cos_v: f64, f: impl Fn(V3, V3) -> [f64; N]) -> [f64; N] {
     let v = [(1.0 - cos_v * cos_v).sqrt(), 0.0, cos_v];
     let (nt, np) = (96, 96);
-    let mut sum = [0.0; 2];
+    let mut sum = [0.0; N];
     for it in 0..nt {
         for ip in 0..np {
             for (xi, wi) in GL_X.iter().zip(GL_W) {
@@ -273,9 +279,9 @@ pub(crate) fn ggx_albedo(cos_v: f64, alpha: f64) -> [f64; 2] {
                     let phi = (ip as f64 + 0.5 + 0.5 * xj) / np as f64 * PI;
                     let l = [theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()];
                     let w = wi * wj * 0.25 * (PI / 2.0 / nt as f64) * (PI / np as f64) * theta.sin() * 2.0;
-                    let [f, fr] = ggx_cos(v, l, alpha);
-                    sum[0] += f * w;
-                    sum[1] += fr * w;
+                    for (s, x) in sum.iter_mut().zip(f(v, l)) {
+                        *s += x * w;
+                    }
                 }
             }
         }

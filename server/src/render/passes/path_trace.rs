@@ -98,3 +98,6 @@ pub fn path_trace(g: &mut GraphBuilder, scene: &Scene) -> Option<Traced> {
     });
     Some(Traced { color, albedo, normal, samples })
 }
+
+#[cfg(test)]
+mod tests;

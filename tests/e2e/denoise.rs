@@ -1,0 +1,68 @@
+//! `loupe denoise`: OIDN's weights and the denoiser's test images through
+//! the binary, every output format, and the exit codes of bad input.
+
+use loupe_tests::{Project, repo};
+
+fn fixture(name: &str) -> String {
+    repo().join("server/src/denoise/fixtures").join(name).display().to_string()
+}
+
+/// OIDN's weights beside the repository (CI has them: missing fails).
+fn weights(name: &str) -> String {
+    let p = repo().join("../shared/weights/oidn").join(name);
+    assert!(p.is_file(), "OIDN's weights file {} is missing", p.display());
+    p.display().to_string()
+}
+
+#[test]
+fn denoises_into_every_format() {
+    let p = Project::empty("denoise");
+    let (w, color, albedo, normal) =
+        (weights("rt_ldr_alb_nrm.tza"), fixture("color.pfm"), fixture("albedo.pfm"), fixture("normal.pfm"));
+    for out in ["out.pfm", "out.exr", "out.png"] {
+        let args = ["denoise", "--weights", &w, "--color", &color, "--albedo", &albedo, "--normal", &normal, "--ldr", "-o", out];
+        p.run(&args).code(0).stdout_has("32x24, colour, albedo and normal, input scale 1");
+    }
+    assert!(std::fs::read(p.path("out.pfm")).unwrap().starts_with(b"PF\n32 24\n"));
+    assert_eq!(image::open(p.path("out.png")).unwrap().to_rgb8().dimensions(), (32, 24));
+    assert!(std::fs::metadata(p.path("out.exr")).unwrap().len() > 32 * 24 * 12);
+
+    let ldr = weights("rt_ldr.tza");
+    p.run(&["denoise", "--weights", &ldr, "--color", &color, "--hdr", "--precision", "f16", "-o", "hdr.exr", "--dump-tensors", "t"])
+        .code(0)
+        .stdout_has("29 tensors in t");
+    let dumped = std::fs::read_dir(p.path("t")).unwrap().count();
+    assert_eq!(dumped, 29);
+    assert!(p.path("t/upsample4.npy").is_file());
+}
+
+#[test]
+fn bad_input_has_exit_codes() {
+    let p = Project::empty("denoise-bad");
+    let (w, color) = (weights("rt_ldr.tza"), fixture("color.pfm"));
+    p.write("cut.tza", &std::fs::read(&w).unwrap()[..1000]);
+    p.run(&["denoise", "--weights", "cut.tza", "--color", &color, "--ldr", "-o", "o.pfm"])
+        .code(1)
+        .stderr_has("cut.tza:1:1: error[weights]: at byte 4: the tensor table is said to start at byte 1829504, past the end of the file (1000 bytes)");
+    p.write("bad.pfm", "PF\n2 2\n-1\n");
+    p.run(&["denoise", "--weights", &w, "--color", "bad.pfm", "--ldr", "-o", "o.pfm"])
+        .code(1)
+        .stderr_has("error[image]: at byte 10: 2×2 pixels of 3 f32 take 48 bytes, but the file ends after 0")
+        .stderr_has("bad.pfm:1:1");
+    p.run(&["denoise", "--weights", &w, "--color", &color, "--albedo", &fixture("albedo.pfm"), "--ldr", "-o", "o.pfm"])
+        .code(1)
+        .stderr_has("error[weights]: these weights take colour, but colour and albedo were given");
+    p.run(&["denoise", "--weights", &w, "--color", "missing.pfm", "--ldr", "-o", "o.pfm"]).code(2).stderr_has("error[io]");
+    p.run(&["denoise", "--weights", &w, "--color", &color, "--ldr", "-o", "no/such/dir/o.pfm"]).code(2).stderr_has("error[io]");
+    for usage in [
+        &["--color", &color, "-o", "o.pfm"][..],
+        &["--color", &color, "--hdr", "--srgb", "-o", "o.pfm"],
+        &["--color", &color, "--ldr", "--normal", &color, "-o", "o.pfm"],
+        &["--color", &color, "--ldr", "--input-scale", "-1", "-o", "o.pfm"],
+    ] {
+        let mut args = vec!["denoise", "--weights", &w];
+        args.extend_from_slice(usage);
+        p.run(&args).code(2);
+    }
+    assert!(!p.path("o.pfm").exists());
+}
