@@ -9,7 +9,7 @@
 // Weights are laid out by the host as mat4x4 blocks,
 // [tap (ky·3+kx)][input block][output block], column c holding input
 // channel c's weights to the block's 4 outputs, so `w * x` adds a whole
-// input block to an output block.
+// input block to an output block (`render::denoise_weights::pack_conv`).
 
 struct Layer {
     // Output (and `b`) size in pixels.
@@ -62,8 +62,13 @@ fn conv(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let count = min(BLOCKS, layer.out_blocks - first);
     let in_blocks = layer.a_blocks + layer.b_blocks;
+    // The weights' and bias's output blocks are padded to a multiple of
+    // BLOCKS (with zeros), so the loops over k have a constant count: the
+    // compiler unrolls them and keeps `acc` in registers (on llvmpipe twice
+    // as fast as looping to `count`).
+    let stride = (layer.out_blocks + BLOCKS - 1u) / BLOCKS * BLOCKS;
     var acc: array<vec4<f32>, BLOCKS>;
-    for (var k = 0u; k < count; k++) {
+    for (var k = 0u; k < BLOCKS; k++) {
         acc[k] = bias[first + k];
     }
     for (var tap = 0u; tap < 9u; tap++) {
@@ -79,8 +84,8 @@ fn conv(@builtin(global_invocation_id) id: vec3<u32>) {
 #endif
         for (var ci = 0u; ci < layer.a_blocks; ci++) {
             let v = load(a[a_pixel * layer.a_blocks + ci]);
-            let row = (tap * in_blocks + ci) * layer.out_blocks + first;
-            for (var k = 0u; k < count; k++) {
+            let row = (tap * in_blocks + ci) * stride + first;
+            for (var k = 0u; k < BLOCKS; k++) {
                 acc[k] += weights[row + k] * v;
             }
         }
@@ -88,8 +93,8 @@ fn conv(@builtin(global_invocation_id) id: vec3<u32>) {
         let b_pixel = u32(sy) * layer.width + u32(sx);
         for (var ci = 0u; ci < layer.b_blocks; ci++) {
             let v = load(b[b_pixel * layer.b_blocks + ci]);
-            let row = (tap * in_blocks + layer.a_blocks + ci) * layer.out_blocks + first;
-            for (var k = 0u; k < count; k++) {
+            let row = (tap * in_blocks + layer.a_blocks + ci) * stride + first;
+            for (var k = 0u; k < BLOCKS; k++) {
                 acc[k] += weights[row + k] * v;
             }
         }

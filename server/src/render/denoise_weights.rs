@@ -17,6 +17,9 @@ use crate::denoise::network::{Conv, Network, Op, TensorId};
 
 /// Lanes of a channel block.
 pub const BLOCK: usize = 4;
+/// Output blocks one convolution invocation computes (the shader's
+/// BLOCKS): the weights' and bias's output blocks are padded to a multiple.
+pub const CONV_BLOCKS: usize = 4;
 
 /// Channel blocks holding `channels`.
 pub fn blocks(channels: usize) -> usize {
@@ -31,7 +34,8 @@ pub fn blocks(channels: usize) -> usize {
 pub fn pack_conv(weight: &[f32], bias: &[f32], a: usize, b: usize, out: usize) -> (Vec<f32>, Vec<f32>) {
     let inputs = a + b;
     debug_assert_eq!(weight.len(), out * inputs * 9);
-    let (a_blocks, in_blocks, out_blocks) = (blocks(a), blocks(a) + blocks(b), blocks(out));
+    let (a_blocks, in_blocks) = (blocks(a), blocks(a) + blocks(b));
+    let out_blocks = blocks(out).next_multiple_of(CONV_BLOCKS);
     let mut w = vec![0.0; 9 * in_blocks * out_blocks * 16];
     for o in 0..out {
         for i in 0..inputs {

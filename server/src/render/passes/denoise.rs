@@ -16,7 +16,7 @@
 
 pub mod kernels;
 
-use kernels::{CONCAT, CONCAT_CHANNELS, CONV, CONV_BLOCKS, ConcatUniform, F16, LayerUniform, POOL, PoolUniform, TILE, UPSAMPLE, UPSAMPLE_NEAREST};
+use kernels::{CONCAT, CONCAT_CHANNELS, CONV, ConcatUniform, F16, LayerUniform, POOL, PoolUniform, TILE, UPSAMPLE, UPSAMPLE_NEAREST, conv_workgroups};
 
 use super::path_trace::{COLOR, Traced};
 use crate::denoise::Precision;
@@ -236,7 +236,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
                         ctx.encoder.clear_buffer(ctx.buffer(o), 0, None);
                         b.push(("overflow", ctx.bind(o)));
                     }
-                    ctx.dispatch(&key, &b, [ow.div_ceil(TILE), oh.div_ceil(TILE), u.out_blocks.div_ceil(CONV_BLOCKS)]);
+                    ctx.dispatch(&key, &b, conv_workgroups(ow, oh, u.out_blocks));
                 });
             }
             Op::Pool { src, .. } => {

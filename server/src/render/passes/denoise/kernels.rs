@@ -5,11 +5,17 @@
 //! vector; the weights' layout is `render::denoise_weights::pack_conv`'s.
 
 use crate::gpu::pipeline::{COMPUTE, Group, PipelineSpec, Stages, sizes, storage, storage_rw, uniform};
+use crate::render::denoise_weights::CONV_BLOCKS;
 
-/// Output blocks one convolution invocation computes (the shader's BLOCKS).
-pub const CONV_BLOCKS: u32 = 4;
-/// Both kernels' workgroup side in pixels.
+/// Every kernel's workgroup side in invocations.
 pub const TILE: u32 = 8;
+
+/// The workgroups of a convolution making a `width` × `height` tensor of
+/// `out_blocks` channel blocks: an invocation per pixel and `CONV_BLOCKS`
+/// output blocks.
+pub fn conv_workgroups(width: u32, height: u32, out_blocks: u32) -> [u32; 3] {
+    [width.div_ceil(TILE), height.div_ceil(TILE), out_blocks.div_ceil(CONV_BLOCKS as u32)]
+}
 
 /// Reads the first input 2× nearest-upsampled.
 pub const UPSAMPLE: &str = "UPSAMPLE";

@@ -147,8 +147,7 @@ fn conv_on_gpu(gpu: &Gpu, a: &Tensor, b: Option<&Tensor>, upsample: bool, weight
     if let Some(g) = &group1 {
         groups.push(g);
     }
-    let z = (blocks(out) as u32).div_ceil(CONV_BLOCKS);
-    run(gpu, &p, &groups, &out_buf, len, [(w as u32).div_ceil(TILE), (h as u32).div_ceil(TILE), z])
+    run(gpu, &p, &groups, &out_buf, len, conv_workgroups(w as u32, h as u32, blocks(out) as u32))
 }
 
 /// Compares the padded GPU result with the exact-channel reference; the
