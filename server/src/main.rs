@@ -185,6 +185,11 @@ struct BenchArgs {
     /// Indirect bounces when path tracing, as `quality.path_bounces`.
     #[arg(long)]
     bounces: Option<i64>,
+    /// Time each pass by the wall clock, submitting it alone and waiting
+    /// for it, in an extra frame per round: for adapters whose timestamps
+    /// do not bracket compute work (llvmpipe).
+    #[arg(long)]
+    serial: bool,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -423,14 +428,14 @@ fn run_bench(args: BenchArgs) -> ExitCode {
             overrides.insert("quality.path_bounces".into(), Value::Int(b));
         }
         let job = offline::Job { scene, shader_root: args.root.join("shaders"), size: Some(args.size), overrides };
-        let r = match offline::bench(&job, args.frames) {
+        let r = match offline::bench(&job, args.frames, args.serial) {
             Ok(r) => r,
             Err(e) => return offline_failed("bench", e),
         };
         println!("## {} at {}x{}, {} frames, {} timing, {}", r.scene, r.width, r.height, r.frames, r.timing, r.adapter);
         let total: f64 = r.passes.iter().map(|(_, t)| t).sum();
         for (name, t) in &r.passes {
-            println!("  {name:<14} {t:>9.3} ms  {:>5.1} %", if total > 0.0 { t / total * 100.0 } else { 0.0 });
+            println!("  {name:<20} {t:>9.3} ms  {:>5.1} %", if total > 0.0 { t / total * 100.0 } else { 0.0 });
         }
         let over = |x: f64| (x / r.frame_ms_no_capture - 1.0) * 100.0;
         println!(

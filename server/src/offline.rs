@@ -233,7 +233,10 @@ fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() { 0.0 } else { v[v.len() / 2] }
 }
 
-pub fn bench(job: &Job, frames: u32) -> Result<BenchReport, OfflineError> {
+/// `serial`: per-pass times from an extra frame each round that submits
+/// each pass alone and waits for it (wall clock), instead of from the
+/// uncaptured frame's timestamps.
+pub fn bench(job: &Job, frames: u32, serial: bool) -> Result<BenchReport, OfflineError> {
     let mut session = prepare(job)?;
     let none = BTreeSet::new();
     let fin: BTreeSet<String> = session.graph().final_name().into_iter().collect();
@@ -260,11 +263,21 @@ pub fn bench(job: &Job, frames: u32) -> Result<BenchReport, OfflineError> {
             let r = pending.finish();
             times.push((landed - start).as_secs_f64() * 1e3);
             converts.push(landed.elapsed().as_secs_f64() * 1e3);
-            if set.is_some_and(BTreeSet::is_empty) && !quads {
+            if set.is_some_and(BTreeSet::is_empty) && !quads && !serial {
                 timing = r.timing.to_owned();
                 for (name, t) in r.timings {
                     per_pass.entry(name).or_default().push(t);
                 }
+            }
+        }
+        if serial {
+            session.set_quads(false);
+            session.set_serial(true);
+            let r = frame(&mut session, Some(&none));
+            session.set_serial(false);
+            timing = r.timing.to_owned();
+            for (name, t) in r.timings {
+                per_pass.entry(name).or_default().push(t);
             }
         }
     }

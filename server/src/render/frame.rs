@@ -36,6 +36,10 @@ pub struct FrameInputs<'a> {
     pub frame: u64,
     /// Seconds since the previous frame.
     pub dt: f32,
+    /// Submit each pass on its own and wait for it, timing it by the wall
+    /// clock: for adapters whose timestamps do not bracket compute work
+    /// (llvmpipe's), at the cost of the overlap between passes.
+    pub serial: bool,
 }
 
 /// A submitted frame whose captures and timings are still on their way back.
@@ -48,6 +52,9 @@ pub struct PendingFrame {
     timestamps: Option<(Readback, f32)>,
     /// The pipeline statistics and, per pass, the queries it used.
     statistics: Option<(Readback, Vec<Vec<u32>>)>,
+    /// Per pass, the wall-clock milliseconds of its own submission (serial
+    /// frames only).
+    serial: Option<Vec<(String, f64)>>,
     /// Render passes recorded for quad statistics.
     quad_targets: Vec<PendingTarget>,
     pub skipped: Vec<String>,
@@ -76,10 +83,11 @@ pub struct FrameResult {
     /// timestamp queries: one clock around the whole frame cannot say how
     /// it splits between passes.
     pub timings: Vec<(String, f64)>,
-    /// The whole frame: the passes' sum (`gpu`), or the wall clock from
-    /// recording to the readbacks landing (`cpu`).
+    /// The whole frame: the passes' sum (`gpu`, `serial`), or the wall
+    /// clock from recording to the readbacks landing (`cpu`).
     pub total_ms: f64,
-    /// `gpu` when from timestamp queries, `cpu` otherwise.
+    /// `gpu` when from timestamp queries, `serial` when each pass was
+    /// submitted and waited for alone, `cpu` otherwise.
     pub timing: &'static str,
     pub captures: Vec<CapturedImage>,
     pub tensors: Vec<CapturedTensor>,
@@ -167,7 +175,9 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
     let mut encoder = f.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
     let mut captures = Vec::new();
     let mut skipped = Vec::new();
+    let mut serial = f.serial.then(Vec::new);
     for (i, pass) in graph.passes.iter().enumerate() {
+        let started = Instant::now();
         let mut ctx = PassContext {
             device: f.device,
             encoder: &mut encoder,
@@ -213,6 +223,12 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
                 captures.push(c);
             }
         }
+        if let Some(times) = serial.as_mut() {
+            let done = std::mem::replace(&mut encoder, f.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") }));
+            f.queue.submit([done.finish()]);
+            let _ = f.device.poll(wgpu::PollType::wait_indefinitely());
+            times.push((pass.name.clone(), started.elapsed().as_secs_f64() * 1e3));
+        }
     }
     let timestamps = query_set.map(|qs| {
         (resolve(f.device, &mut encoder, &qs, graph.passes.len() as u32 * 2, "timestamps"), f.queue.get_timestamp_period())
@@ -240,6 +256,7 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
         captures,
         timestamps,
         statistics,
+        serial,
         quad_targets,
         skipped,
         passes: graph.passes.iter().map(|p| p.name.clone()).collect(),
@@ -329,8 +346,12 @@ impl PendingFrame {
             }
         }
         let stamps = self.timestamps.as_ref().and_then(|(r, period)| Some((read_u64s(r)?, *period)));
-        let (timings, total_ms, timing) = match stamps {
-            Some((stamps, period)) => {
+        let (timings, total_ms, timing) = match (self.serial, stamps) {
+            (Some(t), _) => {
+                let total = t.iter().map(|(_, ms)| ms).sum();
+                (t, total, "serial")
+            }
+            (None, Some((stamps, period))) => {
                 let t: Vec<(String, f64)> = self
                     .passes
                     .iter()
@@ -340,7 +361,7 @@ impl PendingFrame {
                 let total = t.iter().map(|(_, ms)| ms).sum();
                 (t, total, "gpu")
             }
-            None => (Vec::new(), self.submitted.elapsed().as_secs_f64() * 1e3 + self.cpu_record_ms, "cpu"),
+            (None, None) => (Vec::new(), self.submitted.elapsed().as_secs_f64() * 1e3 + self.cpu_record_ms, "cpu"),
         };
         let counts = self.statistics.as_ref().and_then(|(r, queries)| Some((read_u64s(r)?, queries)));
         let fragment_invocations = counts

@@ -102,6 +102,9 @@ pub struct Session {
     composer: Arc<ComposeCache>,
     /// Whether frames gather quad statistics (costly: only while asked).
     quads: bool,
+    /// Whether frames submit and time each pass on its own (`loupe bench
+    /// --serial`).
+    serial: bool,
     /// The vertex captures of the frame's raster pipelines, with the
     /// generation each was instrumented from; built while `quads` is on.
     vertex_captures: BTreeMap<PipelineKey, VertexCapture>,
@@ -119,6 +122,7 @@ impl Session {
             options: FrameOptions::default(),
             composer: Arc::default(),
             quads: false,
+            serial: false,
             vertex_captures: BTreeMap::new(),
             capture_generations: BTreeMap::new(),
             accumulated: 0,
@@ -145,6 +149,12 @@ impl Session {
     /// Turns quad statistics on or off for the frames that follow.
     pub fn set_quads(&mut self, on: bool) {
         self.quads = on;
+    }
+
+    /// Times each pass of the frames that follow by the wall clock,
+    /// submitting it alone and waiting for it.
+    pub fn set_serial(&mut self, on: bool) {
+        self.serial = on;
     }
 
     pub fn gpu(&self) -> &Gpu {
@@ -308,6 +318,7 @@ impl Session {
             vertex_captures: self.quads.then_some(&self.vertex_captures),
             frame: self.frame,
             dt,
+            serial: self.serial,
         };
         frame::submit(inputs, &mut self.pool)
     }
