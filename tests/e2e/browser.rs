@@ -570,14 +570,16 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
     until(&c, &s, "the page showing the served frame", &format!("document.querySelector('#tensor-shape').textContent.endsWith('frame {}')", meta["frame"])).await;
     assert_eq!(s.get_json(&format!("/api/tensors/{pass}/tensor"))["frame"], meta["frame"], "no frame rendered meanwhile");
     let row = listed.iter().find(|r| r[0] == format!("{pass}/tensor").as_str()).unwrap();
-    let (lo, hi) = (meta["stats"]["min"].as_array().unwrap(), meta["stats"]["max"].as_array().unwrap());
+    let lo = meta["stats"]["min"].as_array().unwrap();
     assert_eq!(row[2], format!("{h} × {w} × {channels}"));
     assert_eq!(row[3], "[y, x, channel] f32");
     let min = lo.iter().map(|v| v.as_f64().unwrap()).fold(f64::INFINITY, f64::min);
     assert!((row[4].as_str().unwrap().parse::<f64>().unwrap() - min).abs() <= 1e-3 * min.abs().max(1e-3), "listed min {} of {min}", row[4]);
 
     // Three channels picked as R, G, B: each pixel is the tensor's value
-    // mapped from that channel's min…max.
+    // mapped from that channel's min…max. (serde_json may read a float
+    // one ulp off: the same double, as far as JSON goes.)
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-15 * b.abs();
     let picked = [5usize, 0, channels - 5];
     c.execute(&format!("['#tensor-r', '#tensor-g', '#tensor-b'].forEach((id, k) => {{ const s = document.querySelector(id); s.value = String({picked:?}[k]); s.dispatchEvent(new Event('change')); }}); return true;"), vec![]).await.unwrap();
     let drawn = c.execute("const c = document.querySelector('#tensor-rgb'); return [JSON.parse(c.dataset.ranges), Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data)];", vec![]).await.unwrap();
@@ -587,13 +589,25 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
         let values = || data.iter().skip(ch).step_by(channels).map(|&v| f64::from(v));
         let (lo, hi) = (values().fold(f64::INFINITY, f64::min), values().fold(f64::NEG_INFINITY, f64::max));
         assert!(hi > lo, "channel {ch} varies");
-        assert_eq!(drawn[0][k], serde_json::json!([lo, hi]), "channel {ch}'s range is its min…max");
+        let range = [drawn[0][k][0].as_f64().unwrap(), drawn[0][k][1].as_f64().unwrap()];
+        assert!(same(range[0], lo) && same(range[1], hi), "channel {ch}'s range {range:?} is its min…max {lo} … {hi}");
         for (i, v) in values().enumerate() {
             let want = ((v - lo) / (hi - lo) * 255.0).round();
             let got = f64::from(pixels[i * 4 + k]);
             assert!((got - want).abs() <= 1.0, "pixel {i} {}: {got}, want {want} (channel {ch} = {v})", ["R", "G", "B"][k]);
         }
     }
+
+    // Fitted to the percentiles instead: each channel's 1st and 99th.
+    let fitted = c.execute("const f = document.querySelector('#tensor-fit'); f.value = 'percentile'; f.dispatchEvent(new Event('change')); return JSON.parse(document.querySelector('#tensor-rgb').dataset.ranges);", vec![]).await.unwrap();
+    for (k, &ch) in picked.iter().enumerate() {
+        let mut values: Vec<f64> = data.iter().skip(ch).step_by(channels).map(|&v| f64::from(v)).collect();
+        values.sort_by(f64::total_cmp);
+        let at = |p: f64| values[(p * (values.len() - 1) as f64).round() as usize];
+        let got = [fitted[k][0].as_f64().unwrap(), fitted[k][1].as_f64().unwrap()];
+        assert!(same(got[0], at(0.01)) && same(got[1], at(0.99)), "channel {ch}'s percentiles: {got:?}, want {} … {}", at(0.01), at(0.99));
+    }
+    c.execute("const f = document.querySelector('#tensor-fit'); f.value = 'minmax'; f.dispatchEvent(new Event('change')); return true;", vec![]).await.unwrap();
 
     // Under the mouse: every channel's exact value at that pixel.
     let (x, y) = (41usize, 17usize);
