@@ -10,6 +10,11 @@
 import * as api from './api.js';
 import { $, el } from './util.js';
 
+/** A connection subscribes to at most 64 outputs (PROTOCOL.md, "Limits"),
+ * the open tensor and the path view's among them: a larger network than
+ * OIDN's has its first ones listed. */
+const MAX_LISTED = 56;
+
 export class TensorList {
   /** `subscribe(wanted)` captures these outputs; `open(pass, output)` shows one. */
   constructor(subscribe, open) {
@@ -39,7 +44,8 @@ export class TensorList {
   wanted() {
     return this.passes
       .filter((p) => p.name.startsWith('denoise') && p.status !== 'culled')
-      .flatMap((p) => (p.writes || []).filter((w) => w.kind === 'buffer').map((w) => ({ pass: p.name, output: w.name })));
+      .flatMap((p) => (p.writes || []).filter((w) => w.kind === 'buffer').map((w) => ({ pass: p.name, output: w.name })))
+      .slice(0, MAX_LISTED);
   }
 
   async refresh() {
