@@ -102,11 +102,10 @@ impl Log for Dead {
 async fn until(c: &Client, server: &impl Log, what: &str, js: &str) -> serde_json::Value {
     let start = Instant::now();
     loop {
-        if let Ok(v) = c.execute(&format!("return ({js});"), vec![]).await {
-            if !(v.is_null() || v == false || v == "" || v == 0) {
+        if let Ok(v) = c.execute(&format!("return ({js});"), vec![]).await
+            && !(v.is_null() || v == false || v == "" || v == 0) {
                 return v;
             }
-        }
         if start.elapsed() > LIMIT {
             let html = c.source().await.unwrap_or_default();
             panic!("timed out waiting for {what}\n--- page ---\n{}\n--- server ---\n{}", &html[..html.len().min(4000)], server.log());
