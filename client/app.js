@@ -272,7 +272,7 @@ const inspector = new Inspector({
 });
 
 // The tensor view takes the inspector's place: one set of outputs for both.
-const tensors = new TensorView(streamF32('inspector'));
+const tensors = new TensorView(streamF32('inspector'), streamF32('tensor-list'));
 $('tensor-close').addEventListener('click', () => {
   tensors.hide();
   $('inspector').hidden = false;
@@ -283,6 +283,7 @@ $('tensor-close').addEventListener('click', () => {
 function applyPasses(passes) {
   state.passes = Array.isArray(passes) ? passes : [];
   pathView.setPasses(state.passes);
+  tensors.setPasses(state.passes);
   if (!passList.set(state.passes)) return false;
   const broken = state.passes.filter((p) => p.status === 'stale' || p.status === 'failed');
   const badge = $('frame-badge');

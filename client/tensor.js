@@ -2,22 +2,29 @@
 // later a network's activations) read as the tensor its layout describes.
 // It shows the shape, element type and per-channel statistics, and plots
 // the values as bars (one per element) when there are few enough to see;
-// hovering a bar reads its index and exact value.
+// hovering a bar reads its index and exact value. An image-shaped tensor
+// ([y, x, channel]) is shown as images instead (tensor_image.js), and a
+// denoiser tensor with the list of all of the denoiser's (tensor_list.js).
 //
 // Test hooks: #tensor-panel[data-key], #tensor-shape, #tensor-stats,
 // #tensor-plot (canvas, data-bars = bars drawn), #tensor-readout.
 
 import * as api from './api.js';
 import { $, el, encodePath } from './util.js';
+import { TensorImage, isImage } from './tensor_image.js';
+import { TensorList } from './tensor_list.js';
 
 /** Above this many elements the plot would be a smear: stats only. */
 const MAX_BARS = 4096;
 const REFRESH_MS = 250;
 
 export class TensorView {
-  /** `subscribe(wanted)` asks the server to capture these outputs each frame. */
-  constructor(subscribe) {
+  /** `subscribe(wanted)` asks the server to capture these outputs each frame;
+   * `subscribeList` the same for the denoiser's list. */
+  constructor(subscribe, subscribeList) {
     this.subscribe = subscribe;
+    this.image = new TensorImage();
+    this.list = new TensorList(subscribeList, (pass, output) => this.show(pass, output));
     this.root = $('tensor-panel');
     this.title = $('tensor-title');
     this.shape = $('tensor-shape');
@@ -44,13 +51,21 @@ export class TensorView {
     this.title.textContent = `${pass}/${output}`;
     this.data = null;
     this.subscribe([{ pass, output }]);
+    this.list.follow(pass, output);
     this.refresh();
+  }
+
+  /** The newest pass list (the denoiser's tensors to list). */
+  setPasses(passes) {
+    this.list.setPasses(passes);
   }
 
   hide() {
     this.target = null;
     this.root.hidden = true;
     delete this.root.dataset.key;
+    this.image.hide();
+    this.list.follow(null);
   }
 
   /** A frame was rendered: fetch the new values, at most every REFRESH_MS
@@ -80,6 +95,7 @@ export class TensorView {
       this.meta = meta;
       this.data = new Float32Array(bytes);
       this.render();
+      await this.list.refresh();
     } catch (err) {
       if (err instanceof api.ApiError && err.notFound) {
         // Not captured yet: the subscription makes the next frame capture
@@ -103,6 +119,10 @@ export class TensorView {
       el('table', {}, el('tr', {}, el('th', { text: '' }), el('th', { text: 'min' }), el('th', { text: 'max' }), el('th', { text: 'mean' })), ...channels),
       el('div', { class: 'tensor-counts', text: `NaN ${stats.nan} · Inf ${stats.inf} · negative ${stats.negative}` }),
     );
+    const image = isImage(layout);
+    this.canvas.hidden = image;
+    if (image) this.image.show(layout, this.data);
+    else this.image.hide();
     this.draw();
   }
 

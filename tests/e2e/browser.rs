@@ -102,11 +102,10 @@ impl Log for Dead {
 async fn until(c: &Client, server: &impl Log, what: &str, js: &str) -> serde_json::Value {
     let start = Instant::now();
     loop {
-        if let Ok(v) = c.execute(&format!("return ({js});"), vec![]).await {
-            if !(v.is_null() || v == false || v == "" || v == 0) {
+        if let Ok(v) = c.execute(&format!("return ({js});"), vec![]).await
+            && !(v.is_null() || v == false || v == "" || v == 0) {
                 return v;
             }
-        }
         if start.elapsed() > LIMIT {
             let html = c.source().await.unwrap_or_default();
             panic!("timed out waiting for {what}\n--- page ---\n{}\n--- server ---\n{}", &html[..html.len().min(4000)], server.log());
@@ -518,5 +517,118 @@ async fn the_renderer_switch_counts_samples_and_measures_path_against_raster() {
     // Set in the Scene panel instead, the switch follows.
     c.execute("const s = document.querySelector('#controls [data-path=\"quality.renderer\"]'); s.value = 'path'; s.dispatchEvent(new Event('change')); return true;", vec![]).await.unwrap();
     until(&c, &s, "the switch following the Scene panel", "document.querySelector('#renderer-path').getAttribute('aria-pressed') === 'true'").await;
+    c.close().await.unwrap();
+}
+
+/// A denoiser tensor in the page: every denoiser tensor listed with its
+/// statistics, three picked channels as RGB equal to the values the server
+/// serves (each mapped from its own min…max), the value of every channel
+/// under the mouse exact, a grid cell and a histogram per channel.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
+    let weights = loupe_tests::repo().join("../shared/weights/oidn/rt_ldr_alb_nrm.tza");
+    assert!(weights.is_file(), "OIDN's weights are read from {} (never copied into the repository)", weights.display());
+    let p = Project::copy_of_repo("browser-denoiser");
+    // Small, with few samples: lavapipe traces and denoises it in a few frames.
+    let small = p.read("scenes/minimal.toml").replacen("width = 640", "width = 64", 1).replacen("height = 360", "height = 48", 1);
+    assert!(small.contains("width = 64") && small.contains("height = 48") && !small.contains("[quality]"), "minimal.toml's settings moved: update this test");
+    let denoiser = format!("\n[quality]\nrenderer = \"path\"\npath_spp = 2\n\n[denoiser]\nweights = \"{}\"\nmode = \"ldr\"\n", weights.display());
+    p.write("scenes/small.toml", small + &denoiser);
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/small.toml"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    until(&c, &s, "convergence", "document.querySelector('#path-samples[data-converged=\"true\"]')").await;
+    let (pass, w, h) = ("denoise.enc_conv0", 64usize, 48usize);
+    let chip = format!("#passes li[data-pass=\"{pass}\"][data-status=\"ok\"] .chip[data-output=\"tensor\"]");
+    until(&c, &s, "the first convolution's chip", &format!("document.querySelector('{chip}')")).await;
+    c.find(Locator::Css(&chip)).await.unwrap().click().await.unwrap();
+    until(&c, &s, "the RGB view", &format!("!document.querySelector('#tensor-image').hidden && document.querySelector('#tensor-rgb').width === {w}")).await;
+
+    // Every denoiser tensor the frame makes is listed.
+    let tensors: Vec<String> = s.get_json("/api/passes").as_array().unwrap().iter()
+        .filter(|p| p["name"].as_str().unwrap().starts_with("denoise") && p["status"] == "ok")
+        .flat_map(|p| p["writes"].as_array().unwrap().iter().filter(|w| w["kind"] == "buffer" && w["name"] != "overflow").map(|w| format!("{}/{}", p["name"].as_str().unwrap(), w["name"].as_str().unwrap())).collect::<Vec<_>>())
+        .collect();
+    assert!(tensors.len() > 10 && tensors.iter().any(|t| t == "denoise.pool1/tensor"), "{tensors:?}");
+    until(&c, &s, "every denoiser tensor listed", &format!("document.querySelector('#tensor-list').dataset.count === '{}'", tensors.len())).await;
+    let listed = c.execute("return Array.from(document.querySelectorAll('#tensor-list tr[data-key]'), r => [r.dataset.key, ...Array.from(r.cells, d => d.textContent)]);", vec![]).await.unwrap();
+    let listed = listed.as_array().unwrap();
+    for t in &tensors {
+        assert!(listed.iter().any(|r| r[0] == t.as_str()), "{t} listed: {listed:?}");
+    }
+
+    // The tensor the page shows is the one served (nothing renders once converged).
+    let meta = s.get_json(&format!("/api/tensors/{pass}/tensor"));
+    let channels = meta["layout"]["dims"][2][1].as_u64().unwrap() as usize;
+    assert_eq!(meta["layout"]["dims"], serde_json::json!([["y", h], ["x", w], ["channel", channels]]));
+    let (status, bytes) = s.get(&format!("/api/tensors/{pass}/tensor.f32"));
+    assert_eq!(status, 200);
+    let data: Vec<f32> = bytes.chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect();
+    assert_eq!(data.len(), w * h * channels);
+    until(&c, &s, "the page showing the served frame", &format!("document.querySelector('#tensor-shape').textContent.endsWith('frame {}')", meta["frame"])).await;
+    assert_eq!(s.get_json(&format!("/api/tensors/{pass}/tensor"))["frame"], meta["frame"], "no frame rendered meanwhile");
+    let row = listed.iter().find(|r| r[0] == format!("{pass}/tensor").as_str()).unwrap();
+    let lo = meta["stats"]["min"].as_array().unwrap();
+    assert_eq!(row[2], format!("{h} × {w} × {channels}"));
+    assert_eq!(row[3], "[y, x, channel] f32");
+    let min = lo.iter().map(|v| v.as_f64().unwrap()).fold(f64::INFINITY, f64::min);
+    assert!((row[4].as_str().unwrap().parse::<f64>().unwrap() - min).abs() <= 1e-3 * min.abs().max(1e-3), "listed min {} of {min}", row[4]);
+
+    // Three channels picked as R, G, B: each pixel is the tensor's value
+    // mapped from that channel's min…max. (serde_json may read a float
+    // one ulp off: the same double, as far as JSON goes.)
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-15 * b.abs();
+    let picked = [5usize, 0, channels - 5];
+    c.execute(&format!("['#tensor-r', '#tensor-g', '#tensor-b'].forEach((id, k) => {{ const s = document.querySelector(id); s.value = String({picked:?}[k]); s.dispatchEvent(new Event('change')); }}); return true;"), vec![]).await.unwrap();
+    let drawn = c.execute("const c = document.querySelector('#tensor-rgb'); return [JSON.parse(c.dataset.ranges), Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data)];", vec![]).await.unwrap();
+    let pixels: Vec<u8> = drawn[1].as_array().unwrap().iter().map(|v| v.as_u64().unwrap() as u8).collect();
+    assert_eq!(pixels.len(), w * h * 4);
+    for (k, &ch) in picked.iter().enumerate() {
+        let values = || data.iter().skip(ch).step_by(channels).map(|&v| f64::from(v));
+        let (lo, hi) = (values().fold(f64::INFINITY, f64::min), values().fold(f64::NEG_INFINITY, f64::max));
+        assert!(hi > lo, "channel {ch} varies");
+        let range = [drawn[0][k][0].as_f64().unwrap(), drawn[0][k][1].as_f64().unwrap()];
+        assert!(same(range[0], lo) && same(range[1], hi), "channel {ch}'s range {range:?} is its min…max {lo} … {hi}");
+        for (i, v) in values().enumerate() {
+            let want = ((v - lo) / (hi - lo) * 255.0).round();
+            let got = f64::from(pixels[i * 4 + k]);
+            assert!((got - want).abs() <= 1.0, "pixel {i} {}: {got}, want {want} (channel {ch} = {v})", ["R", "G", "B"][k]);
+        }
+    }
+
+    // Fitted to the percentiles instead: each channel's 1st and 99th.
+    let fitted = c.execute("const f = document.querySelector('#tensor-fit'); f.value = 'percentile'; f.dispatchEvent(new Event('change')); return JSON.parse(document.querySelector('#tensor-rgb').dataset.ranges);", vec![]).await.unwrap();
+    for (k, &ch) in picked.iter().enumerate() {
+        let mut values: Vec<f64> = data.iter().skip(ch).step_by(channels).map(|&v| f64::from(v)).collect();
+        values.sort_by(f64::total_cmp);
+        let at = |p: f64| values[(p * (values.len() - 1) as f64).round() as usize];
+        let got = [fitted[k][0].as_f64().unwrap(), fitted[k][1].as_f64().unwrap()];
+        assert!(same(got[0], at(0.01)) && same(got[1], at(0.99)), "channel {ch}'s percentiles: {got:?}, want {} … {}", at(0.01), at(0.99));
+    }
+    c.execute("const f = document.querySelector('#tensor-fit'); f.value = 'minmax'; f.dispatchEvent(new Event('change')); return true;", vec![]).await.unwrap();
+
+    // Under the mouse: every channel's exact value at that pixel.
+    let (x, y) = (41usize, 17usize);
+    let hover = format!(
+        "const c = document.querySelector('#tensor-rgb'); const r = c.getBoundingClientRect();
+         c.dispatchEvent(new MouseEvent('mousemove', {{ clientX: r.left + ({x} + 0.5) * r.width / {w}, clientY: r.top + ({y} + 0.5) * r.height / {h} }}));
+         const p = document.querySelector('#tensor-pixel'); return [Number(p.dataset.x), Number(p.dataset.y), JSON.parse(p.dataset.values)];"
+    );
+    let read = c.execute(&hover, vec![]).await.unwrap();
+    assert_eq!((read[0].as_u64(), read[1].as_u64()), (Some(x as u64), Some(y as u64)));
+    let values: Vec<f64> = read[2].as_array().unwrap().iter().map(|v| v.as_str().unwrap().parse().unwrap()).collect();
+    let want: Vec<f64> = data[(y * w + x) * channels..][..channels].iter().map(|&v| f64::from(v)).collect();
+    assert_eq!(values, want, "the readout is every channel's value at ({x}, {y})");
+
+    // Small multiples: one cell per channel; a histogram per channel, of
+    // every pixel; the colour map.
+    let view = |v: &str| format!("const s = document.querySelector('#tensor-view'); s.value = '{v}'; s.dispatchEvent(new Event('change'));");
+    let cells = c.execute(&format!("{} return document.querySelectorAll('#tensor-grid:not([hidden]) canvas[data-channel]').length;", view("grid")), vec![]).await.unwrap();
+    assert_eq!(cells.as_u64(), Some(channels as u64), "one grid cell per channel");
+    let bins = c.execute(&format!("{} return Array.from(document.querySelectorAll('#tensor-histograms:not([hidden]) canvas[data-channel]'), c => JSON.parse(c.dataset.bins).reduce((a, b) => a + b, 0));", view("histograms")), vec![]).await.unwrap();
+    assert_eq!(bins, serde_json::json!(vec![w * h; channels]), "a histogram per channel, of every pixel");
+    let cmap = c.execute(&format!("{} return document.querySelector('#tensor-cmap').hidden ? 0 : document.querySelector('#tensor-cmap').width;", view("colormap")), vec![]).await.unwrap();
+    assert_eq!(cmap.as_u64(), Some(w as u64), "the colour map view");
     c.close().await.unwrap();
 }

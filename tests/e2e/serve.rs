@@ -82,7 +82,7 @@ fn a_change_to_an_imported_module_rebuilds_only_its_dependents() {
     for (rel, content) in [(BRDF, changed.as_str()), (UNUSED, "#define_import_path demo::unused\nfn nothing() {}\n"), (TONEMAP, &tonemap)] {
         let o = d.save(rel, content).unwrap_or_else(|| panic!("no reload for {rel}\n{}", s.log()));
         assert!(o.succeeded, "{rel}: {:?}", d.events);
-        events.extend(d.events.drain(..));
+        events.append(&mut d.events);
     }
     let started: Vec<(Vec<String>, BTreeSet<String>)> = events
         .iter()

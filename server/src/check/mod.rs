@@ -353,7 +353,10 @@ fn guarded<T>(display: &str, who: &str, f: impl FnOnce() -> Result<T, Vec<Diagno
 
 /// Silences the default panic message while compile steps run: a panic
 /// there is reported as a diagnostic, not as a backtrace on stderr.
-struct QuietPanics(Option<Box<dyn Fn(&std::panic::PanicHookInfo<'_>) + Sync + Send + 'static>>);
+struct QuietPanics(Option<PanicHook>);
+
+/// A panic hook, as `std::panic::take_hook` returns it.
+type PanicHook = Box<dyn Fn(&std::panic::PanicHookInfo<'_>) + Sync + Send + 'static>;
 
 impl QuietPanics {
     fn install() -> Self {

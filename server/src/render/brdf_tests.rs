@@ -153,8 +153,8 @@ fn the_brdf_pdf_is_a_density_and_sampling_estimates_the_albedo_it_integrates() {
             let (pdf, again) = (o.a[3], o.b[3]);
             assert!(o.a.iter().chain(&o.b).all(|x| x.is_finite()), "{case}: {o:?}");
             assert!((pdf - again).abs() <= 1e-4 * pdf.max(1.0), "{case}: a sample's pdf {pdf} vs brdf_pdf {again}");
-            for c in 0..3 {
-                estimate[c] += f64::from(o.b[c]) / out.len() as f64;
+            for (e, b) in estimate.iter_mut().zip(&o.b) {
+                *e += f64::from(*b) / out.len() as f64;
             }
         }
         for c in 0..3 {

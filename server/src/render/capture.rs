@@ -299,9 +299,9 @@ impl TensorStats {
             count[c] += 1;
         }
         s.mean = sum.iter().zip(&count).map(|(s, n)| if *n == 0 { 0.0 } else { (s / *n as f64) as f32 }).collect();
-        for c in 0..channels {
-            if count[c] == 0 {
-                (s.min[c], s.max[c]) = (0.0, 0.0);
+        for ((min, max), n) in s.min.iter_mut().zip(s.max.iter_mut()).zip(&count) {
+            if *n == 0 {
+                (*min, *max) = (0.0, 0.0);
             }
         }
         s

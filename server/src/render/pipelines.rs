@@ -126,13 +126,12 @@ impl PipelineCache {
             files: vec![shader_display.to_owned()],
             sources: None,
         });
-        if let Ok(c) = &result {
-            if entry.current.is_some() && Some(c.sources) == entry.sources {
+        if let Ok(c) = &result
+            && entry.current.is_some() && Some(c.sources) == entry.sources {
                 entry.files = c.composed.files.clone();
                 entry.diagnostics.clear();
                 return Installed::Unchanged;
             }
-        }
         let created = result.and_then(|Compiled { composed, sources }| {
             entry.files = composed.files.clone();
             pipeline::create(device, key.spec, &key.defs, &composed, lib, shader_display).map(|p| (p, composed, sources))

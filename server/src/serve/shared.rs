@@ -48,6 +48,9 @@ pub struct Shared {
     pub controls: RwLock<ControlsReport>,
 }
 
+/// One encoding of one image, made once by whichever client asks first.
+type Encoded = Arc<OnceLock<Arc<[u8]>>>;
+
 /// One frame's captured images: the final output and every output some
 /// client subscribed to. Each encoding of each image is made once, by the
 /// first client that sends it, and shared by the others.
@@ -58,7 +61,7 @@ pub struct FrameImages {
     pub final_key: Option<String>,
     /// This frame's captures by `pass/output`.
     pub captures: BTreeMap<String, Arc<CapturedImage>>,
-    encoded: Mutex<BTreeMap<(String, Encoding), Arc<OnceLock<Arc<[u8]>>>>>,
+    encoded: Mutex<BTreeMap<(String, Encoding), Encoded>>,
 }
 
 impl FrameImages {

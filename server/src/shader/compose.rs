@@ -241,6 +241,9 @@ pub fn check_library(
 /// lines become blanks) and tags spans with a module index in the high bits,
 /// so masking and subtracting the module's start offset gives a byte offset
 /// into text with the same lines as the original.
+/// Spans in the composed text and their messages.
+type Labels = Vec<(Range<usize>, String)>;
+
 fn from_composer(composer: &Composer, err: ComposerError, deps: &[Arc<SourceFile>], entry: &SourceFile) -> Diagnostic {
     const SPAN_SHIFT: usize = 21; // naga_oil's module-index shift
     let path = err.source.path(composer).clone();
@@ -251,7 +254,7 @@ fn from_composer(composer: &Composer, err: ComposerError, deps: &[Arc<SourceFile
         (r.start & mask).saturating_sub(offset)..(r.end & mask).saturating_sub(offset)
     };
     let point = |p: usize| vec![(p..p, String::new())];
-    let (code, labels, notes): (Code, Vec<(Range<usize>, String)>, Vec<String>) = match &err.inner {
+    let (code, labels, notes): (Code, Labels, Vec<String>) = match &err.inner {
         ComposerErrorInner::WgslParseError(e) => (
             Code::Parse,
             e.labels().map(|(s, m)| (map(s.to_range().unwrap_or(0..0)), m.to_owned())).collect(),

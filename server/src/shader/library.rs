@@ -239,14 +239,11 @@ impl Library {
         let mut by_line: BTreeMap<usize, (bool, &str)> = BTreeMap::new();
         for (import, range) in &file.imports {
             let entry = by_line.entry(range.start).or_insert((false, import));
-            match self.resolve(import) {
-                Some(dep) => {
-                    entry.0 = true;
-                    if !found.iter().any(|f| f.display == dep.display) {
-                        found.push(dep.clone());
-                    }
+            if let Some(dep) = self.resolve(import) {
+                entry.0 = true;
+                if !found.iter().any(|f| f.display == dep.display) {
+                    found.push(dep.clone());
                 }
-                None => {}
             }
         }
         for (start, (resolved, import)) in by_line {
