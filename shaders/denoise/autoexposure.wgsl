@@ -3,29 +3,13 @@
 // colour's geometric-mean luminance to 0.18. Two entry points, one
 // workgroup per bin and then one for the whole image.
 
+#import loupe::sanitize::{F32_MAX, sanitize, sanitize3}
+
 @group(0) @binding(0) var color: texture_2d<f32>;
 // Each bin's mean luminance, row by row.
 @group(0) @binding(1) var<storage, read_write> bins: array<f32>;
 // The scale: one value.
 @group(0) @binding(2) var<storage, read_write> scale: array<f32>;
-
-const F32_MAX: f32 = 3.40282347e+38;
-
-fn is_nan(v: f32) -> bool {
-    return (bitcast<u32>(v) & 0x7fffffffu) > 0x7f800000u;
-}
-
-// `process::sanitize`: NaN to 0, then clamped.
-fn sanitize(v: f32, lo: f32, hi: f32) -> f32 {
-    if is_nan(v) {
-        return 0.0;
-    }
-    return clamp(v, lo, hi);
-}
-
-fn sanitize3(v: vec3<f32>, lo: f32, hi: f32) -> vec3<f32> {
-    return vec3(sanitize(v.x, lo, hi), sanitize(v.y, lo, hi), sanitize(v.z, lo, hi));
-}
 
 // `process::autoexposure`, first half: the colour cut into bins of at most
 // 16×16 pixels (one workgroup each), a bin's mean luminance.

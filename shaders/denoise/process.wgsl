@@ -7,6 +7,7 @@
 // `autoexposure.wgsl` measured; otherwise LDR: sRGB, scale 1.
 
 #import loupe::tensor::{load, store}
+#import loupe::sanitize::{F32_MAX, sanitize, sanitize3}
 
 #ifdef F16
 alias Stored = vec2<u32>;
@@ -48,24 +49,6 @@ struct Output {
 // The input scale (`autoexposure.wgsl`).
 @group(1) @binding(0) var<storage, read> scale: array<f32>;
 #endif
-
-const F32_MAX: f32 = 3.40282347e+38;
-
-fn is_nan(v: f32) -> bool {
-    return (bitcast<u32>(v) & 0x7fffffffu) > 0x7f800000u;
-}
-
-// `process::sanitize`: NaN to 0, then clamped.
-fn sanitize(v: f32, lo: f32, hi: f32) -> f32 {
-    if is_nan(v) {
-        return 0.0;
-    }
-    return clamp(v, lo, hi);
-}
-
-fn sanitize3(v: vec3<f32>, lo: f32, hi: f32) -> vec3<f32> {
-    return vec3(sanitize(v.x, lo, hi), sanitize(v.y, lo, hi), sanitize(v.z, lo, hi));
-}
 
 // `Transfer::Srgb` (`process::srgb`).
 const SRGB_A: f32 = 12.92;
