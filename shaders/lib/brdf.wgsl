@@ -133,6 +133,14 @@ fn brdf_pdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, met
 
 // A direction from `u` (three uniform numbers in [0, 1)): u.x picks the
 // lobe, u.yz place the direction.
+// A cosine-distributed direction about `frame`'s z (pdf n·l / π): the
+// diffuse lobe's sample, and the path tracer's environment sample.
+fn cosine_direction(frame: mat3x3<f32>, u: vec2<f32>) -> vec3<f32> {
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    return frame * vec3(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u.x, 0.0)));
+}
+
 fn brdf_sample(n: vec3<f32>, v: vec3<f32>, u: vec3<f32>, base_color: vec3<f32>, metallic: f32, roughness: f32) -> BrdfSample {
     let frame = basis(n);
     let n_v = max(dot(n, v), 1e-4);
@@ -142,9 +150,7 @@ fn brdf_sample(n: vec3<f32>, v: vec3<f32>, u: vec3<f32>, base_color: vec3<f32>, 
         let h = frame * sample_vndf(ve, alpha(roughness), u.yz);
         l = reflect(-v, h);
     } else {
-        let r = sqrt(u.y);
-        let phi = 2.0 * PI * u.z;
-        l = frame * vec3(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u.y, 0.0)));
+        l = cosine_direction(frame, u.yz);
     }
     let pdf = brdf_pdf(n, v, l, base_color, metallic, roughness);
     if pdf <= 0.0 {

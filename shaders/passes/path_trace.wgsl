@@ -13,7 +13,7 @@
 // shadow rays by ratio tracking.
 #import loupe::view::{view, world_position}
 #import loupe::lights::{Light, lights, incident, light_type, LIGHT_RECT}
-#import loupe::brdf::{brdf_cos, brdf_pdf, brdf_sample, PI}
+#import loupe::brdf::{brdf_cos, brdf_pdf, brdf_sample, basis, cosine_direction, PI}
 #import loupe::environment::environment_radiance
 #import loupe::geometry::Material
 #import loupe::random::{random_key, random_f32}
@@ -331,11 +331,9 @@ fn direct(x: Vertex) -> vec3<f32> {
         let u = vec2(rand(), rand());
         var l: vec3<f32>;
         if x.in_medium {
-            let z = 1.0 - 2.0 * u.x;
-            let r = sqrt(max(0.0, 1.0 - z * z));
-            l = vec3(r * cos(2.0 * PI * u.y), r * sin(2.0 * PI * u.y), z);
+            l = sphere_direction(u);
         } else {
-            l = cosine_direction(x.n, u);
+            l = cosine_direction(basis(x.n), u);
         }
         let pdf = environment_pdf(x, l);
         let f = scatter(x, l);
@@ -347,15 +345,12 @@ fn direct(x: Vertex) -> vec3<f32> {
     return sum;
 }
 
-fn cosine_direction(n: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
-    let s = select(-1.0, 1.0, n.z >= 0.0);
-    let a = -1.0 / (s + n.z);
-    let b = n.x * n.y * a;
-    let t = vec3(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
-    let bt = vec3(b, s + n.y * n.y * a, -n.y);
-    let r = sqrt(u.x);
-    let phi = 2.0 * PI * u.y;
-    return t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - u.x));
+// A uniform direction on the sphere (pdf 1 / 4π): the isotropic phase
+// function's sample, and the environment's in a medium.
+fn sphere_direction(u: vec2<f32>) -> vec3<f32> {
+    let z = 1.0 - 2.0 * u.x;
+    let r = sqrt(max(0.0, 1.0 - z * z));
+    return vec3(r * cos(2.0 * PI * u.y), r * sin(2.0 * PI * u.y), z);
 }
 
 // ---- the path -------------------------------------------------------------
@@ -428,10 +423,7 @@ fn path(pixel: vec2<u32>) -> Sample {
         var l: vec3<f32>;
         var pdf: f32;
         if x.in_medium {
-            let u = vec2(rand(), rand());
-            let z = 1.0 - 2.0 * u.x;
-            let r = sqrt(max(0.0, 1.0 - z * z));
-            l = vec3(r * cos(2.0 * PI * u.y), r * sin(2.0 * PI * u.y), z);
+            l = sphere_direction(vec2(rand(), rand()));
             pdf = ISOTROPIC;
         } else {
             let s = brdf_sample(x.n, x.v, vec3(rand(), rand(), rand()), x.base_color, x.metallic, x.roughness);

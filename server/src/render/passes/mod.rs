@@ -3,7 +3,7 @@
 //! function taking the graph builder and input handles and returning
 //! output handles. `render::build_graph` assembles them into a frame.
 
-use crate::gpu::pipeline::{Binding, Group, PipelineSpec, storage, uniform, ALL, FRAG, sizes};
+use crate::gpu::pipeline::{Binding, Group, PipelineSpec, storage, uniform, ALL, COMPUTE, FRAG, sizes};
 use crate::scene::Scene;
 
 use super::resource::PipelineKey;
@@ -49,16 +49,17 @@ pub const SHADOWS: &str = "SHADOWS";
 
 /// The camera, as `lib/view.wgsl` declares it.
 pub const VIEW: Binding = uniform("view", 0, ALL, sizes::VIEW);
-/// The scene's lights, as `lib/lights.wgsl` declares them.
-pub const LIGHTS: Binding = storage("lights", 1, FRAG);
+/// The scene's lights, as `lib/lights.wgsl` declares them: read by raster
+/// and compute passes (the path tracer).
+pub const LIGHTS: Binding = storage("lights", 1, FRAG.union(COMPUTE));
 /// Shadow maps and their views (`lib/shadows.wgsl`), with SHADOWS on.
 pub const SHADOW_GROUP: Group = Group::when(
     1,
     SHADOWS,
     &[crate::gpu::pipeline::depth_array("shadow_maps", 0), storage("shadow_views", 1, FRAG)],
 );
-/// The participating media (`lib/media.wgsl`).
-pub const MEDIA: &[Binding] = &[storage("media", 0, FRAG)];
+/// The participating media (`lib/media.wgsl`), for raster and compute passes.
+pub const MEDIA: &[Binding] = &[storage("media", 0, FRAG.union(COMPUTE))];
 
 /// A fullscreen pass's key: TWO_TRIANGLES as the scene says, plus `defs`.
 pub fn fullscreen_key(spec: &'static PipelineSpec, scene: &Scene, defs: &[(&'static str, bool)]) -> PipelineKey {

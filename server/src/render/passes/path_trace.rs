@@ -6,7 +6,7 @@
 //! denoiser takes), and `samples`. The session forgets the history, so
 //! accumulation restarts, whenever the scene or its pipeline changes.
 
-use super::VIEW;
+use super::{LIGHTS, MEDIA, VIEW};
 use crate::gpu::pipeline::{COMPUTE, Group, HDR, PipelineSpec, Stages, sizes, storage, storage_rw, storage_texture, uniform};
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Element, Handle, PipelineKey, TensorLayout, TextureDesc};
@@ -31,7 +31,7 @@ pub static PATH_TRACE: PipelineSpec = PipelineSpec {
             0,
             &[
                 VIEW,
-                storage("lights", 1, COMPUTE),
+                LIGHTS,
                 storage("materials", 2, COMPUTE),
                 storage("shading", 3, COMPUTE),
                 uniform("params", 4, COMPUTE, sizes::VEC4),
@@ -43,7 +43,7 @@ pub static PATH_TRACE: PipelineSpec = PipelineSpec {
             ],
         ),
         Group::always(1, &[storage("nodes", 0, COMPUTE), storage("triangles", 1, COMPUTE)]),
-        Group::when(3, MEDIA_DEF, &[storage("media", 0, COMPUTE)]),
+        Group::when(3, MEDIA_DEF, MEDIA),
     ],
     defs: &[MEDIA_DEF],
 };
