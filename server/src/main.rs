@@ -54,8 +54,9 @@ enum Command {
     /// frames, captures none / final / all measured interleaved).
     Bench(BenchArgs),
     /// Denoise an image with an OIDN U-Net, as OIDN's `oidnDenoise` does,
-    /// on OIDN's weights files (.tza). Runs the CPU reference until the GPU
-    /// network lands.
+    /// on OIDN's weights files (.tza): on the GPU, with the frame's own
+    /// denoiser passes (tiled when the image's tensors exceed the device's
+    /// limits or --max-memory-mb), or on the CPU reference.
     ///
     /// Images: PFM, OpenEXR or PNG (by extension). PFM and EXR hold linear
     /// values; a PNG colour is sRGB-decoded and the output PNG encoded,
@@ -103,9 +104,33 @@ struct DenoiseArgs {
     #[arg(short = 'o', long)]
     output: PathBuf,
     /// Write every tensor of the network into this directory as
-    /// `<name>.npy` (height, width, channels of the padded image).
+    /// `<name>.npy` (height, width, channels of the padded image; on the
+    /// GPU per tile, `tile<i>/`, when it cut the image into tiles).
     #[arg(long, value_name = "DIR")]
     dump_tensors: Option<PathBuf>,
+    /// Where the network runs.
+    #[arg(short = 'd', long, value_enum, default_value = "gpu")]
+    device: loupe::denoise::offline::Device,
+    /// Project root: where shaders/ is (the GPU's).
+    #[arg(long, default_value = ".")]
+    root: PathBuf,
+    /// The most memory one tile's tensors may take on the GPU, in MiB
+    /// (OIDN's `--maxmem`): larger images are cut into tiles that overlap
+    /// by the network's receptive radius.
+    #[arg(long, default_value_t = 2048, value_parser = clap::value_parser!(u64).range(1..=1 << 20))]
+    max_memory_mb: u64,
+    /// The GPU's tile side in pixels instead of the largest that fits: a
+    /// multiple of 16, more than twice the receptive radius (224 or more
+    /// for OIDN's networks).
+    #[arg(long, value_parser = parse_tile)]
+    tile: Option<u32>,
+}
+
+fn parse_tile(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(n) if n > 0 && n % 16 == 0 && n <= 16384 => Ok(n),
+        _ => Err(format!("{s} is not a tile side: a multiple of 16 up to 16384")),
+    }
 }
 
 fn parse_scale(s: &str) -> Result<f32, String> {
@@ -380,6 +405,10 @@ fn run_denoise(args: DenoiseArgs) -> ExitCode {
         precision: args.precision,
         output: args.output,
         dump_tensors: args.dump_tensors,
+        device: args.device,
+        shader_root: args.root.join("shaders"),
+        max_memory_mb: args.max_memory_mb,
+        tile: args.tile,
     };
     match offline::run(&job) {
         Ok(r) => {
@@ -387,22 +416,30 @@ fn run_denoise(args: DenoiseArgs) -> ExitCode {
                 Some(dir) => format!(", {} tensors in {}", r.tensors_dumped, dir.display()),
                 None => String::new(),
             };
+            let tiles = match r.window {
+                Some(side) if r.tiles > 1 => format!(" in {} tiles of {side}x{side}", r.tiles),
+                _ => String::new(),
+            };
             println!(
-                "{}: {}x{}, {}, input scale {}, network {:.3} s on the CPU reference{dumped}",
+                "{}: {}x{}, {}, input scale {}, network {:.3} s on {}{tiles}{dumped}",
                 job.output.display(),
                 r.width,
                 r.height,
                 r.inputs.describe(),
                 r.input_scale,
-                r.network_seconds
+                r.network_seconds,
+                r.device
             );
             ExitCode::from(exit::OK)
         }
         Err(d) => {
             use loupe::diag::Code;
             print_diagnostics(std::slice::from_ref(&d));
-            let unreadable = matches!(d.code, Code::Io | Code::FileTooLarge);
-            ExitCode::from(if unreadable { exit::USAGE } else { exit::ERRORS })
+            ExitCode::from(match d.code {
+                Code::Io | Code::FileTooLarge => exit::USAGE,
+                Code::DeviceMissing => exit::NO_DEVICE,
+                _ => exit::ERRORS,
+            })
         }
     }
 }

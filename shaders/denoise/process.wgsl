@@ -3,8 +3,10 @@
 // OIDN's, `core/color.h`): `input` is `process::input` (the network's
 // input tensor from the path tracer's colour, albedo and normal) and
 // `output` is `process::output` (the denoised colour from the network's
-// output). HDR: the PU transfer function and the input scale that
-// `autoexposure.wgsl` measured; otherwise LDR: sRGB, scale 1.
+// output). The transfer function is the mode's: HDR the PU curve, LDR_SRGB
+// none (the colour is sRGB-encoded already), otherwise sRGB. The input
+// scale is what `autoexposure.wgsl` measured (AUTOEXPOSURE) or the one
+// the uniforms carry (given, or 1).
 
 #import loupe::tensor::{load, store}
 #import loupe::sanitize::{F32_MAX, sanitize, sanitize3}
@@ -23,7 +25,8 @@ struct Input {
     padded_height: u32,
     // Channel blocks of the tensor: 1 (colour), 2 (+ albedo), 3 (+ normal).
     blocks: u32,
-    _pad0: u32,
+    // The input scale unless AUTOEXPOSURE.
+    scale: f32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -32,7 +35,7 @@ struct Output {
     width: u32,
     height: u32,
     padded_width: u32,
-    _pad: u32,
+    scale: f32,
 }
 
 @group(0) @binding(0) var<uniform> input_params: Input;
@@ -45,7 +48,7 @@ struct Output {
 @group(0) @binding(6) var<storage, read> network_output: array<Stored>;
 @group(0) @binding(7) var denoised: texture_storage_2d<rgba32float, write>;
 
-#ifdef HDR
+#ifdef AUTOEXPOSURE
 // The input scale (`autoexposure.wgsl`).
 @group(1) @binding(0) var<storage, read> scale: array<f32>;
 #endif
@@ -111,6 +114,8 @@ fn pu_inverse(x: f32) -> f32 {
 fn forward(y: f32) -> f32 {
 #ifdef HDR
     return pu_forward(y) * (1.0 / pu_forward(Y_MAX));
+#else ifdef LDR_SRGB
+    return y;
 #else
     return srgb_forward(y);
 #endif
@@ -119,17 +124,19 @@ fn forward(y: f32) -> f32 {
 fn inverse(x: f32) -> f32 {
 #ifdef HDR
     return pu_inverse(x * pu_forward(Y_MAX));
+#else ifdef LDR_SRGB
+    return x;
 #else
     return srgb_inverse(x);
 #endif
 }
 
 // What multiplies the colour before the network (`process::input_scale`).
-fn input_scale() -> f32 {
-#ifdef HDR
+fn input_scale(given: f32) -> f32 {
+#ifdef AUTOEXPOSURE
     return scale[0];
 #else
-    return 1.0;
+    return given;
 #endif
 }
 
@@ -151,7 +158,7 @@ fn input(@builtin(global_invocation_id) id: vec3<u32>) {
 #else
         let hi = 1.0;
 #endif
-        let s = input_scale();
+        let s = input_scale(p.scale);
         let c0 = sanitize3(textureLoad(color, id.xy, 0).rgb * s, 0.0, hi);
         let c = vec3(forward(c0.r), forward(c0.g), forward(c0.b));
         let a = sanitize3(textureLoad(albedo, id.xy, 0).rgb, 0.0, 1.0);
@@ -189,7 +196,7 @@ fn output(@builtin(global_invocation_id) id: vec3<u32>) {
 #ifndef HDR
     v = min(v, vec3(1.0));
 #endif
-    let s = input_scale();
+    let s = input_scale(p.scale);
     let out_scale = select(0.0, 1.0 / s, s != 0.0);
     textureStore(denoised, id.xy, vec4(v * out_scale, 1.0));
 }

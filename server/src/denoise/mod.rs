@@ -12,7 +12,9 @@ pub mod cpu;
 pub mod image;
 pub mod network;
 pub mod offline;
+pub mod on_gpu;
 pub mod process;
+pub mod tiles;
 pub mod tza;
 
 use crate::diag::{Code, Diagnostic, Location};

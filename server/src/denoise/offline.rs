@@ -1,5 +1,5 @@
-//! `loupe denoise`: OIDN's `oidnDenoise` on loupe's network. Until the GPU
-//! network lands it runs the CPU reference.
+//! `loupe denoise`: OIDN's `oidnDenoise` on loupe's network, on the GPU
+//! (the frame's own denoiser passes, `on_gpu`) or on the CPU reference.
 //!
 //! Files are treated as `oidnDenoise` treats them (`apps/oidnDenoise.cpp`,
 //! `apps/utils/image_io.cpp`): PFM and EXR hold linear values; a PNG colour
@@ -10,11 +10,24 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use std::sync::Arc;
+
 use super::image::{self, Format, Image};
 use super::network::{Inputs, Network};
 use super::process::{self, Mode, Transfer};
-use super::{Precision, cpu, tza};
+use super::{Precision, cpu, on_gpu, tza};
 use crate::diag::{Code, Diagnostic, Location};
+use crate::render::passes::images::TileImages;
+
+/// Where the network runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Device {
+    /// The denoiser's WGSL passes, on the GPU wgpu opens (lavapipe when
+    /// there is none).
+    Gpu,
+    /// The plain-Rust reference (`denoise::cpu`).
+    Cpu,
+}
 
 pub struct Job {
     pub weights: PathBuf,
@@ -26,8 +39,16 @@ pub struct Job {
     pub input_scale: Option<f32>,
     pub precision: Precision,
     pub output: PathBuf,
-    /// Where every tensor of the network goes as `<name>.npy`.
+    /// Where every tensor of the network goes as `<name>.npy` (per tile,
+    /// `tile<i>/<name>.npy`, when the GPU cut the image into tiles).
     pub dump_tensors: Option<PathBuf>,
+    pub device: Device,
+    /// The GPU's shaders (`shaders/` of the project).
+    pub shader_root: PathBuf,
+    /// The most memory one tile's tensors may take on the GPU.
+    pub max_memory_mb: u64,
+    /// The GPU's tile side instead of the largest that fits.
+    pub tile: Option<u32>,
 }
 
 /// What was done, for the command's summary line.
@@ -37,9 +58,15 @@ pub struct Report {
     pub height: usize,
     pub inputs: Inputs,
     pub input_scale: f32,
-    /// The network alone (pre- and post-processing excluded).
+    /// The network: on the CPU alone; on the GPU with its pre- and
+    /// post-processing passes and the uploads and readbacks of its tiles.
     pub network_seconds: f64,
     pub tensors_dumped: usize,
+    /// "the CPU reference", or the adapter.
+    pub device: String,
+    /// The GPU's tiles (1 on the CPU) and their window side.
+    pub tiles: usize,
+    pub window: Option<u32>,
 }
 
 fn display(path: &Path) -> String {
@@ -72,32 +99,77 @@ pub fn run(job: &Job) -> Result<Report, Diagnostic> {
     let normal = job.normal.as_deref().map(|p| read(p, false, Some(&color))).transpose()?;
 
     let scale = process::input_scale(job.mode, job.input_scale, &color);
-    let input = process::input(&color, albedo.as_ref(), normal.as_ref(), job.mode, scale, net.alignment());
-    let start = Instant::now();
-    let (out, tensors) = if job.dump_tensors.is_some() {
-        let all = cpu::run_all(&net, input, job.precision);
-        (all[net.output.0].clone(), all)
-    } else {
-        (cpu::run(&net, input, job.precision), Vec::new())
+    let mut report = Report {
+        width: color.width,
+        height: color.height,
+        inputs: net.inputs,
+        input_scale: scale,
+        network_seconds: 0.0,
+        tensors_dumped: 0,
+        device: "the CPU reference".into(),
+        tiles: 1,
+        window: None,
     };
-    let network_seconds = start.elapsed().as_secs_f64();
-    let mut denoised = process::output(&out, color.width, color.height, job.mode, scale);
+    let mut denoised = match job.device {
+        Device::Cpu => {
+            let input = process::input(&color, albedo.as_ref(), normal.as_ref(), job.mode, scale, net.alignment());
+            let start = Instant::now();
+            let (out, tensors) = if job.dump_tensors.is_some() {
+                let all = cpu::run_all(&net, input, job.precision);
+                (all[net.output.0].clone(), all)
+            } else {
+                (cpu::run(&net, input, job.precision), Vec::new())
+            };
+            report.network_seconds = start.elapsed().as_secs_f64();
+            if let Some(dir) = &job.dump_tensors {
+                let named = net.tensors.iter().zip(&tensors).map(|(d, t)| (d.name.as_str(), [t.height, t.width, t.channels], t.data.clone()));
+                report.tensors_dumped = dump(dir, named)?;
+            }
+            process::output(&out, color.width, color.height, job.mode, scale)
+        }
+        Device::Gpu => {
+            let gpu = crate::gpu::open().map_err(|e| Diagnostic::error(Code::DeviceMissing, format!("{e} (--device cpu runs the CPU reference)")))?;
+            let settings = on_gpu::Settings {
+                mode: job.mode,
+                input_scale: scale,
+                precision: job.precision,
+                budget: job.max_memory_mb << 20,
+                window: job.tile,
+                keep_tensors: job.dump_tensors.is_some(),
+            };
+            let images = TileImages { color, albedo, normal };
+            let done = on_gpu::denoise(gpu, &job.shader_root, Arc::new(net.clone()), &images, &settings)
+                .map_err(|d| if d.code == Code::Weights { d.at(Location::file_start(&weights)) } else { d })?;
+            (report.network_seconds, report.device, report.tiles, report.window) = (done.seconds, done.adapter, done.tiles.len(), Some(done.window));
+            if let Some(dir) = &job.dump_tensors {
+                let tiled = done.tiles.len() > 1;
+                for (i, (_, tensors)) in done.tiles.iter().enumerate() {
+                    let dir = if tiled { dir.join(format!("tile{i}")) } else { dir.clone() };
+                    report.tensors_dumped += dump(&dir, tensors.iter().filter_map(|t| unpadded(&net, t)))?;
+                }
+            }
+            done.image
+        }
+    };
 
     if job.mode != Mode::LdrSrgb && Format::of(&job.output) == Some(Format::Png) {
         denoised.data.iter_mut().for_each(|v| *v = Transfer::Srgb.forward(*v));
     }
     image::write(&job.output, &denoised)?;
-    if let Some(dir) = &job.dump_tensors {
-        dump(dir, &net, &tensors)?;
+    Ok(report)
+}
+
+/// A captured tensor of the network as (name, shape, values): its
+/// channels without the padding to blocks of 4.
+fn unpadded<'t>(net: &'t Network, t: &crate::render::capture::CapturedTensor) -> Option<(&'t str, [usize; 3], Vec<f32>)> {
+    let name = if t.pass == "denoise_input" { &net.tensor(net.input).name } else { &net.tensors.iter().find(|d| Some(d.name.as_str()) == t.pass.strip_prefix("denoise."))?.name };
+    let desc = net.tensors.iter().find(|d| d.name == *name)?;
+    let [h, w, padded] = [0, 1, 2].map(|i| t.layout.dims.get(i).map_or(0, |d| d.1 as usize));
+    if t.output != "tensor" || padded < desc.channels {
+        return None;
     }
-    Ok(Report {
-        width: color.width,
-        height: color.height,
-        inputs: net.inputs,
-        input_scale: scale,
-        network_seconds,
-        tensors_dumped: tensors.len(),
-    })
+    let data = t.data.chunks(padded).flat_map(|px| px[..desc.channels].iter().copied()).collect();
+    Some((name.as_str(), [h, w, desc.channels], data))
 }
 
 /// Reads an input image: a PNG sRGB-decoded when `decode_png`, and the
@@ -115,18 +187,19 @@ fn read(path: &Path, decode_png: bool, like: Option<&Image>) -> Result<Image, Di
     Ok(img)
 }
 
-/// Every tensor as `<dir>/<name>.npy`, shaped (height, width, channels) of
-/// the padded image.
-fn dump(dir: &Path, net: &Network, tensors: &[cpu::Tensor]) -> Result<(), Diagnostic> {
+/// Every (name, shape, values) as `<dir>/<name>.npy`; how many.
+fn dump<'a>(dir: &Path, tensors: impl Iterator<Item = (&'a str, [usize; 3], Vec<f32>)>) -> Result<usize, Diagnostic> {
     let io = |e: std::io::Error, path: &Path| {
         Diagnostic::error(Code::Io, format!("cannot write tensors: {e}")).at(Location::file_start(&display(path)))
     };
     std::fs::create_dir_all(dir).map_err(|e| io(e, dir))?;
-    for (desc, t) in net.tensors.iter().zip(tensors) {
-        let path = dir.join(format!("{}.npy", desc.name));
-        std::fs::write(&path, crate::npy::encode(&[t.height, t.width, t.channels], &t.data)).map_err(|e| io(e, &path))?;
+    let mut n = 0;
+    for (name, shape, data) in tensors {
+        let path = dir.join(format!("{name}.npy"));
+        std::fs::write(&path, crate::npy::encode(&shape, &data)).map_err(|e| io(e, &path))?;
+        n += 1;
     }
-    Ok(())
+    Ok(n)
 }
 
 #[cfg(test)]

@@ -13,8 +13,11 @@
 use super::cpu::Tensor;
 use super::image::Image;
 
-/// How the colour is encoded, as OIDN's `hdr` and `srgb` flags say.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// How the colour is encoded, as OIDN's `hdr` and `srgb` flags say: the
+/// range the weights were trained for (OIDN ships `rt_hdr_*` and
+/// `rt_ldr_*` variants of each network). The scene's `[denoiser] mode`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Mode {
     /// Linear values in [0, 1]; the network sees them sRGB-encoded.
     Ldr,
@@ -22,6 +25,7 @@ pub enum Mode {
     LdrSrgb,
     /// Linear values of any magnitude; the network sees them through the
     /// perceptual (PU) curve, after the input scale.
+    #[default]
     Hdr,
 }
 
@@ -94,7 +98,7 @@ impl Mode {
         }
     }
 
-    fn hdr(self) -> bool {
+    pub fn hdr(self) -> bool {
         self == Mode::Hdr
     }
 }

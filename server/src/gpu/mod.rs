@@ -150,6 +150,11 @@ fn private_runtime_dir() -> Option<std::path::PathBuf> {
 
 /// Opens the best adapter: a real GPU over a CPU one. `LOUPE_ADAPTER`
 /// (a substring of the adapter name) picks one explicitly.
+/// The most bytes one storage buffer binding may hold on a device.
+pub fn largest_binding(limits: &wgpu::Limits) -> u64 {
+    limits.max_storage_buffer_binding_size.min(limits.max_buffer_size)
+}
+
 pub fn open() -> Result<Gpu, OpenError> {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
     // The GL adapter (llvmpipe) lacks every optional feature; Vulkan covers

@@ -173,7 +173,7 @@ impl Kernel {
         let limits = gpu.device.limits();
         let in_bytes = std::mem::size_of_val(inputs) as u64;
         let out_bytes = (output_len as u64).saturating_mul(self.output_stride);
-        let largest = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        let largest = super::largest_binding(&limits);
         if in_bytes.max(out_bytes) > largest {
             return request(format!("{in_bytes} input and {out_bytes} output bytes; the device binds at most {largest}"));
         }

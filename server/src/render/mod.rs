@@ -31,6 +31,9 @@ pub struct FrameOptions {
     /// Count NaN/Inf texels of the HDR frame every frame (`nan_watch`): the
     /// daemon's cue to trace a frame.
     pub nan_watch: bool,
+    /// The most bytes one buffer may bind on the device (the session's);
+    /// `None`: unknown, nothing is culled for its size.
+    pub max_buffer: Option<u64>,
 }
 
 /// Assembles the frame from the scene and the network its `[denoiser]`
@@ -50,7 +53,8 @@ pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOpti
         for pass in raster {
             g.cull(pass, "quality.renderer is path");
         }
-        (denoise::denoise(&mut g, scene, denoiser, &traced), None)
+        let noisy = denoise::Noisy { color: traced.color, albedo: traced.albedo, normal: traced.normal };
+        (denoise::denoise(&mut g, scene, denoiser, &noisy, options.max_buffer), None)
     } else {
         denoise::cull(&mut g, scene, "quality.renderer is raster");
         g.cull("test_pattern", "the scene has content to render");
@@ -81,6 +85,17 @@ pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOpti
     if let Some(w) = watch {
         g.output(w);
     }
+    g.build()
+}
+
+/// The frame `loupe denoise` renders for one tile: its images, then the
+/// denoiser the scene's `[denoiser]` describes (an otherwise empty scene
+/// of the tile's size).
+pub fn denoise_graph(scene: &Scene, network: &Network, tile: std::sync::Arc<images::TileImages>) -> Graph {
+    let mut g = GraphBuilder::new();
+    let noisy = images::images(&mut g, tile);
+    let color = denoise::denoise(&mut g, scene, Some(network), &noisy, None);
+    g.output(color);
     g.build()
 }
 

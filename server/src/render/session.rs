@@ -5,7 +5,9 @@
 //! a finished frame.
 //!
 //! Architecture Invariant: the graph is rebuilt exactly when the scene
-//! changes (`set_scene`), and the pipelines to build are derived from it.
+//! changes (`set_scene`), or replaced whole by an offline command that
+//! renders frames of its own (`use_graph`), and the pipelines to build
+//! are derived from it.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -117,9 +119,11 @@ pub struct Session {
 impl Session {
     pub fn new(gpu: Gpu, shader_root: &Path, lib: Library, loaded: &Loaded) -> Self {
         let scene_gpu = SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes, loaded.denoiser.as_ref(), None);
+        let limits = gpu.device.limits();
+        let options = FrameOptions { max_buffer: Some(crate::gpu::largest_binding(&limits)), ..FrameOptions::default() };
         Session {
-            graph: super::build_graph(&loaded.scene, loaded.denoiser.as_deref(), FrameOptions::default()),
-            options: FrameOptions::default(),
+            graph: super::build_graph(&loaded.scene, loaded.denoiser.as_deref(), options),
+            options,
             composer: Arc::default(),
             quads: false,
             serial: false,
@@ -139,10 +143,11 @@ impl Session {
         }
     }
 
-    /// Builds frames with `options` from now on.
+    /// Builds frames with `options` from now on (the device's limits stay
+    /// the session's).
     pub fn with_options(mut self, options: FrameOptions) -> Self {
-        self.options = options;
-        self.graph = super::build_graph(&self.scene, self.network.as_deref(), options);
+        self.options = FrameOptions { max_buffer: self.options.max_buffer, ..options };
+        self.graph = super::build_graph(&self.scene, self.network.as_deref(), self.options);
         self
     }
 
@@ -182,9 +187,9 @@ impl Session {
         self.frame
     }
 
-    /// Renders `graph` instead of the scene's own (tests of single passes).
-    #[cfg(test)]
-    pub(crate) fn use_graph(&mut self, graph: Graph) {
+    /// Renders `graph` instead of the scene's own: `loupe denoise`'s frames
+    /// of images (`render::denoise_graph`), and tests of single passes.
+    pub fn use_graph(&mut self, graph: Graph) {
         self.graph = graph;
     }
 

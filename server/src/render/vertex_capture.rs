@@ -118,7 +118,7 @@ impl VertexCapture {
         if draw.count == 0 {
             return Err(CaptureError::Draw("no vertices to capture".into()));
         }
-        if bytes > limits.max_storage_buffer_binding_size.min(limits.max_buffer_size) {
+        if bytes > crate::gpu::largest_binding(&limits) {
             return Err(CaptureError::Draw(format!("{} positions do not fit one storage buffer", draw.count)));
         }
         let workgroups = draw.count.div_ceil(instrument::WORKGROUP_SIZE);

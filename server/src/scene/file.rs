@@ -7,6 +7,8 @@
 use serde::Deserialize;
 use serde::de::IgnoredAny;
 
+use crate::denoise::process::Mode;
+
 pub type Vec3 = [f32; 3];
 
 #[derive(Debug, Deserialize, Default)]
@@ -99,7 +101,10 @@ pub struct Denoiser {
     #[serde(default)]
     pub precision: Precision,
     #[serde(default)]
-    pub mode: DenoiseMode,
+    pub mode: Mode,
+    /// Multiplies the colour before the network and divides the output
+    /// (OIDN's `inputScale`); by default OIDN's autoexposure in HDR, else 1.
+    pub input_scale: Option<f32>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
@@ -108,19 +113,6 @@ pub enum Precision {
     F16,
     #[default]
     F32,
-}
-
-/// The range the weights were trained for: OIDN ships `hdr` and `ldr`
-/// variants of each network, and the colour goes through that variant's
-/// transfer function.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum DenoiseMode {
-    /// Linear radiance of any magnitude: OIDN's autoexposure, then the PU curve.
-    #[default]
-    Hdr,
-    /// Linear values clamped to [0, 1], then sRGB-encoded.
-    Ldr,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize)]

@@ -13,10 +13,11 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-pub use file::{Camera, DenoiseMode, Environment, Material, Noise, SdfShape, Vec3};
+pub use file::{Camera, Environment, Material, Noise, SdfShape, Vec3};
 pub use settings::{DebugView, Estimator, Post, Quality, Renderer, Tonemap};
 
 use crate::denoise::Precision;
+use crate::denoise::process::Mode;
 use crate::denoise::network::Network;
 use crate::diag::{Code, Diagnostic, LineIndex, Location};
 use crate::mesh::MeshData;
@@ -53,7 +54,9 @@ pub struct Denoiser {
     /// Where `weights` is written, for diagnostics about the file.
     pub at: Location,
     pub precision: Precision,
-    pub mode: DenoiseMode,
+    pub mode: Mode,
+    /// `None`: OIDN's default (autoexposure in HDR, else 1).
+    pub input_scale: Option<f32>,
 }
 
 #[derive(Debug, Clone, PartialEq)]

@@ -103,15 +103,19 @@ fn missing_and_malformed_meshes_are_diagnosed_at_the_reference() {
 // ---- [denoiser] ------------------------------------------------------------
 
 #[test]
-fn the_denoiser_section_reads_its_weights_precision_and_mode() {
+fn the_denoiser_section_reads_its_weights_precision_mode_and_input_scale() {
     assert_eq!(parse("s.toml", BASE).unwrap().denoiser, None, "no section, no denoiser");
     let s = parse("s.toml", "[denoiser]\nweights = \"w/rt_hdr.tza\"\n").unwrap();
     let d = s.denoiser.expect("a denoiser");
-    assert_eq!((d.weights.as_str(), d.precision, d.mode), ("w/rt_hdr.tza", crate::denoise::Precision::F32, DenoiseMode::Hdr), "the defaults");
+    assert_eq!((d.weights.as_str(), d.precision, d.mode), ("w/rt_hdr.tza", crate::denoise::Precision::F32, crate::denoise::process::Mode::Hdr), "the defaults");
     assert_eq!((d.at.line, d.at.column), (2, 11), "where the weights are named");
     let d = parse("s.toml", "[denoiser]\nweights = \"a.tza\"\nprecision = \"f16\"\nmode = \"ldr\"\n").unwrap().denoiser.unwrap();
-    assert_eq!((d.precision, d.mode), (crate::denoise::Precision::F16, DenoiseMode::Ldr));
+    assert_eq!((d.precision, d.mode, d.input_scale), (crate::denoise::Precision::F16, crate::denoise::process::Mode::Ldr, None));
+    let d = parse("s.toml", "[denoiser]\nweights = \"a.tza\"\nmode = \"ldr_srgb\"\ninput_scale = 0.25\n").unwrap().denoiser.unwrap();
+    assert_eq!((d.mode, d.input_scale), (crate::denoise::process::Mode::LdrSrgb, Some(0.25)));
     for (text, line, col) in [
+        ("[denoiser]\nweights = \"a.tza\"\ninput_scale = 0\n", 3, 15),
+        ("[denoiser]\nweights = \"a.tza\"\ninput_scale = nan\n", 3, 15),
         ("[denoiser]\nweights = \"a.tza\"\nprecision = \"f8\"\n", 3, 13),
         ("[denoiser]\nweights = \"a.tza\"\nmode = \"hdr10\"\n", 3, 8),
         ("[denoiser]\nweights = \"a.tza\"\nstrength = 1\n", 3, 1),

@@ -374,7 +374,8 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
                 file::Precision::F32 => Precision::F32,
             };
             let at = c.location(&path).unwrap_or_else(|| Location::file_start(display));
-            Some(Denoiser { weights: d.weights.clone(), at, precision, mode: d.mode })
+            let input_scale = d.input_scale.map(|s| c.positive(&[K("denoiser"), K("input_scale")], s)).transpose()?;
+            Some(Denoiser { weights: d.weights.clone(), at, precision, mode: d.mode, input_scale })
         }
         None => None,
     };

@@ -172,7 +172,7 @@ impl Daemon {
         let timing = if gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) { "gpu" } else { "cpu" };
         config.watch_files.set(&loaded.files);
         Daemon {
-            session: Session::new(gpu, &config.shader_root, lib, &loaded).with_options(FrameOptions { nan_watch: true }),
+            session: Session::new(gpu, &config.shader_root, lib, &loaded).with_options(FrameOptions { nan_watch: true, ..FrameOptions::default() }),
             config,
             file_errors: BTreeMap::new(),
             scene_files: loaded.files,

@@ -18,7 +18,7 @@ pub mod kernels;
 
 use kernels::{CONCAT, CONCAT_CHANNELS, CONV, ConcatUniform, F16, LayerUniform, POOL, PoolUniform, TILE, UPSAMPLE, UPSAMPLE_NEAREST, conv_workgroups};
 
-use super::path_trace::{COLOR, Traced};
+use super::path_trace::COLOR;
 use crate::denoise::Precision;
 use crate::denoise::network::{Network, Op, TensorId};
 use crate::gpu::pipeline::{COMPUTE, Group, PipelineSpec, Stages, sizes, storage, storage_rw, storage_texture, texture, uniform};
@@ -26,11 +26,15 @@ use crate::render::context::PassContext;
 use crate::render::denoise_weights::{blocks, fused_inputs};
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Element, Handle, PipelineKey, TensorLayout, TextureDesc};
-use crate::scene::{DenoiseMode, Scene};
+use crate::denoise::process::Mode;
+use crate::scene::Scene;
 
-/// The HDR transfer function (PU) and the autoexposure's input scale;
-/// without it, LDR: sRGB and a scale of 1.
+/// The HDR transfer function (PU); without it or `LDR_SRGB`, sRGB.
 pub const HDR_DEF: &str = "HDR";
+/// The colour is sRGB-encoded already: no transfer function.
+pub const LDR_SRGB: &str = "LDR_SRGB";
+/// The input scale is the autoexposure's (a buffer), not the uniforms'.
+pub const AUTOEXPOSURE: &str = "AUTOEXPOSURE";
 
 /// OIDN's bins of the autoexposure are at most this many pixels a side.
 const AUTOEXPOSURE_BIN: u32 = 16;
@@ -51,8 +55,8 @@ pub static AUTOEXPOSURE_SCALE: PipelineSpec = PipelineSpec {
     defs: &[],
 };
 
-/// The input scale, read by the input and output kernels in HDR.
-const SCALE: Group = Group::when(1, HDR_DEF, &[storage("scale", 0, COMPUTE)]);
+/// The measured input scale, read by the input and output kernels.
+const SCALE: Group = Group::when(1, AUTOEXPOSURE, &[storage("scale", 0, COMPUTE)]);
 
 pub static INPUT: PipelineSpec = PipelineSpec {
     name: "denoise.input",
@@ -65,7 +69,7 @@ pub static INPUT: PipelineSpec = PipelineSpec {
         ),
         SCALE,
     ],
-    defs: &[HDR_DEF, F16],
+    defs: &[HDR_DEF, LDR_SRGB, AUTOEXPOSURE, F16],
 };
 
 pub static OUTPUT: PipelineSpec = PipelineSpec {
@@ -76,7 +80,7 @@ pub static OUTPUT: PipelineSpec = PipelineSpec {
         Group::always(0, &[uniform("output_params", 5, COMPUTE, sizes::VEC4), storage("network_output", 6, COMPUTE), storage_texture("denoised", 7, COLOR)]),
         SCALE,
     ],
-    defs: &[HDR_DEF, F16],
+    defs: &[HDR_DEF, LDR_SRGB, AUTOEXPOSURE, F16],
 };
 
 pub const SPECS: &[&PipelineSpec] = &[&AUTOEXPOSURE_BINS, &AUTOEXPOSURE_SCALE, &INPUT, &CONV, &POOL, &UPSAMPLE_NEAREST, &CONCAT_CHANNELS, &OUTPUT];
@@ -104,9 +108,18 @@ fn pass_name(net: &Network, t: TensorId) -> String {
     format!("denoise.{}", net.tensor(t).name)
 }
 
-/// The denoised colour of the path-traced frame (`traced.color` as it is
-/// when the scene has no `[denoiser]` or its network is not loaded).
-pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, traced: &Traced) -> Handle {
+/// What the denoiser reads: the noisy colour (`Rgba32Float`), and the
+/// albedo and normal the network may take.
+pub struct Noisy {
+    pub color: Handle,
+    pub albedo: Handle,
+    pub normal: Handle,
+}
+
+/// The denoised colour (`traced.color` as it is when the scene has no
+/// `[denoiser]`, its network is not loaded, or a tensor would be larger
+/// than `max_buffer` bytes).
+pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, traced: &Noisy, max_buffer: Option<u64>) -> Handle {
     let Some(settings) = &scene.denoiser else {
         cull_all(g, NO_DENOISER);
         return traced.color;
@@ -115,7 +128,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
         cull_all(g, "the denoiser's weights are not loaded");
         return traced.color;
     };
-    let hdr = settings.mode == DenoiseMode::Hdr;
+    let mode = settings.mode;
     let f16 = settings.precision == Precision::F16;
     let (w, h) = (scene.width, scene.height);
     let align = net.alignment() as u32;
@@ -128,14 +141,49 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
         TensorLayout::new(&[("y", th), ("x", tw), ("channel", (blocks(net.tensor(t).channels) * 4) as u32)], element)
     };
     let channel_blocks = |t: TensorId| blocks(net.tensor(t).channels) as u32;
+    // With fusion, the convolutions that read an upsample's concatenation
+    // read both of its inputs instead; those two tensors are never made.
+    let fused: Vec<_> = net
+        .ops
+        .iter()
+        .map(|op| match op {
+            Op::Conv(c) if scene.quality.denoiser_fused => fused_inputs(net, c).map(|f| (f, pass_name(net, c.dst))),
+            _ => None,
+        })
+        .collect();
+    let fused_into = |t: TensorId| fused.iter().flatten().find(|(f, _)| f.upsampled == t || f.concatenated == t).map(|(_, conv)| conv.clone());
 
-    let scale = if hdr {
-        Some(autoexposure(g, traced.color, w, h))
-    } else {
-        g.cull("denoise_autoexposure", "denoiser.mode is ldr: the input scale is 1");
-        None
+    let made = (0..net.tensors.len()).map(TensorId).filter(|&t| fused_into(t).is_none());
+    let largest = made.map(|t| (layout(t).bytes(), net.tensor(t))).max_by_key(|(bytes, _)| *bytes);
+    if let (Some(limit), Some((bytes, t))) = (max_buffer, largest)
+        && bytes > limit
+    {
+        let reason = format!(
+            "the denoiser's tensor {} would take {:.1} MiB at {w}×{h}, more than the device binds in one buffer ({:.1} MiB): render smaller, with precision = \"f16\", or denoise the image with `loupe denoise`, which cuts it into tiles",
+            t.name,
+            mib(bytes),
+            mib(limit)
+        );
+        cull_all(g, &reason);
+        return traced.color;
+    }
+
+    // The measured scale, or the uniforms' (`given`).
+    let given = settings.input_scale.or((!mode.hdr()).then_some(1.0));
+    let scale = match given {
+        None => Some(autoexposure(g, traced.color, w, h)),
+        Some(_) if settings.input_scale.is_some() => {
+            g.cull("denoise_autoexposure", "denoiser.input_scale is given");
+            None
+        }
+        Some(_) => {
+            let name = if mode == Mode::Ldr { "ldr" } else { "ldr_srgb" };
+            g.cull("denoise_autoexposure", format!("denoiser.mode is {name}: the input scale is 1"));
+            None
+        }
     };
-    let defs = [(HDR_DEF, hdr), (F16, f16)];
+    let given = given.unwrap_or(0.0).to_bits();
+    let defs = [(HDR_DEF, mode == Mode::Hdr), (LDR_SRGB, mode == Mode::LdrSrgb), (AUTOEXPOSURE, scale.is_some()), (F16, f16)];
 
     let mut tensors: Vec<Option<Handle>> = vec![None; net.tensors.len()];
     let mut p = g.pass("denoise_input", PassKind::Compute);
@@ -146,7 +194,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
     }
     let input = p.create("tensor", layout(net.input), Access::StorageWrite);
     tensors[net.input.0] = Some(input);
-    let params = [w, h, pw, ph, channel_blocks(net.input), 0, 0, 0];
+    let params = [w, h, pw, ph, channel_blocks(net.input), given, 0, 0];
     p.execute(move |ctx| {
         let u = ctx.uniform(bytemuck::cast_slice(&params));
         let mut b = vec![
@@ -161,18 +209,6 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
         }
         ctx.dispatch(&key, &b, [pw.div_ceil(TILE), ph.div_ceil(TILE), 1]);
     });
-
-    // With fusion, the convolutions that read an upsample's concatenation
-    // read both of its inputs instead; those two tensors are never made.
-    let fused: Vec<_> = net
-        .ops
-        .iter()
-        .map(|op| match op {
-            Op::Conv(c) if scene.quality.denoiser_fused => fused_inputs(net, c).map(|f| (f, pass_name(net, c.dst))),
-            _ => None,
-        })
-        .collect();
-    let fused_into = |t: TensorId| fused.iter().flatten().find(|(f, _)| f.upsampled == t || f.concatenated == t).map(|(_, conv)| conv.clone());
 
     for (i, op) in net.ops.iter().enumerate() {
         let dst = op.dst();
@@ -285,7 +321,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
         p.access(s, Access::StorageRead);
     }
     let denoised = p.create("color", TextureDesc::d2(COLOR, w, h), Access::StorageWrite);
-    let params = [w, h, pw, 0];
+    let params = [w, h, pw, given];
     p.execute(move |ctx| {
         let u = ctx.uniform(bytemuck::cast_slice(&params));
         let mut b = vec![("output_params", u.as_entire_binding()), ("network_output", ctx.bind(result)), ("denoised", ctx.bind(denoised))];
@@ -295,6 +331,10 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
         ctx.dispatch(&key, &b, [w.div_ceil(TILE), h.div_ceil(TILE), 1]);
     });
     denoised
+}
+
+fn mib(bytes: u64) -> f64 {
+    bytes as f64 / f64::from(1 << 20)
 }
 
 /// OIDN's autoexposure over the colour: per bin of at most 16×16 pixels

@@ -31,6 +31,7 @@ passes![
     lighting,
     volumes,
     path_trace,
+    images,
     denoise,
     auto_exposure,
     exposure,
@@ -109,7 +110,7 @@ mod tests {
                     let overrides = Overrides::from([((*key).to_owned(), v.clone())]);
                     let loaded = crate::scene::load_with(&path, &overrides).unwrap_or_else(|d| panic!("{d}"));
                     for nan_watch in [false, true] {
-                        let options = crate::render::FrameOptions { nan_watch };
+                        let options = crate::render::FrameOptions { nan_watch, ..Default::default() };
                         for k in crate::render::build_graph(&loaded.scene, loaded.denoiser.as_deref(), options).pipelines() {
                             assert!(specs().any(|s| std::ptr::eq(s, k.spec)), "{} is built by a frame but not listed for loupe check", k.label());
                             used.insert(k.spec.name);
@@ -122,9 +123,10 @@ mod tests {
         // No bundled scene names weights (they are not in the repository):
         // a denoised frame on a small random network, in each of its modes.
         let network = crate::denoise::testing::network(&crate::denoise::testing::small_unet(9), 1);
-        for (precision, mode, fused) in [("f32", "hdr", true), ("f16", "ldr", false), ("f16", "hdr", true), ("f32", "ldr", false)] {
+        let modes = [("f32", "hdr", true, ""), ("f16", "ldr", false, ""), ("f16", "hdr", true, ""), ("f32", "ldr", false, ""), ("f32", "ldr_srgb", true, ""), ("f32", "hdr", true, "input_scale = 0.5")];
+        for (precision, mode, fused, scale) in modes {
             let text = format!(
-                "[quality]\nrenderer = \"path\"\ndenoiser_fused = {fused}\n[denoiser]\nweights = \"w.tza\"\nprecision = \"{precision}\"\nmode = \"{mode}\"\n\
+                "[quality]\nrenderer = \"path\"\ndenoiser_fused = {fused}\n[denoiser]\nweights = \"w.tza\"\nprecision = \"{precision}\"\nmode = \"{mode}\"\n{scale}\n\
                  [[materials]]\nname = \"m\"\n[[objects]]\nshape = \"sphere\"\nmaterial = \"m\"\n"
             );
             let scene = crate::scene::parse("denoised.toml", &text).unwrap_or_else(|d| panic!("{d}"));

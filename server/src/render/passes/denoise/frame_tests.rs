@@ -13,7 +13,6 @@ use crate::gpu::pipeline::HDR;
 use crate::render::capture::CapturedTensor;
 use crate::render::denoise_weights::BLOCK;
 use crate::render::frame::FrameResult;
-use crate::render::passes::path_trace::SAMPLES;
 use crate::render::session::Session;
 
 // The GPU side: the passes in a frame of their own, after a copy pass that
@@ -96,14 +95,13 @@ fn gpu_session(net: Network, s: &Setup, images: &[Image; 3]) -> (Session, Vec<(S
     let color = p.create("color", TextureDesc::d2(COLOR, w32, h32), Access::CopyDst);
     let albedo = p.create("albedo", TextureDesc::d2(HDR, w32, h32), Access::CopyDst);
     let normal = p.create("normal", TextureDesc::d2(HDR, w32, h32), Access::CopyDst);
-    let samples = p.create("samples", TextureDesc::d2(SAMPLES, w32, h32), Access::CopyDst);
     p.execute(move |ctx| {
         for (from, to) in sources.iter().zip([color, albedo, normal]) {
             ctx.encoder.copy_texture_to_texture(from.as_image_copy(), ctx.texture(to).as_image_copy(), from.size());
         }
     });
-    let traced = Traced { color, albedo, normal, samples };
-    let out = denoise(&mut g, &scene, Some(&network), &traced);
+    let traced = Noisy { color, albedo, normal };
+    let out = denoise(&mut g, &scene, Some(&network), &traced, None);
     g.output(out);
     let graph = g.build();
     let culled = graph.culled.iter().map(|c| (c.name.clone(), c.reason.clone())).collect();
@@ -261,4 +259,33 @@ fn f16_overflow_is_counted_per_layer_and_stored_as_inf() {
     let t = captured(&r, "denoise.enc_conv0/tensor");
     assert_eq!(t.stats.inf, 0);
     assert!(t.stats.max[0] > 9e4, "{:?}", t.stats.max);
+}
+
+/// A frame whose largest tensor the device cannot bind in one buffer is
+/// not denoised, and every denoiser pass says why, naming the tensor; a
+/// larger limit denoises it.
+#[test]
+fn a_tensor_larger_than_the_device_binds_culls_the_denoiser_with_the_reason() {
+    let net = crate::denoise::testing::network(&small_unet(9), 7);
+    let scene = scene(&Setup { hdr: true, f16: false, fused: true }, 64, 48);
+    // The largest tensor made: the input, 9 channels padded to 12, f32.
+    let input = 64 * 48 * 12 * 4;
+    for (limit, denoised) in [(input - 4, false), (input, true)] {
+        let mut g = GraphBuilder::new();
+        let mut p = g.pass("source", PassKind::Copy);
+        let [color, albedo, normal] = ["color", "albedo", "normal"].map(|n| p.create(n, TextureDesc::d2(COLOR, 64, 48), Access::CopyDst));
+        p.execute(|_| {});
+        let out = denoise(&mut g, &scene, Some(&net), &Noisy { color, albedo, normal }, Some(limit));
+        assert_eq!(out != color, denoised, "limit {limit}");
+        g.output(out);
+        let graph = g.build();
+        let live: Vec<&str> = graph.passes.iter().map(|p| p.name.as_str()).filter(|n| n.starts_with("denoise")).collect();
+        assert_eq!(live.is_empty(), !denoised, "{live:?}");
+        if !denoised {
+            for pass in PASSES {
+                let reason = &graph.culled.iter().find(|c| c.name == pass).expect("culled").reason;
+                assert!(reason.starts_with("the denoiser's tensor input would take 0.1 MiB at 64×48, more than the device binds in one buffer"), "{pass}: {reason}");
+            }
+        }
+    }
 }
