@@ -191,7 +191,10 @@ struct RenderArgs {
 }
 
 #[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true)]
 struct BenchArgs {
+    #[command(subcommand)]
+    what: Option<BenchCommand>,
     /// Scenes to measure; default: every scene in scenes/.
     scenes: Vec<PathBuf>,
     /// Output size for every scene: WIDTHxHEIGHT.
@@ -215,6 +218,39 @@ struct BenchArgs {
     /// do not bracket compute work (llvmpipe).
     #[arg(long)]
     serial: bool,
+}
+
+#[derive(clap::Subcommand)]
+enum BenchCommand {
+    /// What accuracy costs in time: sweep each quality setting the scene
+    /// calls for, time the passes it affects and compare each image with
+    /// a reference (relative MSE; PSNR and SSIM of the tonemapped image).
+    /// Writes tradeoffs.json, tradeoffs.md, tradeoffs.svg and each point's
+    /// image into --out.
+    Tradeoffs(TradeoffsArgs),
+}
+
+#[derive(clap::Args)]
+struct TradeoffsArgs {
+    #[arg(long, default_value = "scenes/showcase.toml")]
+    scene: PathBuf,
+    /// Output size: WIDTHxHEIGHT.
+    #[arg(long, value_parser = parse_size, default_value = "320x180")]
+    size: (u32, u32),
+    #[arg(long, default_value = "tradeoffs")]
+    out: PathBuf,
+    /// Timed frames per point, after 2 of warm-up.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    repeats: u32,
+    /// Samples per pixel of path-traced references.
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    reference_spp: u32,
+    /// Where references are kept between runs [default: $XDG_CACHE_HOME/loupe/references, else ~/.cache/loupe/references].
+    #[arg(long)]
+    cache: Option<PathBuf>,
+    /// Project root: where shaders/ and scenes/ are.
+    #[arg(long, default_value = ".")]
+    root: PathBuf,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -444,8 +480,44 @@ fn run_denoise(args: DenoiseArgs) -> ExitCode {
     }
 }
 
+fn run_tradeoffs(args: TradeoffsArgs) -> ExitCode {
+    let cache = args.cache.unwrap_or_else(|| {
+        let base = std::env::var_os("XDG_CACHE_HOME").map(PathBuf::from).or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")));
+        base.unwrap_or_else(std::env::temp_dir).join("loupe/references")
+    });
+    let job = loupe::tradeoffs::Job {
+        scene: under_root(&args.root, &args.scene),
+        shader_root: args.root.join("shaders"),
+        size: args.size,
+        repeats: args.repeats,
+        reference_spp: args.reference_spp,
+        cache,
+    };
+    let report = match loupe::tradeoffs::run(&job, &args.out) {
+        Ok(r) => r,
+        Err(e) => return offline_failed("bench tradeoffs", e),
+    };
+    use loupe::tradeoffs::report;
+    let files = [
+        ("tradeoffs.json", serde_json::to_string_pretty(&report).unwrap_or_default()),
+        ("tradeoffs.md", report::markdown(&report)),
+        ("tradeoffs.svg", report::svg(&report)),
+    ];
+    for (name, text) in files {
+        if let Err(e) = std::fs::write(args.out.join(name), text) {
+            eprintln!("loupe bench tradeoffs: cannot write {name}: {e}");
+            return ExitCode::from(exit::USAGE);
+        }
+    }
+    print!("{}", report::markdown(&report));
+    ExitCode::from(exit::OK)
+}
+
 fn run_bench(args: BenchArgs) -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    if let Some(BenchCommand::Tradeoffs(t)) = args.what {
+        return run_tradeoffs(t);
+    }
     let scenes = if args.scenes.is_empty() {
         let mut v: Vec<PathBuf> = std::fs::read_dir(args.root.join("scenes"))
             .map(|d| d.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect())

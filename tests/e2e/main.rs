@@ -7,3 +7,4 @@ mod denoise;
 mod golden;
 mod render;
 mod serve;
+mod tradeoffs;

@@ -1,0 +1,150 @@
+//! Which quality settings a scene's sweep measures, at which values, and
+//! against which reference. The settings themselves (their ranges, what
+//! they affect, when they apply) are the settings table's
+//! (`scene::settings`); this only says how to sweep them.
+
+use crate::scene::overrides::{Overrides, Value};
+use crate::scene::settings;
+use crate::scene::Scene;
+
+/// What a series' images are compared with.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Reference {
+    /// The same passes at their most accurate settings (these overrides):
+    /// the setting only refines how they approximate what they compute.
+    Highest(Overrides),
+    /// The path tracer at this many samples per pixel: the setting changes
+    /// the estimate of the light transport itself.
+    PathTraced(u32),
+}
+
+/// One line of the plot: a setting swept, the others at the scene's values
+/// except `with`.
+#[derive(Debug, Clone)]
+pub struct Series {
+    /// A name for the plot's legend: the setting, and `with` when set.
+    pub name: String,
+    pub setting: &'static str,
+    /// Cheapest first.
+    pub values: Vec<Value>,
+    /// Overrides every point of the series shares.
+    pub with: Overrides,
+    pub reference: Reference,
+}
+
+impl Series {
+    /// The overrides of the point at `value`.
+    pub fn point(&self, value: &Value) -> Overrides {
+        let mut o = self.with.clone();
+        o.insert(self.setting.to_owned(), value.clone());
+        o
+    }
+
+    /// The overrides of the reference image.
+    pub fn reference_overrides(&self) -> Overrides {
+        match &self.reference {
+            Reference::Highest(o) => o.clone(),
+            Reference::PathTraced(spp) => Overrides::from([
+                ("quality.renderer".to_owned(), Value::Text("path".into())),
+                ("quality.path_spp".to_owned(), Value::Int(i64::from(*spp))),
+            ]),
+        }
+    }
+
+    /// Whether a point's image accumulates one path-traced sample a frame,
+    /// so that reaching it takes as many frames as its samples.
+    pub fn accumulates(&self) -> bool {
+        self.setting == "quality.path_spp"
+    }
+}
+
+/// Powers of two from `from` to `to` inclusive.
+fn doublings(from: i64, to: i64) -> Vec<Value> {
+    std::iter::successors(Some(from), |v| Some(v * 2)).take_while(|v| *v <= to).map(Value::Int).collect()
+}
+
+fn text(t: &str) -> Value {
+    Value::Text(t.to_owned())
+}
+
+/// The series `scene` calls for: only settings that change its image (a
+/// scene without media sweeps no volume setting). `reference_spp`: the
+/// path tracer's samples for path-traced references.
+pub fn series(scene: &Scene, reference_spp: u32) -> Vec<Series> {
+    let mut out = Vec::new();
+    let overrides = |pairs: &[(&str, Value)]| -> Overrides { pairs.iter().map(|(k, v)| ((*k).to_owned(), v.clone())).collect() };
+    let mut add = |setting: &'static str, values: Vec<Value>, with: &[(&str, Value)], reference: Reference| {
+        let with = overrides(with);
+        let mut name = setting.trim_start_matches("quality.").trim_start_matches("post.").to_owned();
+        // The renderer is implied by the setting.
+        for (k, v) in with.iter().filter(|(k, _)| *k != "quality.renderer") {
+            name += &format!(", {}={v}", k.rsplit('.').next().unwrap_or(k));
+        }
+        out.push(Series { name, setting, values, with, reference });
+    };
+    let raster = ("quality.renderer", text("raster"));
+    // The most accurate raster image: the setting at its best, the others
+    // at the scene's values.
+    let best = |setting: &str, v: Value| Reference::Highest(overrides(&[raster.clone(), (setting, v)]));
+    if !scene.media.is_empty() {
+        // Both estimators against one reference, so their errors compare.
+        let reference = Reference::Highest(overrides(&[raster.clone(), ("quality.volume_steps", Value::Int(1024)), ("quality.volume_estimator", text("analytic"))]));
+        for estimator in settings::Estimator::NAMES {
+            let with = [raster.clone(), ("quality.volume_estimator", text(estimator))];
+            add("quality.volume_steps", doublings(4, 512), &with, reference.clone());
+        }
+        add("quality.volume_shadow_steps", doublings(1, 32), &[raster.clone()], best("quality.volume_shadow_steps", Value::Int(64)));
+    }
+    if !scene.objects.is_empty() {
+        if !scene.lights.is_empty() {
+            add("quality.shadow_map_size", doublings(128, 2048), &[raster.clone()], best("quality.shadow_map_size", Value::Int(4096)));
+        }
+        let path = [("quality.renderer", text("path"))];
+        add("quality.path_spp", doublings(1, 64), &path, Reference::PathTraced(reference_spp));
+        if scene.denoiser.is_some() {
+            for precision in ["f32", "f16"] {
+                // A precision the scene's [denoiser] does not name: its
+                // override goes through the scene file like any other.
+                let with = [path[0].clone(), ("denoiser.precision", text(precision))];
+                add("quality.path_spp", doublings(1, 64), &with, Reference::PathTraced(reference_spp));
+            }
+        }
+    }
+    // The same image either way: its cost, beside its quads.
+    add("post.two_triangles", vec![Value::Bool(true), Value::Bool(false)], &[], Reference::Highest(overrides(&[("post.two_triangles", Value::Bool(false))])));
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(name: &str) -> Scene {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes").join(name);
+        crate::scene::load_with(&path, &Overrides::new()).unwrap_or_else(|d| panic!("{d}")).scene
+    }
+
+    /// Only what the scene calls for is swept: no volume series without
+    /// media, no shadow-map series without lights; both estimators against
+    /// one reference; every series' values cheapest first.
+    #[test]
+    fn a_scene_sweeps_only_the_settings_that_change_its_image() {
+        let names = |s: &[Series]| s.iter().map(|s| s.name.clone()).collect::<Vec<_>>();
+        let minimal = series(&scene("minimal.toml"), 256);
+        assert_eq!(names(&minimal), ["shadow_map_size", "path_spp", "two_triangles"]);
+        let volume = series(&scene("volume.toml"), 256);
+        let steps: Vec<_> = volume.iter().filter(|s| s.setting == "quality.volume_steps").collect();
+        assert_eq!(steps.len(), 2);
+        assert_eq!(steps[0].reference, steps[1].reference, "one reference for both estimators");
+        assert_eq!(steps[0].name, "volume_steps, volume_estimator=\"constant\"");
+        let pattern = series(&scene("pattern.toml"), 256);
+        assert_eq!(names(&pattern), ["two_triangles"], "no geometry: nothing to path trace");
+        for s in minimal.iter().chain(&volume) {
+            let ints: Vec<i64> = s.values.iter().filter_map(|v| if let Value::Int(i) = v { Some(*i) } else { None }).collect();
+            assert!(ints.windows(2).all(|w| w[0] < w[1]), "{}: cheapest first", s.name);
+        }
+        let path = minimal.iter().find(|s| s.setting == "quality.path_spp").unwrap();
+        assert!(path.accumulates());
+        assert_eq!(path.reference_overrides()["quality.path_spp"], Value::Int(256));
+    }
+}
