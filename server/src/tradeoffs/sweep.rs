@@ -93,11 +93,11 @@ pub fn series(scene: &Scene, reference_spp: u32) -> Vec<Series> {
             let with = [raster.clone(), ("quality.volume_estimator", text(estimator))];
             add("quality.volume_steps", doublings(4, 512), &with, reference.clone());
         }
-        add("quality.volume_shadow_steps", doublings(1, 32), &[raster.clone()], best("quality.volume_shadow_steps", Value::Int(64)));
+        add("quality.volume_shadow_steps", doublings(1, 32), std::slice::from_ref(&raster), best("quality.volume_shadow_steps", Value::Int(64)));
     }
     if !scene.objects.is_empty() {
         if !scene.lights.is_empty() {
-            add("quality.shadow_map_size", doublings(128, 2048), &[raster.clone()], best("quality.shadow_map_size", Value::Int(4096)));
+            add("quality.shadow_map_size", doublings(128, 2048), std::slice::from_ref(&raster), best("quality.shadow_map_size", Value::Int(4096)));
         }
         let path = [("quality.renderer", text("path"))];
         add("quality.path_spp", doublings(1, 64), &path, Reference::PathTraced(reference_spp));
