@@ -34,6 +34,7 @@ import { TensorView } from './tensor.js';
 import { ControlsPanel } from './controls.js';
 import { QuadView } from './quads.js';
 import { PathView } from './path.js';
+import { TradeoffsView } from './tradeoffs.js';
 import * as tex from './texture.js';
 import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
 
@@ -578,9 +579,26 @@ const pathView = new PathView({
   refreshCaptures: refetchCapturesSoon,
 });
 
+// ---- accuracy against time ------------------------------------------------
+
+const tradeoffs = new TradeoffsView(
+  {
+    chart: $('tradeoffs-chart'),
+    tip: $('tradeoffs-tip'),
+    text: $('tradeoffs-text'),
+    image: $('tradeoffs-image'),
+    meta: $('tradeoffs-meta'),
+    empty: $('tradeoffs-empty'),
+    refresh: $('tradeoffs-refresh'),
+  },
+  { send: (message) => conn.send(message), fetch: () => api.getJson('/api/tradeoffs') },
+);
+tradeoffs.load();
+
 function applyControls(report) {
   controls.apply(report);
   pathView.setControls(report);
+  tradeoffs.setControls(report);
 }
 
 // ---- start ---------------------------------------------------------------
@@ -643,6 +661,7 @@ window.loupe = {
       liveImages: { received: live.received, skipped: live.skipped, failed: live.failed, rate: live.rate() },
       inspector: inspector.snapshot(),
       path: pathView.snapshot(),
+      tradeoffs: tradeoffs.snapshot(),
     };
   },
   tex,

@@ -237,6 +237,8 @@ struct TradeoffsArgs {
     /// Output size: WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_size, default_value = "320x180")]
     size: (u32, u32),
+    /// Output directory, under --root unless absolute (`loupe serve` shows
+    /// `tradeoffs/`'s results in the browser).
     #[arg(long, default_value = "tradeoffs")]
     out: PathBuf,
     /// Timed frames per point, after 2 of warm-up.
@@ -493,7 +495,8 @@ fn run_tradeoffs(args: TradeoffsArgs) -> ExitCode {
         reference_spp: args.reference_spp,
         cache,
     };
-    let report = match loupe::tradeoffs::run(&job, &args.out) {
+    let out = under_root(&args.root, &args.out);
+    let report = match loupe::tradeoffs::run(&job, &out) {
         Ok(r) => r,
         Err(e) => return offline_failed("bench tradeoffs", e),
     };
@@ -504,7 +507,7 @@ fn run_tradeoffs(args: TradeoffsArgs) -> ExitCode {
         ("tradeoffs.svg", report::svg(&report)),
     ];
     for (name, text) in files {
-        if let Err(e) = std::fs::write(args.out.join(name), text) {
+        if let Err(e) = std::fs::write(out.join(name), text) {
             eprintln!("loupe bench tradeoffs: cannot write {name}: {e}");
             return ExitCode::from(exit::USAGE);
         }

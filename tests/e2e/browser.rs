@@ -632,3 +632,40 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
     assert_eq!(cmap.as_u64(), Some(w as u64), "the colour map view");
     c.close().await.unwrap();
 }
+
+/// The accuracy-against-time chart: the project's `loupe bench tradeoffs`
+/// results, a point per setting value with the scene's current settings
+/// marked; hovering a point shows its settings, figures and image;
+/// clicking it applies its settings as overrides, and the mark moves.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_tradeoffs_chart_shows_the_sweep_and_applies_a_point() {
+    let p = Project::copy_of_repo("browser-tradeoffs");
+    let sweep = ["bench", "tradeoffs", "--scene", "scenes/minimal.toml", "--size", "32x18", "--repeats", "1", "--reference-spp", "64", "--cache", "cache"];
+    p.run(&sweep).code(0);
+    let s = Server::start(&p.root, &["--scene", "scenes/minimal.toml", "--render", "on-change"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    // Series: shadow_map_size (128 … 2048), path_spp (1 … 64), two_triangles
+    // (true, false: the same image, on the bottom edge). The scene's
+    // defaults are raster, a 1024 shadow map, one triangle: the fourth
+    // point of the first series and the second of the last are current,
+    // the path tracer's are not.
+    until(&c, &s, "the points", "window.loupe.state.tradeoffs.points === 14").await;
+    let current = until(&c, &s, "the current points marked", "JSON.stringify(window.loupe.state.tradeoffs.current)").await;
+    assert_eq!(current, "[[0,3],[2,1]]");
+
+    let point = "document.querySelector('#tradeoffs-chart circle[data-series=\"1\"][data-index=\"2\"]')";
+    c.execute(&format!("{point}.dispatchEvent(new MouseEvent('mouseenter')); return true;"), vec![]).await.unwrap();
+    let text = until(&c, &s, "the tip", "!document.querySelector('#tradeoffs-tip').hidden && document.querySelector('#tradeoffs-text').textContent").await;
+    let text = text.as_str().unwrap().to_owned();
+    assert!(text.starts_with("path_spp: 4") && text.contains("quality.renderer = \"path\" · quality.path_spp = 4") && text.contains("relative MSE"), "{text}");
+    until(&c, &s, "its image", "document.querySelector('#tradeoffs-image').naturalWidth === 32").await;
+
+    c.execute(&format!("{point}.dispatchEvent(new MouseEvent('click')); return true;"), vec![]).await.unwrap();
+    until(&c, &s, "the point applied and marked", "JSON.stringify(window.loupe.state.tradeoffs.current) === '[[1,2],[2,1]]'").await;
+    let (status, body) = s.get("/api/controls");
+    assert_eq!(status, 200);
+    let controls: serde_json::Value = serde_json::from_slice(&body).unwrap();
+    assert_eq!(controls["overrides"], serde_json::json!({ "quality.path_spp": 4, "quality.renderer": "path" }));
+    c.close().await.unwrap();
+}

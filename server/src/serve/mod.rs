@@ -48,7 +48,7 @@ pub fn run(opts: ServeOptions) -> Result<(), ServeError> {
     let shader_root = opts.root.join("shaders");
     let scene_root = opts.root.join("scenes");
     let (tx, clients, inbox) = inbox::open();
-    let shared = shared::Shared::new(clients, vec![shader_root.clone(), scene_root.clone()], opts.debug_api);
+    let shared = shared::Shared::new(clients, vec![shader_root.clone(), scene_root.clone()], opts.debug_api, opts.root.join("tradeoffs"));
 
     // Watching starts first: the daemon names the scene's files outside the
     // roots to it as soon as it has loaded the scene.

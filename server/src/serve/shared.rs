@@ -45,6 +45,8 @@ pub struct Shared {
     pub source_roots: Vec<PathBuf>,
     /// Whether `/api/debug/*` exists (`loupe serve --debug-api`).
     pub debug_api: bool,
+    /// Where `loupe bench tradeoffs` wrote its results (`/api/tradeoffs`).
+    pub tradeoffs: PathBuf,
     pub controls: RwLock<ControlsReport>,
 }
 
@@ -92,7 +94,7 @@ impl FrameImages {
 }
 
 impl Shared {
-    pub fn new(clients: Clients, source_roots: Vec<PathBuf>, debug_api: bool) -> Arc<Self> {
+    pub fn new(clients: Clients, source_roots: Vec<PathBuf>, debug_api: bool, tradeoffs: PathBuf) -> Arc<Self> {
         Arc::new(Shared {
             status: RwLock::new(Status::default()),
             passes: RwLock::new(Vec::new()),
@@ -108,6 +110,7 @@ impl Shared {
             clients,
             source_roots,
             debug_api,
+            tradeoffs,
             controls: RwLock::new(ControlsReport::default()),
         })
     }

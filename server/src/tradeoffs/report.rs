@@ -49,18 +49,19 @@ const TOP: f64 = 40.0;
 const BOTTOM: f64 = 60.0;
 const COLORS: [&str; 8] = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
 
-/// Error (relative MSE) against time, log–log; series whose every point
-/// equals its reference (nothing to plot on a log axis) are left to the
-/// table.
+/// Error (relative MSE) against time, log–log. A point equal to its
+/// reference (no error to put on a log axis) sits hollow on the bottom
+/// edge.
 pub fn svg(r: &Report) -> String {
-    let plotted: Vec<_> = r.series.iter().filter(|s| s.points.iter().any(|p| p.relative_mse > 0.0 && p.time_ms > 0.0)).collect();
-    let points = || plotted.iter().flat_map(|s| s.points.iter()).filter(|p| p.relative_mse > 0.0 && p.time_ms > 0.0);
+    let plotted: Vec<_> = r.series.iter().filter(|s| s.points.iter().any(|p| p.time_ms > 0.0)).collect();
+    let points = || plotted.iter().flat_map(|s| s.points.iter()).filter(|p| p.time_ms > 0.0);
     let decades = |v: &mut dyn Iterator<Item = f64>| {
         let (lo, hi) = v.fold((f64::MAX, f64::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
         if lo > hi { (0.0, 1.0) } else { (lo.log10().floor(), hi.log10().ceil().max(lo.log10().floor() + 1.0)) }
     };
     let (x0, x1) = decades(&mut points().map(|p| p.time_ms));
-    let (y0, y1) = decades(&mut points().map(|p| p.relative_mse));
+    let (y0, y1) = decades(&mut points().map(|p| p.relative_mse).filter(|e| *e > 0.0));
+    let error = |e: f64| if e > 0.0 { e } else { 10f64.powf(y0) };
     let (pw, ph) = (WIDTH - LEFT - RIGHT, HEIGHT - TOP - BOTTOM);
     let x = |t: f64| LEFT + (t.log10() - x0) / (x1 - x0) * pw;
     let y = |e: f64| TOP + (y1 - e.log10()) / (y1 - y0) * ph;
@@ -81,15 +82,16 @@ pub fn svg(r: &Report) -> String {
     let _ = writeln!(s, r#"<text transform="translate(18 {:.1}) rotate(-90)" text-anchor="middle">relative MSE against the reference</text>"#, TOP + ph / 2.0);
     for (i, series) in plotted.iter().enumerate() {
         let color = COLORS[i % COLORS.len()];
-        let pts: Vec<_> = series.points.iter().filter(|p| p.relative_mse > 0.0 && p.time_ms > 0.0).collect();
-        let line: Vec<String> = pts.iter().map(|p| format!("{:.1},{:.1}", x(p.time_ms), y(p.relative_mse))).collect();
+        let pts: Vec<_> = series.points.iter().filter(|p| p.time_ms > 0.0).collect();
+        let line: Vec<String> = pts.iter().map(|p| format!("{:.1},{:.1}", x(p.time_ms), y(error(p.relative_mse)))).collect();
         let _ = writeln!(s, r#"<polyline fill="none" stroke="{color}" stroke-width="1.5" points="{}"/>"#, line.join(" "));
         for p in &pts {
             let _ = writeln!(
                 s,
-                r#"<circle cx="{:.1}" cy="{:.1}" r="3.5" fill="{color}"><title>{} = {}: {:.2} ms, relative MSE {:.3e}, SSIM {:.4}</title></circle>"#,
+                r#"<circle cx="{:.1}" cy="{:.1}" r="3.5" fill="{}" stroke="{color}"><title>{} = {}: {:.2} ms, relative MSE {:.3e}, SSIM {:.4}</title></circle>"#,
                 x(p.time_ms),
-                y(p.relative_mse),
+                y(error(p.relative_mse)),
+                if p.relative_mse > 0.0 { color } else { "white" },
                 escape(&series.setting),
                 escape(&p.value.to_string()),
                 p.time_ms,

@@ -32,6 +32,7 @@ mod guard;
 mod quads;
 mod sources;
 mod tensors;
+mod tradeoffs;
 #[cfg(test)]
 mod testing;
 mod ui;
@@ -137,6 +138,8 @@ fn build(shared: Arc<Shared>, allowed_hosts: Vec<String>) -> (Router, watch::Sen
         .route("/api/sources/{*path}", get(sources::source))
         .route("/api/reload", post(api::reload))
         .route("/api/controls", get(api::controls))
+        .route("/api/tradeoffs", get(tradeoffs::results))
+        .route("/api/tradeoffs/points/{file}", get(tradeoffs::point))
         .route("/api/scene/save", post(api::save_scene))
         .route("/api", any(api::not_found))
         .route("/api/{*rest}", any(api::not_found))

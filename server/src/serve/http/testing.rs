@@ -38,7 +38,9 @@ pub(super) async fn start(roots: Vec<PathBuf>) -> Server {
 
 pub(super) async fn start_with(roots: Vec<PathBuf>, debug_api: bool) -> Server {
     let (_, clients, daemon) = inbox::open();
-    let shared = Shared::new(clients, roots, debug_api);
+    // The first root stands for the project: its results are under it.
+    let tradeoffs = roots.first().map(|r| r.join("tradeoffs")).unwrap_or_default();
+    let shared = Shared::new(clients, roots, debug_api, tradeoffs);
     let (listener, addr) = bind("127.0.0.1:0".parse().unwrap()).await.unwrap();
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
     let done = tokio::spawn(serve(listener, shared.clone(), allowed_hosts(addr), async move {
