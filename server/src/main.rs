@@ -253,6 +253,11 @@ struct TradeoffsArgs {
     /// Project root: where shaders/ and scenes/ are.
     #[arg(long, default_value = ".")]
     root: PathBuf,
+    /// Override a scene value under every point, as `loupe render --set`
+    /// does (e.g. `denoiser.weights=/path/rt_ldr_alb_nrm.tza` adds the
+    /// denoiser's series to a scene without one).
+    #[arg(long = "set", value_name = "PATH=VALUE", value_parser = parse_override)]
+    set: Vec<(String, loupe::scene::overrides::Value)>,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -494,6 +499,7 @@ fn run_tradeoffs(args: TradeoffsArgs) -> ExitCode {
         repeats: args.repeats,
         reference_spp: args.reference_spp,
         cache,
+        overrides: args.set.into_iter().collect(),
     };
     let out = under_root(&args.root, &args.out);
     let report = match loupe::tradeoffs::run(&job, &out) {

@@ -330,7 +330,7 @@ impl SceneGpu {
             let source = triangles_of(scene, &data, &draws);
             PathGeometry::new(device, source, previous.and_then(|p| p.path.as_ref()), |ids| world_shading(scene, &data, &draws, ids))
         });
-        let denoised = scene.quality.renderer == Renderer::Path && scene.denoiser.is_some();
+        let denoised = scene.quality.renderer == Renderer::Path && scene.denoiser.is_some() && scene.quality.denoise;
         let denoiser = network
             .filter(|_| denoised)
             .map(|n| DenoiseWeights::new(device, n, scene.quality.denoiser_fused, previous.and_then(|p| p.denoiser.as_ref())));

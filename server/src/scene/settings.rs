@@ -343,6 +343,9 @@ settings! {
             "Volume shadow steps", affects ["volumes"], shown_when raster_media;
         volume_estimator: Estimator = Estimator::Analytic, Choice(Estimator::NAMES),
             "In-scattering estimator", affects ["volumes"], shown_when raster_media;
+        /// Denoise the path-traced image with the scene's `[denoiser]`; off,
+        /// its passes are culled and the noisy image is shown.
+        denoise: bool = true, Toggle, "Denoise", affects ["denoise"], shown_when denoised;
         /// Run each decoder level's 2× upsample and concatenation inside the
         /// convolution that reads them (the `upsample<L>` and `concat<L>`
         /// tensors are never stored); off, each is a pass of its own whose

@@ -34,6 +34,8 @@ pub struct Job {
     pub reference_spp: u32,
     /// Where references are kept between runs.
     pub cache: PathBuf,
+    /// Applied under every point's own (`--set`): e.g. a `[denoiser]`.
+    pub overrides: Overrides,
 }
 
 /// One value of a series.
@@ -90,7 +92,7 @@ struct Images {
 
 /// Sweeps every series of the scene; `out` receives each point's image.
 pub fn run(job: &Job, out: &Path) -> Result<Report, OfflineError> {
-    let base = crate::offline::Job { scene: job.scene.clone(), shader_root: job.shader_root.clone(), size: Some(job.size), overrides: Overrides::new() };
+    let base = crate::offline::Job { scene: job.scene.clone(), shader_root: job.shader_root.clone(), size: Some(job.size), overrides: job.overrides.clone() };
     let mut session = crate::offline::prepare(&base)?;
     let serial = session.gpu().is_cpu();
     let text = std::fs::read(&job.scene).map_err(|e| OfflineError::Io(format!("cannot read {}: {e}", job.scene.display())))?;
@@ -149,11 +151,16 @@ fn view(c: &CapturedImage) -> Rgba<'_> {
 /// Loads the scene with `overrides` into the session and builds what its
 /// frame lacks.
 fn load(session: &mut Session, job: &Job, overrides: &Overrides) -> Result<(), OfflineError> {
-    let mut loaded = scene::load_with(&job.scene, overrides).map_err(|d| OfflineError::Input(vec![d]))?;
+    let mut loaded = scene::load_with(&job.scene, &merged(job, overrides)).map_err(|d| OfflineError::Input(vec![d]))?;
     (loaded.scene.width, loaded.scene.height) = job.size;
     session.set_scene(&loaded);
     let errors = session.install_missing();
     if errors.is_empty() { Ok(()) } else { Err(OfflineError::Input(errors)) }
+}
+
+/// The job's overrides under a point's.
+fn merged(job: &Job, point: &Overrides) -> Overrides {
+    job.overrides.iter().chain(point).map(|(k, v)| (k.clone(), v.clone())).collect()
 }
 
 /// The names of the renderer's HDR image (what the exposure reads, or the
@@ -189,7 +196,7 @@ fn reference(session: &mut Session, job: &Job, text: &[u8], series: &Series) -> 
     let overrides = series.reference_overrides();
     let mut key = blake3::Hasher::new();
     key.update(text);
-    key.update(format!("{overrides:?} {:?}", job.size).as_bytes());
+    key.update(format!("{:?} {:?}", merged(job, &overrides), job.size).as_bytes());
     for f in session.library().files() {
         key.update(f.display.as_bytes());
         key.update(f.hash.as_bytes());

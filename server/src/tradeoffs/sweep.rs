@@ -44,9 +44,11 @@ impl Series {
     pub fn reference_overrides(&self) -> Overrides {
         match &self.reference {
             Reference::Highest(o) => o.clone(),
+            // Undenoised: the reference is the converged estimate itself.
             Reference::PathTraced(spp) => Overrides::from([
                 ("quality.renderer".to_owned(), Value::Text("path".into())),
                 ("quality.path_spp".to_owned(), Value::Int(i64::from(*spp))),
+                ("quality.denoise".to_owned(), Value::Bool(false)),
             ]),
         }
     }
@@ -100,12 +102,15 @@ pub fn series(scene: &Scene, reference_spp: u32) -> Vec<Series> {
             add("quality.shadow_map_size", doublings(128, 2048), std::slice::from_ref(&raster), best("quality.shadow_map_size", Value::Int(4096)));
         }
         let path = [("quality.renderer", text("path"))];
-        add("quality.path_spp", doublings(1, 64), &path, Reference::PathTraced(reference_spp));
-        if scene.denoiser.is_some() {
+        if scene.denoiser.is_none() {
+            add("quality.path_spp", doublings(1, 64), &path, Reference::PathTraced(reference_spp));
+        } else {
+            // The samples without the denoiser, then with it in each
+            // precision (an override of the scene's [denoiser] like any other).
+            let without = [path[0].clone(), ("quality.denoise", Value::Bool(false))];
+            add("quality.path_spp", doublings(1, 64), &without, Reference::PathTraced(reference_spp));
             for precision in ["f32", "f16"] {
-                // A precision the scene's [denoiser] does not name: its
-                // override goes through the scene file like any other.
-                let with = [path[0].clone(), ("denoiser.precision", text(precision))];
+                let with = [path[0].clone(), ("quality.denoise", Value::Bool(true)), ("denoiser.precision", text(precision))];
                 add("quality.path_spp", doublings(1, 64), &with, Reference::PathTraced(reference_spp));
             }
         }

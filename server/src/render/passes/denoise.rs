@@ -124,6 +124,10 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
         cull_all(g, NO_DENOISER);
         return traced.color;
     };
+    if !scene.quality.denoise {
+        cull_all(g, "quality.denoise is off");
+        return traced.color;
+    }
     let Some(net) = network else {
         cull_all(g, "the denoiser's weights are not loaded");
         return traced.color;

@@ -289,3 +289,24 @@ fn a_tensor_larger_than_the_device_binds_culls_the_denoiser_with_the_reason() {
         }
     }
 }
+
+/// `quality.denoise` off: the noisy colour goes on, every denoiser pass
+/// culled with the reason.
+#[test]
+fn the_denoise_switch_culls_the_denoiser_with_the_reason() {
+    let net = crate::denoise::testing::network(&small_unet(9), 7);
+    let mut scene = scene(&Setup { hdr: true, f16: false, fused: true }, 64, 48);
+    for on in [true, false] {
+        scene.quality.denoise = on;
+        let mut g = GraphBuilder::new();
+        let mut p = g.pass("source", PassKind::Copy);
+        let [color, albedo, normal] = ["color", "albedo", "normal"].map(|n| p.create(n, TextureDesc::d2(COLOR, 64, 48), Access::CopyDst));
+        p.execute(|_| {});
+        let out = denoise(&mut g, &scene, Some(&net), &Noisy { color, albedo, normal }, None);
+        assert_eq!(out == color, !on);
+        g.output(out);
+        let graph = g.build();
+        let culled = graph.culled.iter().filter(|c| c.reason == "quality.denoise is off").count();
+        assert_eq!(culled, if on { 0 } else { PASSES.len() });
+    }
+}
