@@ -148,6 +148,11 @@ mod tests {
             let ints: Vec<i64> = s.values.iter().filter_map(|v| if let Value::Int(i) = v { Some(*i) } else { None }).collect();
             assert!(ints.windows(2).all(|w| w[0] < w[1]), "{}: cheapest first", s.name);
         }
+        // With a [denoiser]: the samples without it, then with it in each precision.
+        let mut denoised = scene("minimal.toml");
+        denoised.denoiser = crate::scene::parse("d.toml", "[denoiser]\nweights = \"w.tza\"\n").unwrap().denoiser;
+        let paths: Vec<_> = series(&denoised, 256).into_iter().filter(|s| s.setting == "quality.path_spp").map(|s| s.name).collect();
+        assert_eq!(paths, ["path_spp, denoise=false", "path_spp, precision=\"f32\", denoise=true", "path_spp, precision=\"f16\", denoise=true"]);
         let path = minimal.iter().find(|s| s.setting == "quality.path_spp").unwrap();
         assert!(path.accumulates());
         assert_eq!(path.reference_overrides()["quality.path_spp"], Value::Int(256));
