@@ -1,15 +1,33 @@
 // The surface BRDF: Lambert diffuse plus GGX specular with the height-
 // correlated Smith visibility term and Schlick's Fresnel. Metals tint the
-// specular with the base colour and have no diffuse.
+// specular with the base colour and have no diffuse. The diffuse is the
+// light Fresnel lets into the surface toward l and out of it toward v,
+// (1 - F(n·l)) (1 - F(n·v)) / (1 - f0): reciprocal, and never more than
+// the specular leaves, so the directional albedo of a white surface stays
+// at or below 1 (the stability suite's furnace case). Weighted by
+// 1 - F(v·h) instead, as it was, a white dielectric reflected 1.5× the
+// light it received at n·v = 0.1: v·h of a diffuse direction is far
+// from n·v, so the diffuse kept what the specular had already taken.
 #define_import_path loupe::brdf
 
 const PI: f32 = 3.14159265358979;
 
-// GGX normal distribution; `a` is roughness squared (alpha).
-fn d_ggx(n_h: f32, a: f32) -> f32 {
-    let a2 = a * a;
-    let d = n_h * n_h * (a2 - 1.0) + 1.0;
-    return a2 / (PI * d * d);
+// GGX normal distribution of half vector `h` about `n` (both unit); `a` is
+// roughness squared (alpha): a² / (π d²), d = (n·h)² (a² - 1) + 1.
+// - d is summed as |n × h|² + (n·h)² a²: 1 - (n·h)² cancels near n·h = 1,
+//   where f32's step in n·h (6e-8) is a few % of a² at the smallest
+//   roughness (4e-6), enough to make the pdf of a mirror-like lobe
+//   integrate to 1.008 (the stability suite's chi-square cases);
+// - D is formed as k (k / π), k = a / d, never d²: near the peak d² is
+//   ~1e-11, below half precision's range, and the form stays in range in
+//   f16 up to f16's largest value (the suite's half-precision case).
+// h below the surface counts as n·h = 0.
+fn d_ggx(n: vec3<f32>, h: vec3<f32>, a: f32) -> f32 {
+    let n_h = dot(n, h);
+    let t = cross(n, h);
+    let d = select(1.0, dot(t, t) + n_h * n_h * a * a, n_h > 0.0);
+    let k = a / d;
+    return k * (k / PI);
 }
 
 // Smith-GGX visibility, height-correlated: G / (4 n·l n·v).
@@ -28,6 +46,12 @@ fn f_schlick(f0: vec3<f32>, v_h: f32) -> vec3<f32> {
     return f0 + (1.0 - f0) * pow(clamp(1.0 - v_h, 0.0, 1.0), 5.0);
 }
 
+// (1 - F(x)) / (1 - f0): the share of Schlick's Fresnel that passes at
+// cosine x, without dividing by 1 - f0 (0 for a white metal).
+fn schlick_transmission(x: f32) -> f32 {
+    return 1.0 - pow(clamp(1.0 - x, 0.0, 1.0), 5.0);
+}
+
 fn specular_f0(base_color: vec3<f32>, metallic: f32) -> vec3<f32> {
     return mix(vec3(0.04), base_color, metallic);
 }
@@ -41,16 +65,17 @@ fn alpha(roughness: f32) -> f32 {
 // BRDF × cosine for light from `l`, seen from `v`.
 fn brdf_cos(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, metallic: f32, roughness: f32) -> vec3<f32> {
     let n_l = dot(n, l);
-    if n_l <= 0.0 {
+    // Written so that a NaN (from a NaN normal or direction) takes this
+    // branch too: the light is 0, not NaN.
+    if !(n_l > 0.0) {
         return vec3(0.0);
     }
     let h = normalize(v + l);
     let n_v = max(dot(n, v), 1e-4);
-    let n_h = max(dot(n, h), 0.0);
     let a = alpha(roughness);
-    let f = f_schlick(specular_f0(base_color, metallic), max(dot(v, h), 0.0));
-    let specular = d_ggx(n_h, a) * v_smith(n_v, n_l, a) * f;
-    let diffuse = (1.0 - metallic) * (1.0 - f) * base_color / PI;
+    let f0 = specular_f0(base_color, metallic);
+    let specular = d_ggx(n, h, a) * v_smith(n_v, n_l, a) * f_schlick(f0, max(dot(v, h), 0.0));
+    let diffuse = (1.0 - metallic) * (1.0 - f0) * schlick_transmission(n_l) * schlick_transmission(n_v) * base_color / PI;
     return (diffuse + specular) * n_l;
 }
 
@@ -66,8 +91,9 @@ fn brdf_cos(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, met
 
 struct BrdfSample {
     l: vec3<f32>,
-    // The mixture pdf of `l` (solid angle); 0 when no direction was made
-    // (the sample went below the surface): the path ends.
+    // The mixture pdf of `l` (solid angle); 0, with `l` the zero vector,
+    // when no direction was made (the sample went below the surface): the
+    // path ends.
     pdf: f32,
     // brdf_cos(l) / pdf.
     weight: vec3<f32>,
@@ -117,7 +143,8 @@ fn sample_vndf(ve: vec3<f32>, a: f32, u: vec2<f32>) -> vec3<f32> {
 // The mixture pdf (solid angle) of sampling `l` with `brdf_sample`.
 fn brdf_pdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, metallic: f32, roughness: f32) -> f32 {
     let n_l = dot(n, l);
-    if n_l <= 0.0 {
+    // NaN takes this branch too (see brdf_cos).
+    if !(n_l > 0.0) {
         return 0.0;
     }
     let n_v = max(dot(n, v), 1e-4);
@@ -125,14 +152,12 @@ fn brdf_pdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, met
     let a = alpha(roughness);
     // VNDF: pdf(h) = G1(v) max(v·h, 0) D(h) / n·v; the reflection's
     // Jacobian 1 / (4 v·h) cancels the v·h.
-    let specular = g1_smith(n_v, a) * d_ggx(max(dot(n, h), 0.0), a) / (4.0 * n_v);
+    let specular = g1_smith(n_v, a) * d_ggx(n, h, a) / (4.0 * n_v);
     let diffuse = n_l / PI;
     let p = specular_probability(n_v, base_color, metallic);
     return p * specular + (1.0 - p) * diffuse;
 }
 
-// A direction from `u` (three uniform numbers in [0, 1)): u.x picks the
-// lobe, u.yz place the direction.
 // A cosine-distributed direction about `frame`'s z (pdf n·l / π): the
 // diffuse lobe's sample, and the path tracer's environment sample.
 fn cosine_direction(frame: mat3x3<f32>, u: vec2<f32>) -> vec3<f32> {
@@ -141,6 +166,8 @@ fn cosine_direction(frame: mat3x3<f32>, u: vec2<f32>) -> vec3<f32> {
     return frame * vec3(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u.x, 0.0)));
 }
 
+// A direction from `u` (three uniform numbers in [0, 1)): u.x picks the
+// lobe, u.yz place the direction.
 fn brdf_sample(n: vec3<f32>, v: vec3<f32>, u: vec3<f32>, base_color: vec3<f32>, metallic: f32, roughness: f32) -> BrdfSample {
     let frame = basis(n);
     let n_v = max(dot(n, v), 1e-4);
@@ -153,8 +180,10 @@ fn brdf_sample(n: vec3<f32>, v: vec3<f32>, u: vec3<f32>, base_color: vec3<f32>, 
         l = cosine_direction(frame, u.yz);
     }
     let pdf = brdf_pdf(n, v, l, base_color, metallic, roughness);
-    if pdf <= 0.0 {
-        return BrdfSample(l, 0.0, vec3(0.0));
+    // No direction (below the surface, or NaN from a NaN normal): the
+    // path ends. The zero vector says so, and stays finite.
+    if !(pdf > 0.0) {
+        return BrdfSample(vec3(0.0), 0.0, vec3(0.0));
     }
     return BrdfSample(l, pdf, brdf_cos(n, v, l, base_color, metallic, roughness) / pdf);
 }

@@ -103,7 +103,7 @@ fn query(theta: f64, roughness: f32, metallic: f32, base: [f32; 3], l: [f32; 3],
 }
 
 /// A small PCG: the same uniform numbers every run.
-fn uniforms(n: usize) -> Vec<[f32; 3]> {
+pub(super) fn uniforms(n: usize) -> Vec<[f32; 3]> {
     let mut state = 0x853c_49e6_748f_ea9b_u64;
     let mut next = || {
         state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);

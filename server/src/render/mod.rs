@@ -104,6 +104,8 @@ mod brdf_tests;
 #[cfg(test)]
 mod random_tests;
 #[cfg(test)]
+mod stability;
+#[cfg(test)]
 mod tests {
     use std::collections::{BTreeMap, BTreeSet};
 

@@ -100,4 +100,4 @@ pub fn path_trace(g: &mut GraphBuilder, scene: &Scene) -> Option<Traced> {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -33,12 +33,12 @@ const ALBEDO: &str = "path_trace/albedo";
 const NORMAL: &str = "path_trace/normal";
 const SAMPLES: &str = "path_trace/samples";
 
-fn loaded(text: &str, meshes: BTreeMap<String, Arc<MeshData>>) -> Loaded {
+pub(crate) fn loaded(text: &str, meshes: BTreeMap<String, Arc<MeshData>>) -> Loaded {
     let scene = crate::scene::parse("path_test.toml", text).unwrap_or_else(|d| panic!("{d}"));
     Loaded { scene, meshes, denoiser: None, files: vec![] }
 }
 
-fn session(loaded: &Loaded) -> Session {
+pub(crate) fn session(loaded: &Loaded) -> Session {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
     let lib = crate::shader::library::read_tree(&root).unwrap();
     let gpu = crate::gpu::testing::device();
@@ -103,9 +103,9 @@ struct Material {
 /// and weighted by `s` (`ltc::tests::ggx_albedo`, quadrature; below
 /// roughness 0.19 the quadrature cannot resolve the lobe, and `dfg::dfg`,
 /// which importance-samples D and is tested against the quadrature, is
-/// used); the diffuse lobe `(1 - m)(1 - F) base / π` integrates to
-/// `(1 - m) base (1 - f0)(1 - S)`, `S` the Lambert-weighted mean of `s`
-/// (quadrature).
+/// used); the diffuse lobe `(1 - m)(1 - f0) t(n·l) t(n·v) base / π`,
+/// `t(x) = 1 - (1 - x)⁵`, integrates to `(1 - m)(1 - f0) t(n·v) base ×
+/// 20/21`: the Lambert-weighted mean of `(1 - n·l)⁵` is 2 B(2, 6) = 1/21.
 struct Albedo {
     table: Vec<[f64; 3]>,
 }
@@ -114,7 +114,7 @@ const LOW: f64 = 0.2;
 const NODES: usize = 17;
 
 impl Albedo {
-    fn new(m: &Material, schlick: &[f64]) -> Albedo {
+    fn new(m: &Material) -> Albedo {
         let f0 = m.base.map(|b| 0.04 + (b - 0.04) * m.metallic);
         let table = (0..NODES)
             .map(|i| {
@@ -125,7 +125,8 @@ impl Albedo {
                 } else {
                     crate::render::dfg::dfg(n_v, m.roughness)
                 };
-                [0, 1, 2].map(|c| f0[c] * scale + bias + (1.0 - m.metallic) * m.base[c] * (1.0 - f0[c]) * (1.0 - schlick[i]))
+                let diffuse = (1.0 - (1.0 - n_v).powi(5)) * 20.0 / 21.0;
+                [0, 1, 2].map(|c| f0[c] * scale + bias + (1.0 - m.metallic) * m.base[c] * (1.0 - f0[c]) * diffuse)
             })
             .collect();
         Albedo { table }
@@ -141,21 +142,6 @@ impl Albedo {
 
 fn node(i: usize) -> f64 {
     LOW + (1.0 - LOW) * i as f64 / (NODES - 1) as f64
-}
-
-/// `S(n·v)` at the nodes: (1/π) ∫ (1 - v·h)⁵ n·l dl.
-fn schlick_nodes() -> Vec<f64> {
-    (0..NODES)
-        .map(|i| {
-            let [s] = crate::render::ltc::tests::hemisphere_integral(node(i), |v, l| {
-                let h = [v[0] + l[0], v[1] + l[1], v[2] + l[2]];
-                let len = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
-                let v_h = ((v[0] * h[0] + v[1] * h[1] + v[2] * h[2]) / len).max(0.0);
-                [l[2] / std::f64::consts::PI * (1.0 - v_h).powi(5)]
-            });
-            s
-        })
-        .collect()
 }
 
 fn furnace_scene(m: &Material, spp: u32) -> String {
@@ -200,11 +186,10 @@ fn a_sphere_in_a_white_furnace_reflects_the_brdfs_directional_albedo() {
         Material { name: "smooth dielectric", base: [0.2, 0.4, 0.8], metallic: 0.0, roughness: 0.1 },
         Material { name: "metal", base: [0.95, 0.64, 0.54], metallic: 1.0, roughness: 0.35 },
     ];
-    let schlick = schlick_nodes();
     let mut s = session(&loaded(&furnace_scene(&materials[0], FURNACE_SPP), BTreeMap::new()));
     for m in &materials {
         s.set_scene(&loaded(&furnace_scene(m, FURNACE_SPP), BTreeMap::new()));
-        let albedo = Albedo::new(m, &schlick);
+        let albedo = Albedo::new(m);
         let r = accumulate(&mut s, &[FURNACE_SPP], Some(&[COLOR, ALBEDO, NORMAL])).pop().unwrap();
         let (color, base, normal) = (image(&r, COLOR), image(&r, ALBEDO), image(&r, NORMAL));
         let scene = s.scene().clone();
@@ -428,7 +413,7 @@ fn the_error_falls_as_one_over_the_square_root_of_the_sample_count() {
 /// darkening the pixel.
 const GUARD: &str = "select(vec3(0.0), s.radiance, finite(s.radiance))";
 
-fn without_guard(s: &mut Session) {
+pub(crate) fn without_guard(s: &mut Session) {
     let display = s.shader_display(&super::PATH_TRACE);
     let mut lib = (**s.library()).clone();
     let file = lib.get(&display).unwrap();
@@ -447,7 +432,7 @@ fn without_guard(s: &mut Session) {
 
 /// Renders to each count in `at` with every output captured, and asserts
 /// every capture finite; returns the colour at the last count.
-fn assert_finite(s: &mut Session, what: &str, at: &[u32]) -> CapturedImage {
+pub(crate) fn assert_finite(s: &mut Session, what: &str, at: &[u32]) -> CapturedImage {
     let frames = accumulate(s, at, None);
     for (n, r) in at.iter().zip(&frames) {
         for c in &r.captures {
@@ -463,7 +448,7 @@ fn assert_finite(s: &mut Session, what: &str, at: &[u32]) -> CapturedImage {
     image(frames.last().unwrap(), COLOR).clone()
 }
 
-fn mean(c: &CapturedImage) -> f64 {
+pub(crate) fn mean(c: &CapturedImage) -> f64 {
     c.data.chunks(4).map(|p| f64::from(p[0] + p[1] + p[2])).sum::<f64>() / (c.data.len() / 4) as f64
 }
 

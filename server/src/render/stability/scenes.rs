@@ -1,0 +1,138 @@
+//! Every pass of every bundled scene (`scenes/*.toml`) at the extremes of
+//! every setting of the settings table, one at a time: each number at its
+//! minimum and maximum, each choice at every option, each toggle both
+//! ways, on top of the scene as written. A setting the scene hides (its
+//! control's `shown_when`: the path tracer's with the raster, the meter's
+//! without auto exposure) is set in the context that shows it: with
+//! auto exposure on, or path traced. One that no context shows (the
+//! volume settings without media, the denoiser's without `[denoiser]`)
+//! changes no pass and is left out. Pairs the file may not hold
+//! (`settings::ORDERED`) are left out too.
+//!
+//! Two frames each (auto exposure and the path tracer's accumulation move
+//! on), every output but depth textures captured (`scanned`), at 64 × 36;
+//! the bound is the capture system's NaN scan: no NaN or Inf in any
+//! capture, and no NaN origin.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use crate::render::session::Session;
+use crate::scene::overrides::Value;
+use crate::scene::settings::{self, Kind, SETTINGS, Setting};
+use crate::scene::{Loaded, Scene};
+
+/// A setting's extremes.
+fn extremes(s: &Setting) -> Vec<Value> {
+    match s.kind {
+        Kind::Toggle => vec![Value::Bool(false), Value::Bool(true)],
+        Kind::Int { min, max, .. } => vec![Value::Int(min), Value::Int(max)],
+        Kind::Float { min, max, .. } => vec![Value::Float(min), Value::Float(max)],
+        Kind::Choice(options) => options.iter().map(|o| Value::Text((*o).to_owned())).collect(),
+    }
+}
+
+/// The contexts a setting is tried in, in order: the scene as written,
+/// with auto exposure, path traced.
+fn contexts(base: &Scene) -> Vec<Scene> {
+    let with = |path: &str, v: Value| {
+        let mut s = base.clone();
+        settings::find(path).expect("a table setting").set(&mut s, &v).expect("a valid value");
+        s
+    };
+    vec![base.clone(), with("post.auto_exposure", Value::Bool(true)), with("quality.renderer", Value::Text("path".into()))]
+}
+
+fn ordered(scene: &Scene) -> bool {
+    settings::ORDERED.iter().all(|(a, b)| {
+        let get = |p: &str| settings::number(&(settings::find(p).expect("a table setting").get)(scene));
+        get(a) < get(b)
+    })
+}
+
+/// Every variant of `base`: a label and the scene.
+pub fn variants(base: &Scene) -> Vec<(String, Scene)> {
+    let mut out = vec![("as written".to_owned(), base.clone())];
+    let contexts = contexts(base);
+    for setting in SETTINGS {
+        for value in extremes(setting) {
+            let shown = contexts.iter().find_map(|c| {
+                let mut s = c.clone();
+                setting.set(&mut s, &value).ok()?;
+                ((setting.shown_when)(&s) && ordered(&s)).then_some(s)
+            });
+            if let Some(s) = shown {
+                out.push((format!("{} = {value}", setting.path), s));
+            }
+        }
+    }
+    out
+}
+
+/// The bundled scenes, each at 64 × 36.
+pub fn bundled() -> Vec<(String, Loaded)> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    let mut paths: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "toml")).collect();
+    paths.sort();
+    paths
+        .into_iter()
+        .map(|p| {
+            let mut loaded = crate::scene::load(&p).unwrap_or_else(|d| panic!("{d}"));
+            (loaded.scene.width, loaded.scene.height) = (64, 36);
+            (p.file_name().unwrap().to_string_lossy().into_owned(), loaded)
+        })
+        .collect()
+}
+
+/// The outputs scanned: every output of every live pass but depth
+/// textures, which the rasterizer fills with depths clamped to the
+/// viewport's [0, 1] and which cannot hold a NaN or Inf (a 4096² shadow
+/// map captured and scanned on the CPU takes half a minute per frame in a
+/// debug build).
+fn scanned(s: &Session) -> BTreeSet<String> {
+    s.passes()
+        .into_iter()
+        .filter(|p| p.kind.is_some())
+        .flat_map(|p| p.writes.into_iter().filter(|o| !o.format.starts_with("Depth")).map(move |o| format!("{}/{}", p.name, o.name)))
+        .collect()
+}
+
+/// Renders two frames of `scene` with `scanned` outputs captured; returns
+/// what the NaN scan found, one line per bad output.
+pub fn scan(s: &mut Session, loaded: &Loaded, scene: &Scene) -> Vec<String> {
+    s.set_scene(&Loaded { scene: scene.clone(), ..loaded.clone() });
+    let diagnostics = s.install_missing();
+    if !diagnostics.is_empty() {
+        return diagnostics.iter().map(ToString::to_string).collect();
+    }
+    s.reset_history();
+    let outputs = scanned(s);
+    let mut bad = Vec::new();
+    for frame in 1..=2 {
+        let pending = s.submit(Some(&outputs), 1.0 / 30.0);
+        let r = s.wait(pending);
+        for c in r.captures.iter().filter(|c| c.stats.has_non_finite()) {
+            bad.push(format!("frame {frame}: {} holds {} NaN and {} Inf, the first at {:?}", c.key(), c.stats.nan, c.stats.inf, c.stats.first_nan));
+        }
+        for t in r.tensors.iter().filter(|t| t.stats.has_non_finite()) {
+            bad.push(format!("frame {frame}: {} holds {} NaN and {} Inf", t.key(), t.stats.nan, t.stats.inf));
+        }
+        bad.extend(r.nan.map(|o| format!("frame {frame}: NaN origin {o:?}")));
+    }
+    bad
+}
+
+/// A scene beyond the bundled ones: a mirror floor (roughness 0, white
+/// metal) under a point light bright enough that the reflected radiance
+/// exceeds f16's largest value, 65504, in the raster's HDR target
+/// (Rgba16Float); validation accepts any finite intensity. Whether a
+/// render target saturates such a value or stores Inf is the adapter's
+/// choice: lavapipe saturates (`lighting/color` peaks at 65504).
+/// An adapter that stores Inf fails here.
+pub const BRIGHT: &str = "[output]\nwidth = 64\nheight = 36\n\
+    [camera]\nposition = [0.0, 1.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\n\
+    [[materials]]\nname = \"mirror\"\nbase_color = [1.0, 1.0, 1.0]\nmetallic = 1.0\nroughness = 0.0\n\
+    [[materials]]\nname = \"white\"\nbase_color = [1.0, 1.0, 1.0]\nroughness = 0.5\n\
+    [[objects]]\nshape = \"plane\"\nmaterial = \"mirror\"\nscale = 4.0\n\
+    [[objects]]\nshape = \"sphere\"\nmaterial = \"white\"\nposition = [0.8, 0.5, 0.0]\nscale = 0.5\n\
+    [[lights]]\ntype = \"point\"\nposition = [0.0, 1.0, -1.0]\nintensity = 10000000.0\n";
