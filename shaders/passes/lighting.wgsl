@@ -1,5 +1,6 @@
 // Deferred lighting: every light on every G-buffer pixel, with shadows,
-// the media's shadows on surfaces, and rect lights integrated with LTC.
+// the media's shadows on surfaces, and rect lights integrated with LTC
+// (LIGHT_RECT) or by sampling their area (RECT_SAMPLED, the reference).
 // The environment lights every surface; pixels without geometry show it.
 #import loupe::fullscreen::{FullscreenOut, fullscreen}
 #import loupe::view::{view, world_position}
@@ -16,6 +17,32 @@
 #import loupe::ltc::{ltc_rect}
 @group(2) @binding(0) var ltc_matrix: texture_2d<f32>;
 @group(2) @binding(1) var ltc_amplitude: texture_2d<f32>;
+#endif
+
+#ifdef RECT_SAMPLED
+// Points per side of the grid over a rect light.
+const RECT_GRID: u32 = 16u;
+
+// A rect light's reflected radiance by a stratified grid of points over
+// its area, each through the BRDF itself: Σ L brdf_cos cos_light A / (N² d²).
+fn rect_sampled(light: Light, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, base: vec3<f32>, metallic: f32, roughness: f32) -> vec3<f32> {
+    let half = light.extra.xy;
+    let area = 4.0 * half.x * half.y;
+    var sum = vec3(0.0);
+    for (var j = 0u; j < RECT_GRID; j++) {
+        for (var i = 0u; i < RECT_GRID; i++) {
+            let uv = (vec2(f32(i), f32(j)) + 0.5) / f32(RECT_GRID) * 2.0 - 1.0;
+            let q = light.position.xyz + light.right.xyz * (uv.x * half.x) + light.up.xyz * (uv.y * half.y);
+            let to_light = q - p;
+            let d2 = max(dot(to_light, to_light), 1e-8);
+            let l = to_light * inverseSqrt(d2);
+            let facing = dot(-l, light.direction.xyz);
+            let cosine = select(max(facing, 0.0), abs(facing), light.extra.z > 0.5);
+            sum += brdf_cos(n, v, l, base, metallic, roughness) * (cosine / d2);
+        }
+    }
+    return light.color.rgb * sum * (area / f32(RECT_GRID * RECT_GRID));
+}
 #endif
 
 @group(0) @binding(2) var gbuffer_normal: texture_2d<f32>;
@@ -74,6 +101,13 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
             let to_light = c - p;
             let seen = visibility(light, p, n, normalize(to_light), length(to_light));
             color += light.color.rgb * lit * seen;
+            continue;
+        }
+#endif
+#ifdef RECT_SAMPLED
+        if light_type(light) == LIGHT_RECT {
+            let to_light = light.position.xyz - p;
+            color += rect_sampled(light, n, v, p, base_color, metallic, roughness) * visibility(light, p, n, normalize(to_light), length(to_light));
             continue;
         }
 #endif

@@ -203,6 +203,17 @@ choice!(
 );
 
 choice!(
+    /// How the raster integrates a rect light's light over its area.
+    RectLights {
+        /// Linearly transformed cosines: closed form, fitted tables.
+        Ltc = "ltc",
+        /// 16 × 16 stratified points over the rectangle through the BRDF
+        /// itself: the reference LTC approximates, at 256 evaluations.
+        Sampled = "sampled",
+    }
+);
+
+choice!(
     /// Which renderer makes the frame's HDR image.
     Renderer {
         /// Rasterized G-buffer, deferred lighting and the volume pass.
@@ -288,6 +299,10 @@ fn raster_media(s: &Scene) -> bool {
     has_media(s) && rastered(s)
 }
 
+fn raster_rect(s: &Scene) -> bool {
+    s.has_rect_lights() && rastered(s)
+}
+
 fn denoised(s: &Scene) -> bool {
     path_traced(s) && s.denoiser.is_some()
 }
@@ -336,6 +351,7 @@ settings! {
         path_bounces: u32 = 4, Int { min: 0, max: 64, step: 1 }, "Path bounces", affects ["path_trace"], shown_when path_traced;
         shadows: bool = true, Toggle, "Shadows", affects ["shadows", "lighting", "volumes"], shown_when rastered;
         shadow_map_size: u32 = 1024, Int { min: 64, max: 4096, step: 64 }, "Shadow map size", affects ["shadows"], shown_when rastered;
+        rect_lights: RectLights = RectLights::Ltc, Choice(RectLights::NAMES), "Rect lights", affects ["ltc_tables", "lighting"], shown_when raster_rect;
         /// Ray-march steps per pixel through the media.
         volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volumes"], shown_when raster_media;
         /// Steps of the march toward each light (self-shadowing).

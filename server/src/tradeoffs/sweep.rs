@@ -101,6 +101,10 @@ pub fn series(scene: &Scene, reference_spp: u32) -> Vec<Series> {
         if !scene.lights.is_empty() {
             add("quality.shadow_map_size", doublings(128, 2048), std::slice::from_ref(&raster), best("quality.shadow_map_size", Value::Int(4096)));
         }
+        if scene.has_rect_lights() {
+            // LTC's closed form against the area sampled through the BRDF.
+            add("quality.rect_lights", vec![text("ltc"), text("sampled")], std::slice::from_ref(&raster), best("quality.rect_lights", text("sampled")));
+        }
         let path = [("quality.renderer", text("path"))];
         if scene.denoiser.is_none() {
             add("quality.path_spp", doublings(1, 64), &path, Reference::PathTraced(reference_spp));

@@ -9,9 +9,12 @@ use crate::gpu::pipeline::{Group, HDR, PipelineSpec, Stages, depth_texture, text
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Handle, TextureDesc};
 use crate::scene::Scene;
+use crate::scene::settings::RectLights;
 
 /// Rect lights, shaded with the LTC tables.
 pub const LIGHT_RECT: &str = "LIGHT_RECT";
+/// Rect lights integrated by sampling their area (`quality.rect_lights`).
+pub const RECT_SAMPLED: &str = "RECT_SAMPLED";
 /// Shadows cast by the participating media onto surfaces.
 pub const MEDIA_SHADOWS: &str = "MEDIA_SHADOWS";
 
@@ -25,14 +28,16 @@ pub static DEFERRED: PipelineSpec = PipelineSpec {
         Group::when(2, LIGHT_RECT, &[texture("ltc_matrix", 0), texture("ltc_amplitude", 1)]),
         Group::when(3, MEDIA_SHADOWS, MEDIA),
     ],
-    defs: &[TWO_TRIANGLES, SHADOWS, LIGHT_RECT, MEDIA_SHADOWS],
+    defs: &[TWO_TRIANGLES, SHADOWS, LIGHT_RECT, RECT_SAMPLED, MEDIA_SHADOWS],
 };
 pub const SPECS: &[&PipelineSpec] = &[&DEFERRED];
 
 pub fn lighting(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle, shadows: Option<Handle>, ltc: Option<[Handle; 2]>) -> Handle {
     let media = !scene.media.is_empty();
     let mut p = g.pass("lighting", PassKind::Raster);
-    let key = p.pipeline(fullscreen_key(&DEFERRED, scene, &[(SHADOWS, shadows.is_some()), (LIGHT_RECT, ltc.is_some()), (MEDIA_SHADOWS, media)]));
+    let sampled = scene.has_rect_lights() && scene.quality.rect_lights == RectLights::Sampled;
+    let defs = [(SHADOWS, shadows.is_some()), (LIGHT_RECT, ltc.is_some()), (RECT_SAMPLED, sampled), (MEDIA_SHADOWS, media)];
+    let key = p.pipeline(fullscreen_key(&DEFERRED, scene, &defs));
     let inputs = [("gbuffer_normal", gb.normal), ("gbuffer_albedo", gb.albedo), ("gbuffer_material", gb.material), ("depth", depth)];
     for (_, h) in inputs {
         p.sample(h);

@@ -7,12 +7,17 @@ use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::ltc;
 use crate::render::resource::{Access, Handle, TextureDesc};
 use crate::scene::Scene;
+use crate::scene::settings::RectLights;
 
 pub const SPECS: &[&PipelineSpec] = &[];
 
 pub fn ltc_tables(g: &mut GraphBuilder, scene: &Scene) -> Option<[Handle; 2]> {
     if !scene.has_rect_lights() {
         g.cull("ltc_tables", "no rectangular area light");
+        return None;
+    }
+    if scene.quality.rect_lights == RectLights::Sampled {
+        g.cull("ltc_tables", "quality.rect_lights is sampled");
         return None;
     }
     let d = TextureDesc::d2(ltc::FORMAT, ltc::SIZE, ltc::SIZE);
