@@ -297,7 +297,7 @@ fn auto_exposure(s: &Scene) -> bool {
 }
 
 /// Every pass that makes the HDR image, raster or path traced.
-const RENDERED: [&str; 7] = ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes", "path_trace"];
+const RENDERED: [&str; 8] = ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volumes", "path_trace"];
 
 /// Every pass drawn as a fullscreen triangle.
 const FULLSCREEN: [&str; 6] = ["test_pattern", "lighting", "volumes", "exposure", "tonemap", "debug_view"];
@@ -338,9 +338,14 @@ settings! {
         shadow_map_size: u32 = 1024, Int { min: 64, max: 4096, step: 64 }, "Shadow map size", affects ["shadows"], shown_when rastered;
         /// Ray-march steps per pixel through the media.
         volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volumes"], shown_when raster_media;
-        /// Steps of the march toward each light (self-shadowing).
+        /// Steps of the march toward each light (self-shadowing), from each
+        /// point of the volume grid and from each lit surface.
         volume_shadow_steps: u32 = 6, Int { min: 1, max: 64, step: 1 },
-            "Volume shadow steps", affects ["volumes"], shown_when raster_media;
+            "Volume shadow steps", affects ["lighting", "volume_shadows", "volumes"], shown_when raster_media;
+        /// Points of the volume grid (transmittance toward each light) along
+        /// the longest side of the box around the media.
+        volume_grid: u32 = 64, Int { min: 8, max: 256, step: 8 },
+            "Volume shadow grid (points, longest side)", affects ["volume_shadows", "volumes"], shown_when raster_media;
         volume_estimator: Estimator = Estimator::Analytic, Choice(Estimator::NAMES),
             "In-scattering estimator", affects ["volumes"], shown_when raster_media;
         /// Run each decoder level's 2× upsample and concatenation inside the

@@ -29,6 +29,7 @@ passes![
     gbuffer,
     ltc_tables,
     lighting,
+    volume_shadows,
     volumes,
     path_trace,
     denoise,
