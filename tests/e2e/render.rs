@@ -37,6 +37,7 @@ fn minimal_scene_builds_only_what_it_needs() {
     assert_eq!(names(&r["passes"]), ["shadows", "depth_prepass", "gbuffer", "lighting", "tonemap"], "{r}");
     assert!(culled_reason(&r, "volumes").contains("no participating media"));
     assert!(culled_reason(&r, "volume_shadows").contains("no participating media"));
+    assert!(culled_reason(&r, "volume_march").contains("no participating media"));
     assert!(culled_reason(&r, "ltc_tables").contains("no rectangular area light"));
     assert!(culled_reason(&r, "exposure").contains("0"));
     assert!(culled_reason(&r, "debug_view").contains("none"));
@@ -73,7 +74,7 @@ fn showcase_renders_every_pass() {
     let r = report.expect("report.json written");
     assert_eq!(
         names(&r["passes"]),
-        ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volumes", "exposure_histogram", "exposure_adapt", "exposure", "tonemap", "debug_view"],
+        ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volume_march", "volumes", "exposure_histogram", "exposure_adapt", "exposure", "tonemap", "debug_view"],
         "{r}"
     );
     assert_eq!(names(&r["culled"]), ["path_trace", "denoise_autoexposure", "denoise_input", "denoise", "test_pattern"]);
@@ -91,7 +92,7 @@ fn showcase_renders_every_pass() {
     assert!(ev[0].is_finite() && ev[0] == ev[1] && ev[3] == 1.0, "the first frame starts at its target: {ev:?}");
     let pipelines: Vec<&str> = r["passes"].as_array().unwrap().iter().flat_map(|p| p["pipelines"].as_array().unwrap()).map(|v| v.as_str().unwrap()).collect();
     assert!(pipelines.contains(&"lighting.deferred[LIGHT_RECT,MEDIA_SHADOWS,SHADOWS]"), "{pipelines:?}");
-    assert!(pipelines.contains(&"volumes.raymarch[SHADOWS,VOLUME_ANALYTIC]"), "{pipelines:?}");
+    assert!(pipelines.contains(&"volume_march[SHADOWS,VOLUME_ANALYTIC]"), "{pipelines:?}");
     assert!(r["nan"].is_null() && r["gpu_errors"].as_array().unwrap().is_empty(), "{r}");
     // The medium attenuates some pixels: transmittance below 1 somewhere.
     let volumes = r["passes"].as_array().unwrap().iter().find(|p| p["name"] == "volumes").unwrap();

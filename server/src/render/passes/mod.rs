@@ -30,6 +30,7 @@ passes![
     ltc_tables,
     lighting,
     volume_shadows,
+    volume_march,
     volumes,
     path_trace,
     denoise,
