@@ -24,7 +24,7 @@ const SAMPLES = { pass: 'path_trace', output: 'samples' };
 const TRACED = { pass: 'path_trace', output: 'color' };
 /** The passes that make the raster HDR image: a control that affects one
  * changes what the raster reference shows. */
-const RASTER = ['shadows', 'depth_prepass', 'gbuffer', 'ltc_tables', 'lighting', 'volumes'];
+const RASTER = ['shadows', 'depth_prepass', 'gbuffer', 'ltc_tables', 'lighting', 'volume_shadows', 'volume_march', 'volumes'];
 /** Added to the raster value under the relative difference, so that black
  * pixels do not divide by zero. */
 export const RELATIVE_EPSILON = 0.01;

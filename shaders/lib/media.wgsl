@@ -150,17 +150,30 @@ fn media_span(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec2<f32> {
     return vec2(max(span.x, 0.0), min(span.y, t_max));
 }
 
-// Beer–Lambert transmittance from `p` along `dir` for `dist`, marched in
-// `steps` midpoint steps through the media.
-fn transmittance(p: vec3<f32>, dir: vec3<f32>, dist: f32, steps: u32) -> vec3<f32> {
+struct OpticalDepth {
+    optical: vec3<f32>,
+    // Steps the loop ran: fewer than asked only where a driver cut the loop
+    // short (llvmpipe caps the loop iterations of one invocation).
+    completed: u32,
+}
+
+// Optical depth from `p` along `dir` for `dist`, marched in `steps`
+// midpoint steps through the media.
+fn optical_depth(p: vec3<f32>, dir: vec3<f32>, dist: f32, steps: u32) -> OpticalDepth {
     let span = media_span(p, dir, dist);
     if span.x >= span.y {
-        return vec3(1.0);
+        return OpticalDepth(vec3(0.0), steps);
     }
     let dt = (span.y - span.x) / f32(steps);
-    var optical = vec3(0.0);
+    var out = OpticalDepth(vec3(0.0), 0u);
     for (var i = 0u; i < steps; i++) {
-        optical += coefficients(p + dir * (span.x + (f32(i) + 0.5) * dt)).extinction * dt;
+        out.optical += coefficients(p + dir * (span.x + (f32(i) + 0.5) * dt)).extinction * dt;
+        out.completed += 1u;
     }
-    return exp(-optical);
+    return out;
+}
+
+// Beer–Lambert transmittance from `p` along `dir` for `dist`.
+fn transmittance(p: vec3<f32>, dir: vec3<f32>, dist: f32, steps: u32) -> vec3<f32> {
+    return exp(-optical_depth(p, dir, dist, steps).optical);
 }

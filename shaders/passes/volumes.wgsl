@@ -1,19 +1,19 @@
-// Single scattering through the participating media, ray-marched per pixel
-// from the camera to the first opaque surface and composited over it.
-// Each step scatters light from every light toward the camera, attenuated
-// by the media between the step and the light (self-shadowing) and by the
-// opaque occluders' shadow maps. Outputs the composited colour and the
-// camera-to-surface transmittance.
+// The volume march (`volume_march`, at `volume_resolution`) brought to the
+// frame's resolution and composited over the lit frame: colour =
+// opaque × transmittance + in-scattered light. Each pixel blends the four
+// march pixels around it, bilinear weights times how close each one's
+// marched distance is to this pixel's own, so light from a surface in
+// front does not bleed onto one behind (and the reverse). At full
+// resolution the one march pixel is the pixel itself.
 #import loupe::fullscreen::{FullscreenOut, fullscreen}
-#import loupe::view::{view, world_position, camera_ray}
-#import loupe::lights::{lights, incident}
-#import loupe::media::{coefficients, media_span, transmittance}
-#ifdef SHADOWS
-#import loupe::shadows::shadow_hard
-#endif
+#import loupe::view::{view, world_position}
 
+// x: the scale, 1, 2 or 4.
+@group(0) @binding(1) var<uniform> params: vec4<u32>;
 @group(0) @binding(2) var opaque: texture_2d<f32>;
 @group(0) @binding(3) var depth: texture_depth_2d;
+@group(0) @binding(4) var scattered: texture_2d<f32>;
+@group(0) @binding(5) var marched: texture_2d<f32>;
 
 struct Out {
     @location(0) color: vec4<f32>,
@@ -25,71 +25,45 @@ fn vs_fullscreen(@builtin(vertex_index) vertex_index: u32) -> FullscreenOut {
     return fullscreen(vertex_index);
 }
 
-// Isotropic phase function.
-const PHASE: f32 = 0.07957747; // 1 / (4π)
-
-// Light scattered toward the camera at `p`, per unit σs.
-fn in_scattered(p: vec3<f32>) -> vec3<f32> {
-    var sum = vec3(0.0);
-    for (var i = 0u; i < view.counts.x; i++) {
-        let inc = incident(lights[i], p);
-        var seen = transmittance(p, inc.l, min(inc.distance, view.params.z), max(view.counts.w, 1u));
-#ifdef SHADOWS
-        seen *= shadow_hard(lights[i], p);
-#endif
-        sum += inc.radiance * seen;
-    }
-    return sum * PHASE;
-}
-
-// Interleaved gradient noise: a per-pixel offset of the first step trades
-// banding for fine noise, the same every frame so captures are stable.
-fn jitter(pixel: vec2<f32>) -> f32 {
-    return fract(52.9829189 * fract(dot(pixel, vec2(0.06711056, 0.00583715))));
-}
+// How fast a march pixel's weight falls with the relative difference
+// between its marched distance and this pixel's: 5 % apart weighs e^-1.
+const DEPTH_FALLOFF: f32 = 20.0;
 
 @fragment
 fn fs_main(in: FullscreenOut) -> Out {
     let pixel = vec2<i32>(in.position.xy);
     let background = textureLoad(opaque, pixel, 0);
     let z = textureLoad(depth, pixel, 0);
-    let origin = view.position.xyz;
-    let dir = camera_ray(in.position.xy);
-    var t_max = view.params.z;
+    var distance = view.params.z;
     if z < 1.0 {
-        t_max = length(world_position(in.position.xy, z) - origin);
+        distance = length(world_position(in.position.xy, z) - view.position.xyz);
     }
-    let span = media_span(origin, dir, t_max);
-    if span.x >= span.y {
-        return Out(background, vec4(1.0));
-    }
-    let steps = max(view.counts.z, 1u);
-    let dt = (span.y - span.x) / f32(steps);
-    var t = span.x + dt * jitter(in.position.xy);
-    var throughput = vec3(1.0);
-    var radiance = vec3(0.0);
-    for (var i = 0u; i < steps; i++) {
-        if t >= span.y {
-            break;
+    // Where this pixel lies among the march pixels, whose rays go through
+    // the frame's pixels scale × i + scale / 2.
+    let scale = i32(params.x);
+    let at = vec2<f32>(pixel - scale / 2) / f32(scale);
+    let base = vec2<i32>(floor(at));
+    let f = at - vec2<f32>(base);
+    let last = vec2<i32>(textureDimensions(scattered)) - 1;
+    var light = vec3(0.0);
+    var transmittance = vec3(0.0);
+    var total = 0.0;
+    var ran = 1.0;
+    for (var i = 0; i < 4; i++) {
+        let offset = vec2(i & 1, i >> 1u);
+        let tap = clamp(base + offset, vec2(0), last);
+        let bilinear = select(1.0 - f.x, f.x, offset.x == 1) * select(1.0 - f.y, f.y, offset.y == 1);
+        let s = textureLoad(scattered, tap, 0);
+        let t = textureLoad(marched, tap, 0);
+        // A floor keeps the sum above 0 where every tap lies at another depth.
+        let w = bilinear * (exp(-DEPTH_FALLOFF * abs(s.a - distance) / max(distance, 1e-6)) + 1e-6);
+        light += w * s.rgb;
+        transmittance += w * t.rgb;
+        total += w;
+        if bilinear > 0.0 {
+            ran = min(ran, t.a);
         }
-        let step = min(dt, span.y - t);
-        let p = origin + dir * (t + 0.5 * step);
-        let c = coefficients(p);
-        if any(c.extinction > vec3(0.0)) || any(c.emission > vec3(0.0)) {
-            let source = c.scattering * in_scattered(p) + c.emission;
-            let step_t = exp(-c.extinction * step);
-#ifdef VOLUME_ANALYTIC
-            // ∫0^dt S e^{-σt s} ds = S (1 - e^{-σt dt}) / σt, exact for
-            // constant coefficients over the step; S·dt where σt → 0.
-            let integral = select(source * step, source * (1.0 - step_t) / c.extinction, c.extinction > vec3(1e-6));
-#else
-            // Left Riemann sum: over-counts in dense media at few steps.
-            let integral = source * step;
-#endif
-            radiance += throughput * integral;
-            throughput *= step_t;
-        }
-        t += step;
     }
-    return Out(vec4(background.rgb * throughput + radiance, background.a), vec4(throughput, 1.0));
+    transmittance /= total;
+    return Out(vec4(background.rgb * transmittance + light / total, background.a), vec4(transmittance, ran));
 }

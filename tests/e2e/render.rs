@@ -36,6 +36,8 @@ fn minimal_scene_builds_only_what_it_needs() {
     let r = report.expect("report.json written");
     assert_eq!(names(&r["passes"]), ["shadows", "depth_prepass", "gbuffer", "lighting", "tonemap"], "{r}");
     assert!(culled_reason(&r, "volumes").contains("no participating media"));
+    assert!(culled_reason(&r, "volume_shadows").contains("no participating media"));
+    assert!(culled_reason(&r, "volume_march").contains("no participating media"));
     assert!(culled_reason(&r, "ltc_tables").contains("no rectangular area light"));
     assert!(culled_reason(&r, "exposure").contains("0"));
     assert!(culled_reason(&r, "debug_view").contains("none"));
@@ -72,7 +74,7 @@ fn showcase_renders_every_pass() {
     let r = report.expect("report.json written");
     assert_eq!(
         names(&r["passes"]),
-        ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes", "exposure_histogram", "exposure_adapt", "exposure", "tonemap", "debug_view"],
+        ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volume_march", "volumes", "exposure_histogram", "exposure_adapt", "exposure", "tonemap", "debug_view"],
         "{r}"
     );
     assert_eq!(names(&r["culled"]), ["path_trace", "denoise_autoexposure", "denoise_input", "denoise", "test_pattern"]);
@@ -90,12 +92,18 @@ fn showcase_renders_every_pass() {
     assert!(ev[0].is_finite() && ev[0] == ev[1] && ev[3] == 1.0, "the first frame starts at its target: {ev:?}");
     let pipelines: Vec<&str> = r["passes"].as_array().unwrap().iter().flat_map(|p| p["pipelines"].as_array().unwrap()).map(|v| v.as_str().unwrap()).collect();
     assert!(pipelines.contains(&"lighting.deferred[LIGHT_RECT,MEDIA_SHADOWS,SHADOWS]"), "{pipelines:?}");
-    assert!(pipelines.contains(&"volumes.raymarch[SHADOWS,VOLUME_ANALYTIC]"), "{pipelines:?}");
+    assert!(pipelines.contains(&"volume_march[SHADOWS,VOLUME_ANALYTIC]"), "{pipelines:?}");
     assert!(r["nan"].is_null() && r["gpu_errors"].as_array().unwrap().is_empty(), "{r}");
     // The medium attenuates some pixels: transmittance below 1 somewhere.
     let volumes = r["passes"].as_array().unwrap().iter().find(|p| p["name"] == "volumes").unwrap();
     let t = volumes["outputs"].as_array().unwrap().iter().find(|o| o["name"] == "transmittance").unwrap();
     assert!(t["stats"]["min"][0].as_f64().unwrap() < 0.9, "{t}");
+    // Every march ran every step: alpha counts them (1 unless the driver
+    // cut a loop short), in the pixels and in the volume grid.
+    assert_eq!(t["stats"]["min"][3].as_f64(), Some(1.0), "{t}");
+    let grid = &pass("volume_shadows")["outputs"][0];
+    assert_eq!(grid["layout"]["dims"][0], serde_json::json!(["light", 4]), "{grid}");
+    assert_eq!(grid["stats"]["min"][3].as_f64(), Some(1.0), "{grid}");
     // Four point-light cube faces + directional + spot: 8 shadow layers.
     let shadows = &r["passes"].as_array().unwrap()[0]["outputs"][0];
     assert_eq!(shadows["height"].as_u64(), Some(1024 * 8), "layers stack vertically: {shadows}");

@@ -59,7 +59,7 @@ fn broken_shader_keeps_last_good_frame_and_reports_location_then_clears() {
 #[test]
 fn a_change_to_an_imported_module_rebuilds_only_its_dependents() {
     // minimal.toml renders depth, G-buffer, lighting and tonemap; of their
-    // shaders only lighting.wgsl imports lib/brdf.wgsl (volumes.wgsl, which
+    // shaders only lighting.wgsl imports lib/brdf.wgsl (volume_march.wgsl, which
     // shares other modules with it, is culled here).
     const BRDF: &str = "shaders/lib/brdf.wgsl";
     const UNUSED: &str = "shaders/lib/unused.wgsl";

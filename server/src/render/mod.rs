@@ -40,7 +40,7 @@ pub struct FrameOptions {
 /// names (`Loaded::denoiser`): only what the scene calls for.
 pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOptions) -> Graph {
     let mut g = GraphBuilder::new();
-    let raster = ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes"];
+    let raster = ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volume_march", "volumes"];
     let (hdr, gbuffer) = if scene.is_empty() {
         let empty = "the scene is empty: it shows the test pattern";
         for pass in raster.iter().chain(&["path_trace"]) {
@@ -63,7 +63,9 @@ pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOpti
         let gb = gbuffer::gbuffer(&mut g, scene, depth);
         let ltc = ltc_tables::ltc_tables(&mut g, scene);
         let lit = lighting::lighting(&mut g, scene, &gb, depth, shadows, ltc);
-        (volumes::volumes(&mut g, scene, lit, depth, shadows), Some((gb, depth)))
+        let grid = volume_shadows::volume_shadows(&mut g, scene);
+        let marched = volume_march::volume_march(&mut g, scene, depth, shadows, grid);
+        (volumes::volumes(&mut g, scene, lit, depth, marched), Some((gb, depth)))
     };
     let adapted = auto_exposure::auto_exposure(&mut g, scene, hdr);
     let exposed = exposure::exposure(&mut g, scene, hdr, adapted);

@@ -13,7 +13,7 @@ use super::denoise_weights::DenoiseWeights;
 use super::path_geometry::PathGeometry;
 use crate::denoise::network::Network;
 use crate::mesh::MeshData;
-use crate::scene::{Geometry, LightKind, Renderer, Scene, SdfShape};
+use crate::scene::{Geometry, LightKind, Medium, Renderer, Scene, SdfShape};
 
 pub struct GpuMesh {
     pub vertices: wgpu::Buffer,
@@ -196,47 +196,48 @@ fn light_bytes(scene: &Scene) -> Vec<u8> {
 /// the origin for marching.
 const PLANE_EXTENT: f32 = 50.0;
 
+/// The box medium `m`'s marches are clipped to (`bounds_min`/`bounds_max`
+/// of media.wgsl): its shapes' bounds grown by the smooth-union radius.
+pub fn medium_bounds(m: &Medium) -> (Vec3, Vec3) {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for s in &m.shapes {
+        let (slo, shi) = match *s {
+            SdfShape::Sphere { center, radius } => (Vec3::from(center) - radius, Vec3::from(center) + radius),
+            SdfShape::Box { center, half_extents } => (Vec3::from(center) - Vec3::from(half_extents), Vec3::from(center) + Vec3::from(half_extents)),
+            SdfShape::Plane { normal, offset } => {
+                let (mut plo, mut phi) = (Vec3::splat(-PLANE_EXTENT), Vec3::splat(PLANE_EXTENT));
+                // An axis-aligned half-space bounds one side exactly.
+                for axis in 0..3 {
+                    if normal[axis] > 0.999 {
+                        phi[axis] = offset;
+                    } else if normal[axis] < -0.999 {
+                        plo[axis] = -offset;
+                    }
+                }
+                (plo, phi)
+            }
+        };
+        lo = lo.min(slo);
+        hi = hi.max(shi);
+    }
+    (lo - m.blend, hi + m.blend)
+}
+
 fn medium_bytes(scene: &Scene) -> Vec<u8> {
     let mut out = Vec::new();
     for m in &scene.media {
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        let (lo, hi) = medium_bounds(m);
         let mut shapes = Vec::new();
         for s in &m.shapes {
             let (a, b) = match *s {
-                SdfShape::Sphere { center, radius } => {
-                    let c = Vec3::from(center);
-                    lo = lo.min(c - radius);
-                    hi = hi.max(c + radius);
-                    ([0.0, center[0], center[1], center[2]], [0.0, 0.0, 0.0, radius])
-                }
-                SdfShape::Box { center, half_extents } => {
-                    let (c, h) = (Vec3::from(center), Vec3::from(half_extents));
-                    lo = lo.min(c - h);
-                    hi = hi.max(c + h);
-                    ([1.0, center[0], center[1], center[2]], [half_extents[0], half_extents[1], half_extents[2], 0.0])
-                }
-                SdfShape::Plane { normal, offset } => {
-                    let n = Vec3::from(normal);
-                    let (mut plo, mut phi) = (Vec3::splat(-PLANE_EXTENT), Vec3::splat(PLANE_EXTENT));
-                    // An axis-aligned half-space bounds one side exactly.
-                    for axis in 0..3 {
-                        if n[axis] > 0.999 {
-                            phi[axis] = offset;
-                        } else if n[axis] < -0.999 {
-                            plo[axis] = -offset;
-                        }
-                    }
-                    lo = lo.min(plo);
-                    hi = hi.max(phi);
-                    ([2.0, normal[0], normal[1], normal[2]], [0.0, 0.0, 0.0, offset])
-                }
+                SdfShape::Sphere { center, radius } => ([0.0, center[0], center[1], center[2]], [0.0, 0.0, 0.0, radius]),
+                SdfShape::Box { center, half_extents } => ([1.0, center[0], center[1], center[2]], [half_extents[0], half_extents[1], half_extents[2], 0.0]),
+                SdfShape::Plane { normal, offset } => ([2.0, normal[0], normal[1], normal[2]], [0.0, 0.0, 0.0, offset]),
             };
             shapes.push(a);
             shapes.push(b);
         }
-        lo -= m.blend;
-        hi += m.blend;
         push_vec4(&mut out, [m.absorption[0], m.absorption[1], m.absorption[2], m.blend]);
         push_vec4(&mut out, [m.scattering[0], m.scattering[1], m.scattering[2], m.edge]);
         push_vec4(&mut out, [m.emission[0], m.emission[1], m.emission[2], m.shapes.len() as f32]);

@@ -191,7 +191,7 @@ pub fn controls(scene: &Scene) -> Vec<Control> {
             label: format!("Light {i} ({kind}) intensity"),
             kind: ControlKind::Slider { min: 0.0, max: 100.0, step: 0.1 },
             value: settings::float(l.intensity),
-            affects: &["lighting", "volumes"],
+            affects: &["lighting", "volume_march", "volumes"],
         });
     }
     out

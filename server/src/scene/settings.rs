@@ -214,6 +214,26 @@ choice!(
 );
 
 choice!(
+    /// How many of the frame's pixels share one volume march.
+    VolumeResolution {
+        Full = "full",
+        Half = "half",
+        Quarter = "quarter",
+    }
+);
+
+impl VolumeResolution {
+    /// Pixels per side of the block one march serves.
+    pub fn scale(self) -> u32 {
+        match self {
+            Self::Full => 1,
+            Self::Half => 2,
+            Self::Quarter => 4,
+        }
+    }
+}
+
+choice!(
     /// Which renderer makes the frame's HDR image.
     Renderer {
         /// Rasterized G-buffer, deferred lighting and the volume pass.
@@ -312,10 +332,10 @@ fn auto_exposure(s: &Scene) -> bool {
 }
 
 /// Every pass that makes the HDR image, raster or path traced.
-const RENDERED: [&str; 7] = ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volumes", "path_trace"];
+const RENDERED: [&str; 9] = ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volume_march", "volumes", "path_trace"];
 
 /// Every pass drawn as a fullscreen triangle.
-const FULLSCREEN: [&str; 6] = ["test_pattern", "lighting", "volumes", "exposure", "tonemap", "debug_view"];
+const FULLSCREEN: [&str; 7] = ["test_pattern", "lighting", "volume_march", "volumes", "exposure", "tonemap", "debug_view"];
 
 use Kind::{Choice, Float, Int, Toggle};
 
@@ -349,16 +369,25 @@ settings! {
         path_spp: u32 = 256, Int { min: 1, max: 65536, step: 1 }, "Path samples per pixel", affects ["path_trace"], shown_when path_traced;
         /// Indirect bounces; 0 is direct light only.
         path_bounces: u32 = 4, Int { min: 0, max: 64, step: 1 }, "Path bounces", affects ["path_trace"], shown_when path_traced;
-        shadows: bool = true, Toggle, "Shadows", affects ["shadows", "lighting", "volumes"], shown_when rastered;
+        shadows: bool = true, Toggle, "Shadows", affects ["shadows", "lighting", "volume_march", "volumes"], shown_when rastered;
         shadow_map_size: u32 = 1024, Int { min: 64, max: 4096, step: 64 }, "Shadow map size", affects ["shadows"], shown_when rastered;
         rect_lights: RectLights = RectLights::Ltc, Choice(RectLights::NAMES), "Rect lights", affects ["ltc_tables", "lighting"], shown_when raster_rect;
         /// Ray-march steps per pixel through the media.
-        volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volumes"], shown_when raster_media;
-        /// Steps of the march toward each light (self-shadowing).
+        volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volume_march", "volumes"], shown_when raster_media;
+        /// Steps of the march toward each light (self-shadowing), from each
+        /// point of the volume grid and from each lit surface.
         volume_shadow_steps: u32 = 6, Int { min: 1, max: 64, step: 1 },
-            "Volume shadow steps", affects ["volumes"], shown_when raster_media;
+            "Volume shadow steps", affects ["lighting", "volume_shadows", "volume_march", "volumes"], shown_when raster_media;
+        /// Points of the volume grid (transmittance toward each light) along
+        /// the longest side of the box around the media.
+        volume_grid: u32 = 32, Int { min: 8, max: 256, step: 8 },
+            "Volume shadow grid (points, longest side)", affects ["volume_shadows", "volume_march", "volumes"], shown_when raster_media;
+        /// The march's resolution: one march per pixel, per 2×2 or per 4×4
+        /// pixels, brought back to the frame by a depth-aware upsample.
+        volume_resolution: VolumeResolution = VolumeResolution::Full, Choice(VolumeResolution::NAMES),
+            "Volume march resolution", affects ["volume_march", "volumes"], shown_when raster_media;
         volume_estimator: Estimator = Estimator::Analytic, Choice(Estimator::NAMES),
-            "In-scattering estimator", affects ["volumes"], shown_when raster_media;
+            "In-scattering estimator", affects ["volume_march", "volumes"], shown_when raster_media;
         /// Denoise the path-traced image with the scene's `[denoiser]`; off,
         /// its passes are culled and the noisy image is shown.
         denoise: bool = true, Toggle, "Denoise", affects ["denoise"], shown_when denoised;

@@ -220,7 +220,7 @@ fn out_of_range_settings_are_located_at_the_value() {
             assert_eq!(at(&e), line_col(&text, &format!("{key} = "), key.len() + 3), "{}", s.path);
         }
     }
-    assert_eq!(numeric, 9, "every numeric setting was tried");
+    assert_eq!(numeric, 10, "every numeric setting was tried");
     let e = err("[post]\nexposure_ev = 30.0\n");
     assert_eq!(e.message, "post.exposure_ev: must be between -24 and 24, not 30");
     assert_eq!(at(&e), (2, 15));

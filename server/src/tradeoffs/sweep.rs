@@ -96,6 +96,9 @@ pub fn series(scene: &Scene, reference_spp: u32) -> Vec<Series> {
             add("quality.volume_steps", doublings(4, 512), &with, reference.clone());
         }
         add("quality.volume_shadow_steps", doublings(1, 32), std::slice::from_ref(&raster), best("quality.volume_shadow_steps", Value::Int(64)));
+        add("quality.volume_grid", doublings(8, 128), std::slice::from_ref(&raster), best("quality.volume_grid", Value::Int(256)));
+        let resolutions = settings::VolumeResolution::NAMES.iter().rev().map(|r| text(r)).collect();
+        add("quality.volume_resolution", resolutions, std::slice::from_ref(&raster), best("quality.volume_resolution", text("full")));
     }
     if !scene.objects.is_empty() {
         if !scene.lights.is_empty() {

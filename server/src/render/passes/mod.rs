@@ -29,6 +29,8 @@ passes![
     gbuffer,
     ltc_tables,
     lighting,
+    volume_shadows,
+    volume_march,
     volumes,
     path_trace,
     images,

@@ -1,52 +1,57 @@
-//! Single scattering through the scene's media, composited over the lit
-//! frame: a ray march with self-shadowing.
+//! The volume march brought to the frame's resolution (a depth-aware
+//! upsample when `quality.volume_resolution` is half or quarter) and
+//! composited over the lit frame: `color`, and the camera-to-surface
+//! `transmittance` (alpha: the fraction of the march's steps that ran).
 
-use super::{LIGHTS, MEDIA, SHADOW_GROUP, SHADOWS, TWO_TRIANGLES, VIEW, fullscreen_key};
-use crate::gpu::pipeline::{Group, HDR, PipelineSpec, Stages, depth_texture, texture};
+use super::volume_march::Marched;
+use super::{TWO_TRIANGLES, VIEW, fullscreen_key};
+use crate::gpu::pipeline::{FRAG, Group, HDR, PipelineSpec, Stages, depth_texture, sizes, texture, uniform};
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Handle, TextureDesc};
-use crate::scene::{Estimator, Scene};
+use crate::scene::Scene;
 
-/// The exact per-step in-scattering integral instead of the constant one.
-pub const VOLUME_ANALYTIC: &str = "VOLUME_ANALYTIC";
-
-pub static RAYMARCH: PipelineSpec = PipelineSpec {
-    name: "volumes.raymarch",
+pub static COMPOSITE: PipelineSpec = PipelineSpec {
+    name: "volumes.composite",
     shader: "passes/volumes.wgsl",
     stages: Stages::Fullscreen { fragment: "fs_main", targets: &[HDR, HDR] },
-    groups: &[Group::always(0, &[VIEW, LIGHTS, texture("opaque", 2), depth_texture("depth", 3)]), SHADOW_GROUP, Group::always(3, MEDIA)],
-    defs: &[TWO_TRIANGLES, SHADOWS, VOLUME_ANALYTIC],
+    groups: &[Group::always(
+        0,
+        &[VIEW, uniform("params", 1, FRAG, sizes::VEC4), texture("opaque", 2), depth_texture("depth", 3), texture("scattered", 4), texture("marched", 5)],
+    )],
+    defs: &[TWO_TRIANGLES],
 };
-pub const SPECS: &[&PipelineSpec] = &[&RAYMARCH];
+pub const SPECS: &[&PipelineSpec] = &[&COMPOSITE];
 
-/// Returns the composited colour, or `color` itself when culled.
-pub fn volumes(g: &mut GraphBuilder, scene: &Scene, color: Handle, depth: Handle, shadows: Option<Handle>) -> Handle {
-    if scene.media.is_empty() {
+/// Returns the composited colour, or `color` itself when culled (no media,
+/// so no march).
+pub fn volumes(g: &mut GraphBuilder, scene: &Scene, color: Handle, depth: Handle, marched: Option<Marched>) -> Handle {
+    let Some(m) = marched else {
         g.cull("volumes", "the scene has no participating media");
         return color;
-    }
-    let analytic = scene.quality.volume_estimator == Estimator::Analytic;
+    };
     let (w, h) = (scene.width, scene.height);
     let mut p = g.pass("volumes", PassKind::Raster);
-    let key = p.pipeline(fullscreen_key(&RAYMARCH, scene, &[(SHADOWS, shadows.is_some()), (VOLUME_ANALYTIC, analytic)]));
+    let key = p.pipeline(fullscreen_key(&COMPOSITE, scene, &[]));
     let opaque = p.sample(color);
     p.sample(depth);
-    let shadow_maps = shadows.map(|h| p.sample(h));
+    p.sample(m.scattered);
+    p.sample(m.transmittance);
     let out = p.create("color", TextureDesc::d2(HDR, w, h), Access::ColorTarget);
     let transmittance = p.create("transmittance", TextureDesc::d2(HDR, w, h), Access::ColorTarget);
     p.execute(move |ctx| {
-        let s = ctx.scene;
-        let mut b = vec![
-            ("view", s.view.as_entire_binding()),
-            ("lights", s.lights.as_entire_binding()),
+        let params = ctx.uniform(bytemuck::cast_slice(&[m.scale, 0, 0, 0]));
+        let b = [
+            ("view", ctx.scene.view.as_entire_binding()),
+            ("params", params.as_entire_binding()),
             ("opaque", ctx.bind(opaque)),
             ("depth", ctx.bind(depth)),
-            ("media", s.media.as_entire_binding()),
+            ("scattered", ctx.bind(m.scattered)),
+            ("marched", ctx.bind(m.transmittance)),
         ];
-        if let Some(h) = shadow_maps {
-            b.extend([("shadow_maps", ctx.bind(h)), ("shadow_views", s.shadow_views.as_entire_binding())]);
-        }
         ctx.fullscreen(&key, &[out, transmittance], &b);
     });
     out
 }
+
+#[cfg(test)]
+mod tests;
