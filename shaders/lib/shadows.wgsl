@@ -1,9 +1,11 @@
 // Shadow maps: one depth layer per directional, spot or rect light, six
 // (a cube, face by dominant axis) per point light, all in one array at
-// group 1. Filtered with a 3×3 PCF of exact loads: no comparison sampler.
+// group 1. Filtered with a (2r + 1)² PCF of exact loads, r the view's
+// `quality.shadow_filter`: no comparison sampler.
 #define_import_path loupe::shadows
 
 #import loupe::lights::{Light, LIGHT_POINT, light_type}
+#import loupe::view::view
 
 @group(1) @binding(0) var shadow_maps: texture_depth_2d_array;
 @group(1) @binding(1) var<storage, read> shadow_views: array<mat4x4<f32>>;
@@ -59,12 +61,14 @@ fn shadow(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
     if at.w < 0.0 {
         return 1.0;
     }
+    let r = i32(view.params.w);
     var lit = 0.0;
-    for (var y = -1; y <= 1; y++) {
-        for (var x = -1; x <= 1; x++) {
+    for (var y = -r; y <= r; y++) {
+        for (var x = -r; x <= r; x++) {
             let c = clamp(vec2<i32>(at.xy) + vec2(x, y), vec2(0), size - 1);
             lit += select(0.0, 1.0, at.z <= textureLoad(shadow_maps, c, i32(at.w), 0));
         }
     }
-    return lit / 9.0;
+    let taps = f32((2 * r + 1) * (2 * r + 1));
+    return lit / taps;
 }

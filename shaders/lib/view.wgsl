@@ -7,7 +7,8 @@ struct View {
     inv_view_proj: mat4x4<f32>,
     // xyz: camera position; w: near plane distance.
     position: vec4<f32>,
-    // xy: target size in pixels; z: far plane distance; w: unused.
+    // xy: target size in pixels; z: far plane distance; w: the shadow
+    // filter's radius in texels (`loupe::shadows`).
     params: vec4<f32>,
     // x: lights, y: media, z: volume steps, w: volume shadow steps.
     counts: vec4<u32>,

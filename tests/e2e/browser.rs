@@ -645,16 +645,16 @@ async fn the_tradeoffs_chart_shows_the_sweep_and_applies_a_point() {
     let s = Server::start(&p.root, &["--scene", "scenes/minimal.toml", "--render", "on-change"]);
     let (_driver, c) = browser().await;
     c.goto(&s.url("/")).await.unwrap();
-    // Series: shadow_map_size (128 … 2048), path_spp (1 … 64), two_triangles
-    // (true, false: the same image, on the bottom edge). The scene's
-    // defaults are raster, a 1024 shadow map, one triangle: the fourth
-    // point of the first series and the second of the last are current,
-    // the path tracer's are not.
-    until(&c, &s, "the points", "window.loupe.state.tradeoffs.points === 14").await;
+    // Series: shadow_map_size (128 … 2048), shadow_filter (0 … 3), path_spp
+    // (1 … 64), two_triangles (true, false: the same image, on the bottom
+    // edge). The scene's defaults are raster, a 1024 shadow map, a filter
+    // of radius 1, one triangle: those points are current, the path
+    // tracer's are not.
+    until(&c, &s, "the points", "window.loupe.state.tradeoffs.points === 18").await;
     let current = until(&c, &s, "the current points marked", "JSON.stringify(window.loupe.state.tradeoffs.current)").await;
-    assert_eq!(current, "[[0,3],[2,1]]");
+    assert_eq!(current, "[[0,3],[1,1],[3,1]]");
 
-    let point = "document.querySelector('#tradeoffs-chart circle[data-series=\"1\"][data-index=\"2\"]')";
+    let point = "document.querySelector('#tradeoffs-chart circle[data-series=\"2\"][data-index=\"2\"]')";
     c.execute(&format!("{point}.dispatchEvent(new MouseEvent('mouseenter')); return true;"), vec![]).await.unwrap();
     let text = until(&c, &s, "the tip", "!document.querySelector('#tradeoffs-tip').hidden && document.querySelector('#tradeoffs-text').textContent").await;
     let text = text.as_str().unwrap().to_owned();
@@ -662,7 +662,7 @@ async fn the_tradeoffs_chart_shows_the_sweep_and_applies_a_point() {
     until(&c, &s, "its image", "document.querySelector('#tradeoffs-image').naturalWidth === 32").await;
 
     c.execute(&format!("{point}.dispatchEvent(new MouseEvent('click')); return true;"), vec![]).await.unwrap();
-    until(&c, &s, "the point applied and marked", "JSON.stringify(window.loupe.state.tradeoffs.current) === '[[1,2],[2,1]]'").await;
+    until(&c, &s, "the point applied and marked", "JSON.stringify(window.loupe.state.tradeoffs.current) === '[[2,2],[3,1]]'").await;
     let (status, body) = s.get("/api/controls");
     assert_eq!(status, 200);
     let controls: serde_json::Value = serde_json::from_slice(&body).unwrap();

@@ -21,9 +21,9 @@ fn sweeps_settings_into_a_table_a_plot_and_json_with_cached_references() {
     let json: serde_json::Value = serde_json::from_slice(&std::fs::read(p.path("out/tradeoffs.json")).unwrap()).unwrap();
     let series = json["series"].as_array().unwrap();
     let names: Vec<&str> = series.iter().map(|s| s["name"].as_str().unwrap()).collect();
-    assert_eq!(names, ["shadow_map_size", "path_spp", "two_triangles"], "minimal.toml has no media: no volume series");
+    assert_eq!(names, ["shadow_map_size", "shadow_filter", "path_spp", "two_triangles"], "minimal.toml has no media: no volume series");
 
-    let path = &series[1]["points"];
+    let path = &series[2]["points"];
     let errors: Vec<f64> = path.as_array().unwrap().iter().map(|p| p["relative_mse"].as_f64().unwrap()).collect();
     assert_eq!(errors.len(), 7, "1 to 64 samples");
     assert!(errors.windows(2).all(|w| w[1] < w[0]), "more samples, less error: {errors:?}");
@@ -34,7 +34,7 @@ fn sweeps_settings_into_a_table_a_plot_and_json_with_cached_references() {
     assert_eq!(last["time_ratio"].as_f64(), Some(1.0));
     assert!(path[0]["time_ms"].as_f64().unwrap() < last["time_ms"].as_f64().unwrap(), "64 samples take longer than 1");
 
-    let triangles = &series[2]["points"];
+    let triangles = &series[3]["points"];
     let lanes = |i: usize| triangles[i]["helper_lanes"].as_u64().unwrap();
     assert!(lanes(0) > lanes(1), "two triangles leave helper lanes along their diagonal: {} against {}", lanes(0), lanes(1));
     assert_eq!(triangles[0]["relative_mse"].as_f64(), Some(0.0), "the same image");
@@ -47,7 +47,7 @@ fn sweeps_settings_into_a_table_a_plot_and_json_with_cached_references() {
 
     // A second run renders no reference: each is read from the cache.
     let before = cached(&p);
-    assert_eq!(before.len(), 3, "a reference per series: {before:?}");
+    assert_eq!(before.len(), 4, "a reference per series: {before:?}");
     p.run(&args).code(0);
     assert_eq!(cached(&p), before, "the cached references are reused, untouched");
     // An edited shader is another reference.
@@ -55,5 +55,5 @@ fn sweeps_settings_into_a_table_a_plot_and_json_with_cached_references() {
     let text = std::fs::read_to_string(&brdf).unwrap();
     std::fs::write(&brdf, text + "\n// edited\n").unwrap();
     p.run(&args).code(0);
-    assert_eq!(cached(&p).len(), 6, "the sources' hashes key the cache");
+    assert_eq!(cached(&p).len(), 8, "the sources' hashes key the cache");
 }

@@ -147,7 +147,7 @@ pub fn view_bytes(scene: &Scene) -> Vec<u8> {
     push_mat4(&mut out, view_proj);
     push_mat4(&mut out, view_proj.inverse());
     push_vec4(&mut out, [c.position[0], c.position[1], c.position[2], c.near]);
-    push_vec4(&mut out, [scene.width as f32, scene.height as f32, c.far, 0.0]);
+    push_vec4(&mut out, [scene.width as f32, scene.height as f32, c.far, scene.quality.shadow_filter as f32]);
     let counts = [scene.lights.len() as u32, scene.media.len() as u32, scene.quality.volume_steps, scene.quality.volume_shadow_steps];
     out.extend_from_slice(bytemuck::cast_slice(&counts));
     let e = &scene.environment;

@@ -371,6 +371,8 @@ settings! {
         path_bounces: u32 = 4, Int { min: 0, max: 64, step: 1 }, "Path bounces", affects ["path_trace"], shown_when path_traced;
         shadows: bool = true, Toggle, "Shadows", affects ["shadows", "lighting", "volume_march", "volumes"], shown_when rastered;
         shadow_map_size: u32 = 1024, Int { min: 64, max: 4096, step: 64 }, "Shadow map size", affects ["shadows"], shown_when rastered;
+        /// The shadow maps' percentage-closer filter: (2r + 1)² taps.
+        shadow_filter: u32 = 1, Int { min: 0, max: 4, step: 1 }, "Shadow filter radius (texels; 1 is 3×3 PCF)", affects ["lighting"], shown_when rastered;
         rect_lights: RectLights = RectLights::Ltc, Choice(RectLights::NAMES), "Rect lights", affects ["ltc_tables", "lighting"], shown_when raster_rect;
         /// Ray-march steps per pixel through the media.
         volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volume_march", "volumes"], shown_when raster_media;

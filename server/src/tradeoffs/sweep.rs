@@ -103,6 +103,8 @@ pub fn series(scene: &Scene, reference_spp: u32) -> Vec<Series> {
     if !scene.objects.is_empty() {
         if !scene.lights.is_empty() {
             add("quality.shadow_map_size", doublings(128, 2048), std::slice::from_ref(&raster), best("quality.shadow_map_size", Value::Int(4096)));
+            let radii = (0..=3).map(Value::Int).collect();
+            add("quality.shadow_filter", radii, std::slice::from_ref(&raster), best("quality.shadow_filter", Value::Int(4)));
         }
         if scene.has_rect_lights() {
             // LTC's closed form against the area sampled through the BRDF.
@@ -143,7 +145,7 @@ mod tests {
     fn a_scene_sweeps_only_the_settings_that_change_its_image() {
         let names = |s: &[Series]| s.iter().map(|s| s.name.clone()).collect::<Vec<_>>();
         let minimal = series(&scene("minimal.toml"), 256);
-        assert_eq!(names(&minimal), ["shadow_map_size", "path_spp", "two_triangles"]);
+        assert_eq!(names(&minimal), ["shadow_map_size", "shadow_filter", "path_spp", "two_triangles"]);
         let volume = series(&scene("volume.toml"), 256);
         let steps: Vec<_> = volume.iter().filter(|s| s.setting == "quality.volume_steps").collect();
         assert_eq!(steps.len(), 2);

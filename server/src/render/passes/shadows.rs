@@ -42,3 +42,7 @@ pub fn shadows(g: &mut GraphBuilder, scene: &Scene) -> Option<Handle> {
     });
     Some(depth)
 }
+
+#[cfg(test)]
+#[path = "shadows/tests.rs"]
+mod tests;
