@@ -17,7 +17,7 @@ const SVG = 'http://www.w3.org/2000/svg';
 const WIDTH = 520;
 const HEIGHT = 300;
 const PAD = { left: 52, right: 12, top: 12, bottom: 36 };
-const COLORS = ['#4e9fff', '#ff6b6b', '#51cf66', '#fcc419', '#cc5de8', '#ff922b', '#22b8cf', '#adb5bd'];
+const COLORS = ['#4e9fff', '#ff6b6b', '#51cf66', '#fcc419', '#cc5de8', '#ff922b', '#22b8cf', '#adb5bd', '#94d82d', '#f783ac', '#748ffc', '#e8590c'];
 
 function svg(tag, attrs = {}, text = null) {
   const node = document.createElementNS(SVG, tag);

@@ -41,13 +41,13 @@ pub fn markdown(r: &Report) -> String {
     s
 }
 
-const WIDTH: f64 = 860.0;
+const WIDTH: f64 = 920.0;
 const HEIGHT: f64 = 520.0;
 const LEFT: f64 = 80.0;
-const RIGHT: f64 = 280.0;
+const RIGHT: f64 = 340.0;
 const TOP: f64 = 40.0;
 const BOTTOM: f64 = 60.0;
-const COLORS: [&str; 8] = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
+const COLORS: [&str; 12] = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f", "#393b79", "#e7969c"];
 
 /// Error (relative MSE) against time, log–log. A point equal to its
 /// reference (no error to put on a log axis) sits hollow on the bottom
@@ -101,7 +101,7 @@ pub fn svg(r: &Report) -> String {
         }
         let ly = TOP + 14.0 + i as f64 * 18.0;
         let lx = LEFT + pw + 16.0;
-        let _ = writeln!(s, r#"<line x1="{lx:.1}" y1="{ly:.1}" x2="{:.1}" y2="{ly:.1}" stroke="{color}" stroke-width="2"/><text x="{:.1}" y="{:.1}">{}</text>"#, lx + 18.0, lx + 24.0, ly + 4.0, escape(&series.name));
+        let _ = writeln!(s, r#"<line x1="{lx:.1}" y1="{ly:.1}" x2="{:.1}" y2="{ly:.1}" stroke="{color}" stroke-width="2"/><text x="{:.1}" y="{:.1}" font-size="11">{}</text>"#, lx + 18.0, lx + 24.0, ly + 4.0, escape(&series.name));
     }
     s.push_str("</svg>\n");
     s
