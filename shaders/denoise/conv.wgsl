@@ -39,7 +39,7 @@ fn conv(@builtin(global_invocation_id) id: vec3<u32>) {
         let a_pixel = u32(sy) * layer.a_width + u32(sx);
 #endif
         for (var ci = 0u; ci < layer.a_blocks; ci++) {
-            let v = load(a[a_pixel * layer.a_blocks + ci]);
+            let v = load(a[a_pixel * layer.a_blocks + ci].v);
             let row = (tap * in_blocks + ci) * stride + first;
             for (var k = 0u; k < BLOCKS; k++) {
                 acc[k] += weights[row + k] * v;
@@ -48,7 +48,7 @@ fn conv(@builtin(global_invocation_id) id: vec3<u32>) {
 #ifdef CONCAT
         let b_pixel = u32(sy) * layer.width + u32(sx);
         for (var ci = 0u; ci < layer.b_blocks; ci++) {
-            let v = load(b[b_pixel * layer.b_blocks + ci]);
+            let v = load(b[b_pixel * layer.b_blocks + ci].v);
             let row = (tap * in_blocks + layer.a_blocks + ci) * stride + first;
             for (var k = 0u; k < BLOCKS; k++) {
                 acc[k] += weights[row + k] * v;

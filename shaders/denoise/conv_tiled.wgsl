@@ -53,12 +53,12 @@ fn input_at(x: i32, y: i32, block: u32) -> vec4<f32> {
 #else
         let a_pixel = u32(y) * layer.a_width + u32(x);
 #endif
-        return load(a[a_pixel * layer.a_blocks + block]);
+        return load(a[a_pixel * layer.a_blocks + block].v);
     }
 #ifdef CONCAT
     let bb = block - layer.a_blocks;
     if bb < layer.b_blocks {
-        return load(b[(u32(y) * layer.width + u32(x)) * layer.b_blocks + bb]);
+        return load(b[(u32(y) * layer.width + u32(x)) * layer.b_blocks + bb].v);
     }
 #endif
     return vec4(0.0);
@@ -99,15 +99,11 @@ fn conv(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) l
         workgroupBarrier();
         for (var ci = 0u; ci < CHUNK; ci++) {
             for (var tap = 0u; tap < 9u; tap++) {
-                var w: array<mat4x4<f32>, BLOCKS>;
-                for (var k = 0u; k < BLOCKS; k++) {
-                    w[k] = taps[(tap * CHUNK + ci) * BLOCKS + k];
-                }
                 let row = (local.y + tap / 3u) * PATCH_W + local.x + tap % 3u;
                 for (var p = 0u; p < PIXELS; p++) {
                     let v = inputs[(row + p * GROUP_W) * CHUNK + ci];
                     for (var k = 0u; k < BLOCKS; k++) {
-                        acc[p * BLOCKS + k] += w[k] * v;
+                        acc[p * BLOCKS + k] += taps[(tap * CHUNK + ci) * BLOCKS + k] * v;
                     }
                 }
             }

@@ -37,23 +37,23 @@ struct Layer {
 }
 
 @group(0) @binding(0) var<uniform> layer: Layer;
-// The tensors' elements (`lib/tensor.wgsl`), spelled out: a composable
-// module cannot declare the `Stored` alias entry points use.
+// A tensor's element (`lib/tensor.wgsl`), wrapped: a composable module
+// cannot declare the `Stored` alias entry points use.
+struct Stored {
 #ifdef F16
-@group(0) @binding(1) var<storage, read> a: array<vec2<u32>>;
-@group(0) @binding(5) var<storage, read_write> out: array<vec2<u32>>;
-#ifdef CONCAT
-@group(1) @binding(0) var<storage, read> b: array<vec2<u32>>;
-#endif
+    v: vec2<u32>,
 #else
-@group(0) @binding(1) var<storage, read> a: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read_write> out: array<vec4<f32>>;
-#ifdef CONCAT
-@group(1) @binding(0) var<storage, read> b: array<vec4<f32>>;
+    v: vec4<f32>,
 #endif
+}
+
+@group(0) @binding(1) var<storage, read> a: array<Stored>;
+#ifdef CONCAT
+@group(1) @binding(0) var<storage, read> b: array<Stored>;
 #endif
 @group(0) @binding(3) var<storage, read> weights: array<mat4x4<f32>>;
 @group(0) @binding(4) var<storage, read> bias: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read_write> out: array<Stored>;
 #ifdef F16
 // Values of this layer too large for an f16, counted before the store.
 @group(2) @binding(0) var<storage, read_write> overflow: atomic<u32>;
@@ -75,7 +75,7 @@ fn store_block(pixel: u32, block: u32, sum: vec4<f32>) -> u32 {
     if layer.relu != 0u {
         v = max(v, vec4(0.0));
     }
-    out[pixel * layer.out_blocks + block] = store(v);
+    out[pixel * layer.out_blocks + block] = Stored(store(v));
 #ifdef F16
     return overflows(v);
 #else
