@@ -10,10 +10,9 @@
 //
 // Loop iterations per invocation, counted as if nothing were unrolled
 // (llvmpipe ends an invocation's loops after 65,535 in all): per chunk 1 +
-// 6 (patch) + 2 (weights) + 272 (sums: 2 blocks, 18 taps, 72 weight
-// loads, 36 pixels, 144 products) = 281; the widest layer (dec_conv1a with
-// OIDN's weights, 19 input blocks) has 10 chunks: about 2,830 with the
-// bias and the stores.
+// 6 (patch) + 2 (weights) + 200 (sums: 2 blocks, 18 taps, 36 pixels, 144
+// products) = 209; the widest layer (dec_conv1a with OIDN's weights, 19
+// input blocks) has 10 chunks: about 2,110 with the bias and the stores.
 
 #import loupe::tensor::load
 #import loupe::conv::{layer, a, weights, bias, BLOCKS, weight_stride, store_block, count_overflows}

@@ -201,9 +201,7 @@ fn compare(net: Network, s: &Setup, images: &[Image; 3], tolerance: f32) -> (Vec
 /// Every setup: each convolution kernel, HDR and LDR, f32 and f16
 /// storage, upsample and concatenation fused or stored.
 fn setups() -> impl Iterator<Item = Setup> {
-    DenoiserKernel::NAMES.iter().flat_map(|&kernel| {
-        (0..8).map(move |i| Setup { hdr: i & 1 != 0, f16: i & 2 != 0, fused: i & 4 != 0, kernel })
-    })
+    DenoiserKernel::NAMES.iter().flat_map(|&kernel| (0..8).map(move |i| Setup { hdr: i & 1 != 0, f16: i & 2 != 0, fused: i & 4 != 0, kernel }))
 }
 
 /// OIDN's base U-Net's layers at small, distinct widths, random weights;

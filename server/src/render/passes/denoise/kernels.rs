@@ -25,7 +25,16 @@ pub const F16: &str = "F16";
 
 /// Both convolution kernels bind the same (`shaders/lib/conv.wgsl`).
 const CONV_GROUPS: &[Group] = &[
-    Group::always(0, &[uniform("layer", 0, COMPUTE, 2 * sizes::VEC4), storage("a", 1, COMPUTE), storage("weights", 3, COMPUTE), storage("bias", 4, COMPUTE), storage_rw("out", 5)]),
+    Group::always(
+        0,
+        &[
+            uniform("layer", 0, COMPUTE, 2 * sizes::VEC4),
+            storage("a", 1, COMPUTE),
+            storage("weights", 3, COMPUTE),
+            storage("bias", 4, COMPUTE),
+            storage_rw("out", 5),
+        ],
+    ),
     Group::when(1, CONCAT, &[storage("b", 0, COMPUTE)]),
     Group::when(2, F16, &[storage_rw("overflow", 0)]),
 ];
