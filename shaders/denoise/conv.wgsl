@@ -1,56 +1,13 @@
-// One 3×3 convolution layer of the denoiser's U-Net, "same" zero padding,
-// bias, optional ReLU. Tensors are channels-last with channels padded to a
-// multiple of 4, one vec4 per (pixel, block of 4 channels), stored as f32
-// or (F16) as halves (`lib/tensor.wgsl`); sums are f32. The input is
-// `a`, optionally read 2× nearest-upsampled (UPSAMPLE), followed along
-// channels by `b` when CONCAT: upsample + concat + conv fused in one pass,
-// so the upsampled and concatenated tensors are never stored.
-//
-// Weights are laid out by the host as mat4x4 blocks,
-// [tap (ky·3+kx)][input block][output block], column c holding input
-// channel c's weights to the block's 4 outputs, so `w * x` adds a whole
-// input block to an output block (`render::denoise_weights::pack_conv`).
+// The direct convolution kernel (`lib/conv.wgsl` says what it computes and
+// how the tensors and weights are laid out): one invocation per output
+// pixel and BLOCKS output blocks, each reading its inputs and weights from
+// the storage buffers itself.
 
-struct Layer {
-    // Output (and `b`) size in pixels.
-    width: u32,
-    height: u32,
-    // `a`'s width: half the output's, rounded up, when UPSAMPLE.
-    a_width: u32,
-    a_height: u32,
-    // Channel blocks (of 4) of a, b and the output.
-    a_blocks: u32,
-    b_blocks: u32,
-    out_blocks: u32,
-    relu: u32,
-}
-
-#import loupe::tensor::{load, store}
-#ifdef F16
-#import loupe::tensor::overflows
-#endif
-
-#ifdef F16
-alias Stored = vec2<u32>;
-#else
-alias Stored = vec4<f32>;
-#endif
-
-@group(0) @binding(0) var<uniform> layer: Layer;
-@group(0) @binding(1) var<storage, read> a: array<Stored>;
+#import loupe::tensor::load
+#import loupe::conv::{layer, a, weights, bias, BLOCKS, weight_stride, store_block, count_overflows}
 #ifdef CONCAT
-@group(1) @binding(0) var<storage, read> b: array<Stored>;
+#import loupe::conv::b
 #endif
-@group(0) @binding(3) var<storage, read> weights: array<mat4x4<f32>>;
-@group(0) @binding(4) var<storage, read> bias: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read_write> out: array<Stored>;
-#ifdef F16
-// Values of this layer too large for an f16, counted before the store.
-@group(2) @binding(0) var<storage, read_write> overflow: atomic<u32>;
-#endif
-
-// Output blocks per invocation: each input vec4 read serves this many.
-const BLOCKS: u32 = 4u;
 
 @compute @workgroup_size(8, 8, 1)
 fn conv(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -62,11 +19,10 @@ fn conv(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let count = min(BLOCKS, layer.out_blocks - first);
     let in_blocks = layer.a_blocks + layer.b_blocks;
-    // The weights' and bias's output blocks are padded to a multiple of
-    // BLOCKS (with zeros), so the loops over k have a constant count: the
-    // compiler unrolls them and keeps `acc` in registers (on llvmpipe twice
-    // as fast as looping to `count`).
-    let stride = (layer.out_blocks + BLOCKS - 1u) / BLOCKS * BLOCKS;
+    // The loops over k have a constant count (the weights' output blocks
+    // are padded): the compiler unrolls them and keeps `acc` in registers
+    // (on llvmpipe twice as fast as looping to `count`).
+    let stride = weight_stride();
     var acc: array<vec4<f32>, BLOCKS>;
     for (var k = 0u; k < BLOCKS; k++) {
         acc[k] = bias[first + k];
@@ -83,7 +39,7 @@ fn conv(@builtin(global_invocation_id) id: vec3<u32>) {
         let a_pixel = u32(sy) * layer.a_width + u32(sx);
 #endif
         for (var ci = 0u; ci < layer.a_blocks; ci++) {
-            let v = load(a[a_pixel * layer.a_blocks + ci]);
+            let v = load(a[a_pixel * layer.a_blocks + ci].v);
             let row = (tap * in_blocks + ci) * stride + first;
             for (var k = 0u; k < BLOCKS; k++) {
                 acc[k] += weights[row + k] * v;
@@ -92,7 +48,7 @@ fn conv(@builtin(global_invocation_id) id: vec3<u32>) {
 #ifdef CONCAT
         let b_pixel = u32(sy) * layer.width + u32(sx);
         for (var ci = 0u; ci < layer.b_blocks; ci++) {
-            let v = load(b[b_pixel * layer.b_blocks + ci]);
+            let v = load(b[b_pixel * layer.b_blocks + ci].v);
             let row = (tap * in_blocks + layer.a_blocks + ci) * stride + first;
             for (var k = 0u; k < BLOCKS; k++) {
                 acc[k] += weights[row + k] * v;
@@ -101,23 +57,9 @@ fn conv(@builtin(global_invocation_id) id: vec3<u32>) {
 #endif
     }
     let pixel = id.y * layer.width + id.x;
-#ifdef F16
     var over = 0u;
-#endif
     for (var k = 0u; k < count; k++) {
-        var v = acc[k];
-        if layer.relu != 0u {
-            v = max(v, vec4(0.0));
-        }
-#ifdef F16
-        over += overflows(v);
-#endif
-        out[pixel * layer.out_blocks + first + k] = store(v);
+        over += store_block(pixel, first + k, acc[k]);
     }
-#ifdef F16
-    // Rare: one atomic per invocation that overflowed, none otherwise.
-    if over > 0u {
-        atomicAdd(&overflow, over);
-    }
-#endif
+    count_overflows(over);
 }

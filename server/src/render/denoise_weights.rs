@@ -1,5 +1,5 @@
 //! The denoiser's weights on the GPU: each convolution's weights and bias
-//! packed as `shaders/denoise/conv.wgsl` reads them, uploaded once per
+//! packed as both convolution kernels read them (`shaders/lib/conv.wgsl`), uploaded once per
 //! network and kept while the network and the way its upsamples and
 //! concatenations run (fused into the convolution or not) are the same: a
 //! scene edit that moves a light keeps them. Built only for scenes whose
@@ -17,8 +17,9 @@ use crate::denoise::network::{Conv, Network, Op, TensorId};
 
 /// Lanes of a channel block.
 pub const BLOCK: usize = 4;
-/// Output blocks one convolution invocation computes (the shader's
-/// BLOCKS): the weights' and bias's output blocks are padded to a multiple.
+/// Output blocks one invocation of the direct convolution, or one
+/// workgroup of the tiled one, computes (`BLOCKS` in `lib/conv.wgsl`): the
+/// weights' and bias's output blocks are padded to a multiple.
 pub const CONV_BLOCKS: usize = 4;
 
 /// Channel blocks holding `channels`.

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 pub use file::{Camera, Environment, Material, Noise, SdfShape, Vec3};
-pub use settings::{DebugView, Estimator, Post, Quality, Renderer, Tonemap, VolumeResolution};
+pub use settings::{DebugView, DenoiserKernel, Estimator, Post, Quality, Renderer, Tonemap, VolumeResolution};
 
 use crate::denoise::Precision;
 use crate::denoise::process::Mode;

@@ -243,6 +243,20 @@ choice!(
     }
 );
 
+choice!(
+    /// Which kernel runs the denoiser's convolutions
+    /// (`render::passes::denoise::kernels`); the result is the same.
+    DenoiserKernel {
+        /// One invocation per output pixel and 4 output blocks, reading its
+        /// inputs and weights from the storage buffers itself.
+        Direct = "direct",
+        /// Workgroup-tiled (implicit GEMM): each workgroup copies its tile's
+        /// input patch and the weights to workgroup memory once per chunk of
+        /// input channels.
+        Tiled = "tiled",
+    }
+);
+
 macro_rules! or_always {
     () => {
         always
@@ -398,6 +412,8 @@ settings! {
         /// tensors are never stored); off, each is a pass of its own whose
         /// tensor can be inspected. The denoised image is the same.
         denoiser_fused: bool = true, Toggle, "Denoiser: fuse upsample + concat into the convolution",
+            affects ["denoise"], shown_when denoised;
+        denoiser_kernel: DenoiserKernel = DenoiserKernel::Direct, Choice(DenoiserKernel::NAMES), "Denoiser: convolution kernel",
             affects ["denoise"], shown_when denoised;
     }
 }

@@ -199,6 +199,7 @@ fn defaults_are_the_documented_ones() {
     assert_eq!((p.auto_exposure, p.auto_exposure_speed, p.auto_exposure_min_ev, p.auto_exposure_max_ev), (false, 3.0, -8.0, 8.0));
     assert_eq!((q.shadows, q.shadow_map_size, q.volume_steps, q.volume_shadow_steps, q.volume_estimator), (true, 1024, 48, 6, Estimator::Analytic));
     assert_eq!((q.renderer, q.path_spp, q.path_bounces), (Renderer::Raster, 256, 4));
+    assert_eq!((q.shadow_filter, q.rect_lights, q.denoise), (1, crate::scene::settings::RectLights::Ltc, true));
 }
 
 #[test]
@@ -220,7 +221,7 @@ fn out_of_range_settings_are_located_at_the_value() {
             assert_eq!(at(&e), line_col(&text, &format!("{key} = "), key.len() + 3), "{}", s.path);
         }
     }
-    assert_eq!(numeric, 10, "every numeric setting was tried");
+    assert_eq!(numeric, 11, "every numeric setting was tried");
     let e = err("[post]\nexposure_ev = 30.0\n");
     assert_eq!(e.message, "post.exposure_ev: must be between -24 and 24, not 30");
     assert_eq!(at(&e), (2, 15));

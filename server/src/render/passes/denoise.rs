@@ -16,7 +16,7 @@
 
 pub mod kernels;
 
-use kernels::{CONCAT, CONCAT_CHANNELS, CONV, ConcatUniform, F16, LayerUniform, POOL, PoolUniform, TILE, UPSAMPLE, UPSAMPLE_NEAREST, conv_workgroups};
+use kernels::{CONCAT, CONCAT_CHANNELS, CONV, CONV_TILED, ConcatUniform, F16, LayerUniform, POOL, PoolUniform, TILE, UPSAMPLE, UPSAMPLE_NEAREST, conv_spec, conv_workgroups};
 
 use super::path_trace::COLOR;
 use crate::denoise::Precision;
@@ -83,7 +83,7 @@ pub static OUTPUT: PipelineSpec = PipelineSpec {
     defs: &[HDR_DEF, LDR_SRGB, AUTOEXPOSURE, F16],
 };
 
-pub const SPECS: &[&PipelineSpec] = &[&AUTOEXPOSURE_BINS, &AUTOEXPOSURE_SCALE, &INPUT, &CONV, &POOL, &UPSAMPLE_NEAREST, &CONCAT_CHANNELS, &OUTPUT];
+pub const SPECS: &[&PipelineSpec] = &[&AUTOEXPOSURE_BINS, &AUTOEXPOSURE_SCALE, &INPUT, &CONV, &CONV_TILED, &POOL, &UPSAMPLE_NEAREST, &CONCAT_CHANNELS, &OUTPUT];
 
 /// The passes every denoised frame has, whatever the network: culled
 /// with the reason when the frame is not denoised.
@@ -238,7 +238,8 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
         match op {
             Op::Conv(c) => {
                 let (a, b) = (reads[0], reads.get(1).copied());
-                let key = p.pipeline(PipelineKey::new(&CONV, &[(UPSAMPLE, fusion.is_some()), (CONCAT, fusion.is_some()), (F16, f16)]));
+                let kernel = scene.quality.denoiser_kernel;
+                let key = p.pipeline(PipelineKey::new(conv_spec(kernel), &[(UPSAMPLE, fusion.is_some()), (CONCAT, fusion.is_some()), (F16, f16)]));
                 let (aw, ah) = size(a);
                 let a_handle = p.access(srcs[0], Access::StorageRead);
                 let b_handle = srcs.get(1).map(|&h| p.access(h, Access::StorageRead));
@@ -276,7 +277,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
                         ctx.encoder.clear_buffer(ctx.buffer(o), 0, None);
                         b.push(("overflow", ctx.bind(o)));
                     }
-                    ctx.dispatch(&key, &b, conv_workgroups(ow, oh, u.out_blocks));
+                    ctx.dispatch(&key, &b, conv_workgroups(kernel, ow, oh, u.out_blocks));
                 });
             }
             Op::Pool { src, .. } => {

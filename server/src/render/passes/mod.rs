@@ -125,10 +125,17 @@ mod tests {
         // No bundled scene names weights (they are not in the repository):
         // a denoised frame on a small random network, in each of its modes.
         let network = crate::denoise::testing::network(&crate::denoise::testing::small_unet(9), 1);
-        let modes = [("f32", "hdr", true, ""), ("f16", "ldr", false, ""), ("f16", "hdr", true, ""), ("f32", "ldr", false, ""), ("f32", "ldr_srgb", true, ""), ("f32", "hdr", true, "input_scale = 0.5")];
-        for (precision, mode, fused, scale) in modes {
+        let modes = [
+            ("f32", "hdr", true, "direct", ""),
+            ("f16", "ldr", false, "tiled", ""),
+            ("f16", "hdr", true, "tiled", ""),
+            ("f32", "ldr", false, "direct", ""),
+            ("f32", "ldr_srgb", true, "direct", ""),
+            ("f32", "hdr", true, "tiled", "input_scale = 0.5"),
+        ];
+        for (precision, mode, fused, kernel, scale) in modes {
             let text = format!(
-                "[quality]\nrenderer = \"path\"\ndenoiser_fused = {fused}\n[denoiser]\nweights = \"w.tza\"\nprecision = \"{precision}\"\nmode = \"{mode}\"\n{scale}\n\
+                "[quality]\nrenderer = \"path\"\ndenoiser_fused = {fused}\ndenoiser_kernel = \"{kernel}\"\n[denoiser]\nweights = \"w.tza\"\nprecision = \"{precision}\"\nmode = \"{mode}\"\n{scale}\n\
                  [[materials]]\nname = \"m\"\n[[objects]]\nshape = \"sphere\"\nmaterial = \"m\"\n"
             );
             let scene = crate::scene::parse("denoised.toml", &text).unwrap_or_else(|d| panic!("{d}"));

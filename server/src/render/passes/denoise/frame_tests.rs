@@ -14,6 +14,7 @@ use crate::render::capture::CapturedTensor;
 use crate::render::denoise_weights::BLOCK;
 use crate::render::frame::FrameResult;
 use crate::render::session::Session;
+use crate::scene::DenoiserKernel;
 
 // The GPU side: the passes in a frame of their own, after a copy pass that
 // stands in for the path tracer.
@@ -23,13 +24,16 @@ struct Setup {
     hdr: bool,
     f16: bool,
     fused: bool,
+    /// `quality.denoiser_kernel`.
+    kernel: &'static str,
 }
 
 fn scene(s: &Setup, w: usize, h: usize) -> Scene {
     let text = format!(
-        "[output]\nwidth = {w}\nheight = {h}\n[quality]\nrenderer = \"path\"\ndenoiser_fused = {}\n\
+        "[output]\nwidth = {w}\nheight = {h}\n[quality]\nrenderer = \"path\"\ndenoiser_fused = {}\ndenoiser_kernel = \"{}\"\n\
          [denoiser]\nweights = \"w.tza\"\nprecision = \"{}\"\nmode = \"{}\"\n",
         s.fused,
+        s.kernel,
         if s.f16 { "f16" } else { "f32" },
         if s.hdr { "hdr" } else { "ldr" },
     );
@@ -192,16 +196,20 @@ fn compare(net: Network, s: &Setup, images: &[Image; 3], tolerance: f32) -> (Vec
     (got_rgb, want.data)
 }
 
+/// Every setup: each convolution kernel, HDR and LDR, f32 and f16
+/// storage, upsample and concatenation fused or stored.
+fn setups() -> impl Iterator<Item = Setup> {
+    DenoiserKernel::NAMES.iter().flat_map(|&kernel| (0..8).map(move |i| Setup { hdr: i & 1 != 0, f16: i & 2 != 0, fused: i & 4 != 0, kernel }))
+}
+
 /// OIDN's base U-Net's layers at small, distinct widths, random weights;
 /// a size that is not a multiple of 16 (padded 48×32). Every tensor, the
-/// input scale and the denoised colour match the CPU, whether upsample
-/// and concatenation are fused into the convolution or stored, in HDR and
-/// LDR, with f32 and f16 storage.
+/// input scale and the denoised colour match the CPU in every setup.
 #[test]
 fn the_network_on_the_gpu_matches_the_cpu_tensor_by_tensor() {
     let net = crate::denoise::testing::network(&small_unet(9), 7);
-    for (hdr, f16, fused) in [(true, false, true), (true, false, false), (false, false, true), (false, true, false), (true, true, true)] {
-        let s = Setup { hdr, f16, fused };
+    for s in setups() {
+        let Setup { hdr, f16, fused, kernel } = s;
         let images = images(37, 21, hdr, 11);
         // f32: sums in another order than the CPU's f64. f16: a value on
         // the other side of a rounding boundary moves by an f16 ulp and
@@ -210,32 +218,35 @@ fn the_network_on_the_gpu_matches_the_cpu_tensor_by_tensor() {
         let (gpu, cpu) = compare(net.clone(), &s, &images, tolerance);
         let db = psnr(&gpu, &cpu);
         let floor = if f16 { 40.0 } else { 80.0 };
-        assert!(db >= floor, "hdr {hdr}, f16 {f16}, fused {fused}: the denoised colour is {db:.1} dB from the CPU's");
+        assert!(db >= floor, "{kernel}, hdr {hdr}, f16 {f16}, fused {fused}: the denoised colour is {db:.1} dB from the CPU's");
     }
 }
 
-/// OIDN's own weights (its base U-Net for LDR colour, albedo and normal):
-/// the denoised colour at least 60 dB from the CPU's with f32 tensors;
-/// with f16 tensors every layer within 1 % of the CPU's f16 evaluation,
-/// and the colour's distance to the f32 result is reported.
+/// OIDN's own weights (its base U-Net for LDR colour, albedo and normal),
+/// with each convolution kernel: the denoised colour at least 60 dB from
+/// the CPU's with f32 tensors; with f16 tensors every layer within 1 % of
+/// the CPU's f16 evaluation, and the colour's distance to the f32 result
+/// is reported.
 #[test]
 fn oidn_weights_on_the_gpu_match_the_cpu() {
     let path = crate::denoise::testing::weights("rt_ldr_alb_nrm.tza");
     let archive = crate::denoise::tza::read(&path, "rt_ldr_alb_nrm.tza").unwrap_or_else(|d| panic!("{d}"));
     let net = Network::from_archive(&archive).unwrap();
     let images = images(40, 24, false, 5);
-    let (gpu, cpu) = compare(net.clone(), &Setup { hdr: false, f16: false, fused: true }, &images, 1e-5);
-    let db = psnr(&gpu, &cpu);
-    assert!(db >= 60.0, "f32: {db:.1} dB");
-    let (gpu16, cpu16) = compare(net, &Setup { hdr: false, f16: true, fused: true }, &images, 1e-2);
-    let (db16, db16_f32) = (psnr(&gpu16, &cpu16), psnr(&gpu16, &cpu));
-    eprintln!("rt_ldr_alb_nrm at 40×24, GPU against CPU: f32 {db:.1} dB; f16 {db16:.1} dB against the CPU's f16, {db16_f32:.1} dB against its f32");
-    assert!(db16 >= 40.0 && db16_f32 >= 40.0, "f16: {db16:.1} dB, {db16_f32:.1} dB");
+    for &kernel in DenoiserKernel::NAMES {
+        let (gpu, cpu) = compare(net.clone(), &Setup { hdr: false, f16: false, fused: true, kernel }, &images, 1e-5);
+        let db = psnr(&gpu, &cpu);
+        assert!(db >= 60.0, "{kernel}, f32: {db:.1} dB");
+        let (gpu16, cpu16) = compare(net.clone(), &Setup { hdr: false, f16: true, fused: true, kernel }, &images, 1e-2);
+        let (db16, db16_f32) = (psnr(&gpu16, &cpu16), psnr(&gpu16, &cpu));
+        eprintln!("rt_ldr_alb_nrm at 40×24, {kernel} kernel, GPU against CPU: f32 {db:.1} dB; f16 {db16:.1} dB against the CPU's f16, {db16_f32:.1} dB against its f32");
+        assert!(db16 >= 40.0 && db16_f32 >= 40.0, "{kernel}, f16: {db16:.1} dB, {db16_f32:.1} dB");
+    }
 }
 
 /// With f16 storage a convolution counts the values beyond 65504 before
 /// the store, every frame from zero, and stores them as Inf; f32 storage
-/// has nothing to count.
+/// has nothing to count. Each convolution kernel.
 #[test]
 fn f16_overflow_is_counted_per_layer_and_stored_as_inf() {
     let mut net = crate::denoise::testing::network(&small_unet(9), 7);
@@ -245,20 +256,22 @@ fn f16_overflow_is_counted_per_layer_and_stored_as_inf() {
     first.bias[0] = 1e5;
     let images = images(37, 21, false, 3);
     let padded = 48 * 32;
-    let (mut session, _) = gpu_session(net.clone(), &Setup { hdr: false, f16: true, fused: true }, &images);
-    for _ in 0..2 {
+    for &kernel in DenoiserKernel::NAMES {
+        let (mut session, _) = gpu_session(net.clone(), &Setup { hdr: false, f16: true, fused: true, kernel }, &images);
+        for _ in 0..2 {
+            let r = frame(&mut session);
+            assert_eq!(captured(&r, "denoise.enc_conv0/overflow").data, [padded as f32], "{kernel}: one per padded pixel, counted again each frame");
+            let t = captured(&r, "denoise.enc_conv0/tensor");
+            assert_eq!((t.stats.inf, t.stats.nan), (padded, 0), "{kernel}: channel 0 is stored as Inf, the others as they are");
+            assert!(r.tensors.iter().all(|t| t.key() != "denoise.pool1/overflow"), "a pool makes no new values: nothing to count");
+        }
+        let (mut session, _) = gpu_session(net.clone(), &Setup { hdr: false, f16: false, fused: true, kernel }, &images);
         let r = frame(&mut session);
-        assert_eq!(captured(&r, "denoise.enc_conv0/overflow").data, [padded as f32], "one per padded pixel, counted again each frame");
+        assert!(r.tensors.iter().all(|t| t.output != "overflow"), "f32 storage counts nothing");
         let t = captured(&r, "denoise.enc_conv0/tensor");
-        assert_eq!((t.stats.inf, t.stats.nan), (padded, 0), "channel 0 is stored as Inf, the others as they are");
-        assert!(r.tensors.iter().all(|t| t.key() != "denoise.pool1/overflow"), "a pool makes no new values: nothing to count");
+        assert_eq!(t.stats.inf, 0);
+        assert!(t.stats.max[0] > 9e4, "{kernel}: {:?}", t.stats.max);
     }
-    let (mut session, _) = gpu_session(net, &Setup { hdr: false, f16: false, fused: true }, &images);
-    let r = frame(&mut session);
-    assert!(r.tensors.iter().all(|t| t.output != "overflow"), "f32 storage counts nothing");
-    let t = captured(&r, "denoise.enc_conv0/tensor");
-    assert_eq!(t.stats.inf, 0);
-    assert!(t.stats.max[0] > 9e4, "{:?}", t.stats.max);
 }
 
 /// A frame whose largest tensor the device cannot bind in one buffer is
@@ -267,7 +280,7 @@ fn f16_overflow_is_counted_per_layer_and_stored_as_inf() {
 #[test]
 fn a_tensor_larger_than_the_device_binds_culls_the_denoiser_with_the_reason() {
     let net = crate::denoise::testing::network(&small_unet(9), 7);
-    let scene = scene(&Setup { hdr: true, f16: false, fused: true }, 64, 48);
+    let scene = scene(&Setup { hdr: true, f16: false, fused: true, kernel: "direct" }, 64, 48);
     // The largest tensor made: the input, 9 channels padded to 12, f32.
     let input = 64 * 48 * 12 * 4;
     for (limit, denoised) in [(input - 4, false), (input, true)] {
@@ -295,7 +308,7 @@ fn a_tensor_larger_than_the_device_binds_culls_the_denoiser_with_the_reason() {
 #[test]
 fn the_denoise_switch_culls_the_denoiser_with_the_reason() {
     let net = crate::denoise::testing::network(&small_unet(9), 7);
-    let mut scene = scene(&Setup { hdr: true, f16: false, fused: true }, 64, 48);
+    let mut scene = scene(&Setup { hdr: true, f16: false, fused: true, kernel: "direct" }, 64, 48);
     for on in [true, false] {
         scene.quality.denoise = on;
         let mut g = GraphBuilder::new();

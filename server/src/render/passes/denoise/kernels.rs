@@ -6,16 +6,14 @@
 
 use crate::gpu::pipeline::{COMPUTE, Group, PipelineSpec, Stages, sizes, storage, storage_rw, uniform};
 use crate::render::denoise_weights::CONV_BLOCKS;
+use crate::scene::DenoiserKernel;
 
 /// Every kernel's workgroup side in invocations.
 pub const TILE: u32 = 8;
 
-/// The workgroups of a convolution making a `width` × `height` tensor of
-/// `out_blocks` channel blocks: an invocation per pixel and `CONV_BLOCKS`
-/// output blocks.
-pub fn conv_workgroups(width: u32, height: u32, out_blocks: u32) -> [u32; 3] {
-    [width.div_ceil(TILE), height.div_ceil(TILE), out_blocks.div_ceil(CONV_BLOCKS as u32)]
-}
+/// The tiled convolution's output tile per workgroup in pixels
+/// (`TILE_W` × `TILE_H` in `conv_tiled.wgsl`).
+const TILED: (u32, u32) = (2 * TILE, TILE);
 
 /// Reads the first input 2× nearest-upsampled.
 pub const UPSAMPLE: &str = "UPSAMPLE";
@@ -25,17 +23,57 @@ pub const CONCAT: &str = "CONCAT";
 /// the values too large for an f16.
 pub const F16: &str = "F16";
 
+/// Both convolution kernels bind the same (`shaders/lib/conv.wgsl`).
+const CONV_GROUPS: &[Group] = &[
+    Group::always(
+        0,
+        &[
+            uniform("layer", 0, COMPUTE, 2 * sizes::VEC4),
+            storage("a", 1, COMPUTE),
+            storage("weights", 3, COMPUTE),
+            storage("bias", 4, COMPUTE),
+            storage_rw("out", 5),
+        ],
+    ),
+    Group::when(1, CONCAT, &[storage("b", 0, COMPUTE)]),
+    Group::when(2, F16, &[storage_rw("overflow", 0)]),
+];
+
 pub static CONV: PipelineSpec = PipelineSpec {
     name: "denoise.conv",
     shader: "denoise/conv.wgsl",
     stages: Stages::Compute { entry: "conv" },
-    groups: &[
-        Group::always(0, &[uniform("layer", 0, COMPUTE, 2 * sizes::VEC4), storage("a", 1, COMPUTE), storage("weights", 3, COMPUTE), storage("bias", 4, COMPUTE), storage_rw("out", 5)]),
-        Group::when(1, CONCAT, &[storage("b", 0, COMPUTE)]),
-        Group::when(2, F16, &[storage_rw("overflow", 0)]),
-    ],
+    groups: CONV_GROUPS,
     defs: &[UPSAMPLE, CONCAT, F16],
 };
+
+pub static CONV_TILED: PipelineSpec = PipelineSpec {
+    name: "denoise.conv_tiled",
+    shader: "denoise/conv_tiled.wgsl",
+    stages: Stages::Compute { entry: "conv" },
+    groups: CONV_GROUPS,
+    defs: &[UPSAMPLE, CONCAT, F16],
+};
+
+/// The pipeline of `kernel`'s convolution.
+pub fn conv_spec(kernel: DenoiserKernel) -> &'static PipelineSpec {
+    match kernel {
+        DenoiserKernel::Direct => &CONV,
+        DenoiserKernel::Tiled => &CONV_TILED,
+    }
+}
+
+/// The workgroups of `kernel`'s convolution making a `width` × `height`
+/// tensor of `out_blocks` channel blocks: each covers `CONV_BLOCKS` output
+/// blocks and, direct, a `TILE` × `TILE` square of pixels (one per
+/// invocation), tiled, its `TILED` tile.
+pub fn conv_workgroups(kernel: DenoiserKernel, width: u32, height: u32, out_blocks: u32) -> [u32; 3] {
+    let (tw, th) = match kernel {
+        DenoiserKernel::Direct => (TILE, TILE),
+        DenoiserKernel::Tiled => TILED,
+    };
+    [width.div_ceil(tw), height.div_ceil(th), out_blocks.div_ceil(CONV_BLOCKS as u32)]
+}
 
 pub static POOL: PipelineSpec = PipelineSpec {
     name: "denoise.pool",
@@ -63,7 +101,7 @@ pub static CONCAT_CHANNELS: PipelineSpec = PipelineSpec {
     defs: &[F16],
 };
 
-/// A convolution's uniform, as `Layer` in `conv.wgsl` declares it.
+/// A convolution's uniform, as `Layer` in `lib/conv.wgsl` declares it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct LayerUniform {

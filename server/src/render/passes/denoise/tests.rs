@@ -117,8 +117,12 @@ fn reference(a: &Tensor, b: Option<&Tensor>, upsample: bool, weight: &[f32], bia
     Tensor { w, h, c: out, data }
 }
 
-fn conv_on_gpu(gpu: &Gpu, a: &Tensor, b: Option<&Tensor>, upsample: bool, weight: &[f32], bias: &[f32], out: usize, relu: bool) -> Vec<f32> {
-    let key = PipelineKey::new(&CONV, &[(UPSAMPLE, upsample), (CONCAT, b.is_some())]);
+/// Both convolution kernels.
+const KERNELS: [DenoiserKernel; 2] = [DenoiserKernel::Direct, DenoiserKernel::Tiled];
+
+#[allow(clippy::too_many_arguments)]
+fn conv_on_gpu(gpu: &Gpu, kernel: DenoiserKernel, a: &Tensor, b: Option<&Tensor>, upsample: bool, weight: &[f32], bias: &[f32], out: usize, relu: bool) -> Vec<f32> {
+    let key = PipelineKey::new(conv_spec(kernel), &[(UPSAMPLE, upsample), (CONCAT, b.is_some())]);
     let p = pipeline(gpu, &key);
     let (w, h) = if upsample { (a.w * 2, a.h * 2) } else { (a.w, a.h) };
     let b_channels = b.map_or(0, |b| b.c);
@@ -147,7 +151,7 @@ fn conv_on_gpu(gpu: &Gpu, a: &Tensor, b: Option<&Tensor>, upsample: bool, weight
     if let Some(g) = &group1 {
         groups.push(g);
     }
-    run(gpu, &p, &groups, &out_buf, len, conv_workgroups(w as u32, h as u32, blocks(out) as u32))
+    run(gpu, &p, &groups, &out_buf, len, conv_workgroups(kernel, w as u32, h as u32, blocks(out) as u32))
 }
 
 /// Compares the padded GPU result with the exact-channel reference; the
@@ -170,31 +174,40 @@ fn assert_matches(gpu: &[f32], want: &Tensor, what: &str) {
     assert!(worst < 1e-5, "{what}: worst relative error {worst}");
 }
 
+/// Both kernels, at a size that is no multiple of either's tile (edge
+/// tiles on the right and bottom, the tiled kernel's halo crossing tiles)
+/// with 3 input blocks (the tiled kernel's last chunk half full).
 #[test]
 fn a_plain_convolution_matches_the_definition() {
     let gpu = crate::gpu::testing::device();
     let (cin, out) = (9, 7);
-    let a = Tensor::random(13, 11, cin, 1);
+    let a = Tensor::random(37, 19, cin, 1);
     let weight: Vec<f32> = (0..out * cin * 9).map(|i| noise(2, i) * 0.3).collect();
     let bias: Vec<f32> = (0..out).map(|i| noise(3, i)).collect();
-    for relu in [false, true] {
-        let got = conv_on_gpu(&gpu, &a, None, false, &weight, &bias, out, relu);
-        assert_matches(&got, &reference(&a, None, false, &weight, &bias, out, relu), &format!("relu {relu}"));
+    for kernel in KERNELS {
+        for relu in [false, true] {
+            let got = conv_on_gpu(&gpu, kernel, &a, None, false, &weight, &bias, out, relu);
+            assert_matches(&got, &reference(&a, None, false, &weight, &bias, out, relu), &format!("{kernel:?}, relu {relu}"));
+        }
     }
 }
 
 #[test]
 fn upsample_concat_and_convolution_fused_match_the_three_done_apart() {
     let gpu = crate::gpu::testing::device();
-    // Channel counts off the block size, and more outputs than one
-    // invocation's blocks, so every lane and block boundary is crossed.
-    let (ca, cb, out) = (6, 5, 21);
-    let a = Tensor::random(5, 4, ca, 4);
-    let b = Tensor::random(10, 8, cb, 5);
+    // Channel counts off the block size, a's blocks odd (a chunk of the
+    // tiled kernel holds a's last block and b's first), and more outputs
+    // than one invocation's blocks, so every lane and block boundary is
+    // crossed; the output, 22×18, is no multiple of either kernel's tile.
+    let (ca, cb, out) = (10, 5, 21);
+    let a = Tensor::random(11, 9, ca, 4);
+    let b = Tensor::random(22, 18, cb, 5);
     let weight: Vec<f32> = (0..out * (ca + cb) * 9).map(|i| noise(6, i) * 0.3).collect();
     let bias: Vec<f32> = (0..out).map(|i| noise(7, i)).collect();
-    let got = conv_on_gpu(&gpu, &a, Some(&b), true, &weight, &bias, out, true);
-    assert_matches(&got, &reference(&a, Some(&b), true, &weight, &bias, out, true), "fused");
+    for kernel in KERNELS {
+        let got = conv_on_gpu(&gpu, kernel, &a, Some(&b), true, &weight, &bias, out, true);
+        assert_matches(&got, &reference(&a, Some(&b), true, &weight, &bias, out, true), &format!("{kernel:?}, fused"));
+    }
 }
 
 #[test]
