@@ -362,10 +362,10 @@ async fn a_nan_made_by_a_pass_is_named_live_and_opened_at_its_pixel() {
     until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
     assert_eq!(c.execute("return document.querySelector('#nan-notice').hidden;", vec![]).await.unwrap(), true, "a clean frame shows no NaN notice");
 
-    // `view.params.w` is always 0: a runtime divide by zero in lighting.
+    // `view.environment_top.w` is always 0 (unused): a runtime divide by zero in lighting.
     const LIGHTING: &str = "shaders/passes/lighting.wgsl";
     let good = p.read(LIGHTING);
-    let broken = good.replace("    return vec4(color, 1.0);\n}", "    return vec4(color / view.params.w, 1.0);\n}");
+    let broken = good.replace("    return vec4(color, 1.0);\n}", "    return vec4(color / view.environment_top.w, 1.0);\n}");
     assert_ne!(broken, good, "the edit applies");
     p.save_by_rename(LIGHTING, &broken);
     let pass = until(&c, &s, "the NaN notice naming a pass", "!document.querySelector('#nan-notice').hidden && document.querySelector('#nan-notice').dataset.pass").await;

@@ -123,10 +123,10 @@ fn npy_f32(path: &std::path::Path) -> Vec<f32> {
 #[test]
 fn nan_report_names_the_pass_that_divides_by_zero() {
     let p = Project::copy_of_repo("render-nan");
-    // `view.params.w` is always 0: a division by it is a runtime divide by
+    // `view.environment_top.w` is always 0 (unused): a division by it is a runtime divide by
     // zero naga cannot fold away.
     let lighting = p.read("shaders/passes/lighting.wgsl");
-    let broken = lighting.replace("    return vec4(color, 1.0);\n}", "    return vec4(color / view.params.w, 1.0);\n}");
+    let broken = lighting.replace("    return vec4(color, 1.0);\n}", "    return vec4(color / view.environment_top.w, 1.0);\n}");
     assert_ne!(broken, lighting, "the edit applies");
     p.write("shaders/passes/lighting.wgsl", broken);
     let (run, report) = render(&p, "scenes/minimal.toml", &[]);
