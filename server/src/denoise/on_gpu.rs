@@ -19,6 +19,7 @@ use crate::gpu::Gpu;
 use crate::render::capture::CapturedTensor;
 use crate::render::passes::images::TileImages;
 use crate::render::session::Session;
+use crate::scene::settings::DenoiseAt;
 use crate::scene::{Denoiser, Loaded, Renderer};
 
 /// How the network runs, beyond the images.
@@ -60,6 +61,8 @@ pub fn denoise(gpu: Gpu, shader_root: &Path, net: Arc<Network>, images: &TileIma
     // The renderer the denoiser follows in a frame: its weights go to the GPU.
     scene.quality.renderer = Renderer::Path;
     scene.quality.denoiser_fused = !s.keep_tensors;
+    // Every tile is a frame of its own, each to be denoised.
+    scene.quality.denoise_at = DenoiseAt::Every;
     scene.denoiser = Some(Denoiser {
         weights: String::new(),
         at: Location::file_start("loupe denoise"),

@@ -34,6 +34,8 @@ pub struct PassContext<'a> {
     pub scene: &'a SceneGpu,
     /// The frame's number, counting from 1.
     pub frame: u64,
+    /// Samples per pixel the path tracer holds after this frame.
+    pub samples: u32,
     /// Seconds since the previous frame (0 for the first): what temporal
     /// passes adapt by.
     pub dt: f32,

@@ -34,6 +34,9 @@ pub struct FrameInputs<'a> {
     /// these (one per raster pipeline); `None`: do not.
     pub vertex_captures: Option<&'a BTreeMap<PipelineKey, VertexCapture>>,
     pub frame: u64,
+    /// Samples per pixel the path tracer holds after this frame (frames
+    /// since its history was last forgotten).
+    pub samples: u32,
     /// Seconds since the previous frame.
     pub dt: f32,
     /// Submit each pass on its own and wait for it, timing it by the wall
@@ -184,6 +187,7 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
             pass: &pass.name,
             scene: f.scene,
             frame: f.frame,
+            samples: f.samples,
             dt: f.dt,
             resources: physical.clone(),
             pipelines: f.pipelines,

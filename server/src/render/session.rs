@@ -322,6 +322,7 @@ impl Session {
             statistics: self.quads,
             vertex_captures: self.quads.then_some(&self.vertex_captures),
             frame: self.frame,
+            samples: self.accumulated,
             dt,
             serial: self.serial,
         };

@@ -214,6 +214,16 @@ choice!(
 );
 
 choice!(
+    /// Which of the path tracer's frames the denoiser runs on.
+    DenoiseAt {
+        /// At 1, 2, 4, 8, … samples and at the last: the others show the
+        /// newest denoised image, at a fraction of the cost.
+        Doublings = "doublings",
+        Every = "every_sample",
+    }
+);
+
+choice!(
     /// How many of the frame's pixels share one volume march.
     VolumeResolution {
         Full = "full",
@@ -407,6 +417,8 @@ settings! {
         /// Denoise the path-traced image with the scene's `[denoiser]`; off,
         /// its passes are culled and the noisy image is shown.
         denoise: bool = true, Toggle, "Denoise", affects ["denoise"], shown_when denoised;
+        /// Which frames of the accumulation are denoised.
+        denoise_at: DenoiseAt = DenoiseAt::Doublings, Choice(DenoiseAt::NAMES), "Denoise at (samples)", affects ["denoise"], shown_when denoised;
         /// Run each decoder level's 2× upsample and concatenation inside the
         /// convolution that reads them (the `upsample<L>` and `concat<L>`
         /// tensors are never stored); off, each is a pass of its own whose

@@ -28,6 +28,7 @@ use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Element, Handle, PipelineKey, TensorLayout, TextureDesc};
 use crate::denoise::process::Mode;
 use crate::scene::Scene;
+use crate::scene::settings::DenoiseAt;
 
 /// The HDR transfer function (PU); without it or `LDR_SRGB`, sRGB.
 pub const HDR_DEF: &str = "HDR";
@@ -108,6 +109,23 @@ fn pass_name(net: &Network, t: TensorId) -> String {
     format!("denoise.{}", net.tensor(t).name)
 }
 
+/// Which frames the denoiser runs on (`quality.denoise_at`). On the others
+/// its passes record nothing, and their outputs, kept from frame to frame
+/// like every frame resource whose description stays, hold the newest
+/// denoised image and tensors.
+#[derive(Debug, Clone, Copy)]
+struct Schedule {
+    every: bool,
+    /// The samples the accumulation ends at (`quality.path_spp`).
+    last: u32,
+}
+
+impl Schedule {
+    fn due(self, samples: u32) -> bool {
+        self.every || samples.is_power_of_two() || samples == self.last
+    }
+}
+
 /// What the denoiser reads: the noisy colour (`Rgba32Float`), and the
 /// albedo and normal the network may take.
 pub struct Noisy {
@@ -133,6 +151,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
         return traced.color;
     };
     let mode = settings.mode;
+    let schedule = Schedule { every: scene.quality.denoise_at == DenoiseAt::Every, last: scene.quality.path_spp };
     let f16 = settings.precision == Precision::F16;
     let (w, h) = (scene.width, scene.height);
     let align = net.alignment() as u32;
@@ -175,7 +194,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
     // The measured scale, or the uniforms' (`given`).
     let given = settings.input_scale.or((!mode.hdr()).then_some(1.0));
     let scale = match given {
-        None => Some(autoexposure(g, traced.color, w, h)),
+        None => Some(autoexposure(g, traced.color, w, h, schedule)),
         Some(_) if settings.input_scale.is_some() => {
             g.cull("denoise_autoexposure", "denoiser.input_scale is given");
             None
@@ -200,6 +219,9 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
     tensors[net.input.0] = Some(input);
     let params = [w, h, pw, ph, channel_blocks(net.input), given, 0, 0];
     p.execute(move |ctx| {
+        if !schedule.due(ctx.samples) {
+            return;
+        }
         let u = ctx.uniform(bytemuck::cast_slice(&params));
         let mut b = vec![
             ("input_params", u.as_entire_binding()),
@@ -258,6 +280,9 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
                     relu: c.relu.into(),
                 };
                 p.execute(move |ctx| {
+                    if !schedule.due(ctx.samples) {
+                        return;
+                    }
                     let Some(weights) = ctx.scene.denoiser.as_ref().and_then(|d| d.conv(i)) else {
                         return no_weights(ctx);
                     };
@@ -286,6 +311,9 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
                 let (iw, ih) = size(*src);
                 let u = PoolUniform { width: iw, height: ih, blocks: channel_blocks(dst), pad: 0 };
                 p.execute(move |ctx| {
+                    if !schedule.due(ctx.samples) {
+                        return;
+                    }
                     let params = ctx.uniform(bytemuck::bytes_of(&u));
                     let b = [("pool", params.as_entire_binding()), ("input", ctx.bind(input)), ("out", ctx.bind(out))];
                     ctx.dispatch(&key, &b, [ow.div_ceil(TILE), oh.div_ceil(TILE), u.blocks]);
@@ -296,6 +324,9 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
                 let input = p.access(srcs[0], Access::StorageRead);
                 let u = PoolUniform { width: ow, height: oh, blocks: channel_blocks(dst), pad: 0 };
                 p.execute(move |ctx| {
+                    if !schedule.due(ctx.samples) {
+                        return;
+                    }
                     let params = ctx.uniform(bytemuck::bytes_of(&u));
                     let b = [("upsample", params.as_entire_binding()), ("input", ctx.bind(input)), ("out", ctx.bind(out))];
                     ctx.dispatch(&key, &b, [ow.div_ceil(TILE), oh.div_ceil(TILE), u.blocks]);
@@ -307,6 +338,9 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
                 let u = ConcatUniform { width: ow, height: oh, a_channels: net.tensor(*first).channels as u32, b_channels: net.tensor(*second).channels as u32 };
                 let out_blocks = channel_blocks(dst);
                 p.execute(move |ctx| {
+                    if !schedule.due(ctx.samples) {
+                        return;
+                    }
                     let params = ctx.uniform(bytemuck::bytes_of(&u));
                     let b = [("concat", params.as_entire_binding()), ("a", ctx.bind(a)), ("b", ctx.bind(b)), ("out", ctx.bind(out))];
                     ctx.dispatch(&key, &b, [ow.div_ceil(TILE), oh.div_ceil(TILE), out_blocks]);
@@ -328,6 +362,9 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
     let denoised = p.create("color", TextureDesc::d2(COLOR, w, h), Access::StorageWrite);
     let params = [w, h, pw, given];
     p.execute(move |ctx| {
+        if !schedule.due(ctx.samples) {
+            return;
+        }
         let u = ctx.uniform(bytemuck::cast_slice(&params));
         let mut b = vec![("output_params", u.as_entire_binding()), ("network_output", ctx.bind(result)), ("denoised", ctx.bind(denoised))];
         if let Some(s) = scale {
@@ -344,7 +381,7 @@ fn mib(bytes: u64) -> f64 {
 
 /// OIDN's autoexposure over the colour: per bin of at most 16×16 pixels
 /// its mean luminance (`bins`), then the input scale (`scale`).
-fn autoexposure(g: &mut GraphBuilder, color: Handle, w: u32, h: u32) -> Handle {
+fn autoexposure(g: &mut GraphBuilder, color: Handle, w: u32, h: u32, schedule: Schedule) -> Handle {
     let mut p = g.pass("denoise_autoexposure", PassKind::Compute);
     let bins_key = p.pipeline(PipelineKey::new(&AUTOEXPOSURE_BINS, &[]));
     let scale_key = p.pipeline(PipelineKey::new(&AUTOEXPOSURE_SCALE, &[]));
@@ -353,6 +390,9 @@ fn autoexposure(g: &mut GraphBuilder, color: Handle, w: u32, h: u32) -> Handle {
     let bins = p.create("bins", TensorLayout::new(&[("y", bh), ("x", bw), ("luminance", 1)], Element::F32), Access::StorageWrite);
     let scale = p.create("scale", TensorLayout::new(&[("value", 1)], Element::F32), Access::StorageWrite);
     p.execute(move |ctx| {
+        if !schedule.due(ctx.samples) {
+            return;
+        }
         let b = [("color", ctx.bind(color)), ("bins", ctx.bind(bins)), ("scale", ctx.bind(scale))];
         ctx.dispatch(&bins_key, &b, [bw, bh, 1]);
         ctx.dispatch(&scale_key, &b, [1, 1, 1]);

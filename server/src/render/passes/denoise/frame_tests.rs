@@ -5,6 +5,7 @@
 use std::sync::Arc;
 
 use super::*;
+use crate::scene::settings::DenoiseAt;
 use crate::denoise::cpu::{self, Tensor};
 use crate::denoise::image::Image;
 use crate::denoise::process::{self, Mode};
@@ -84,13 +85,19 @@ fn texture(gpu: &crate::gpu::Gpu, format: wgpu::TextureFormat, image: &Image) ->
 /// culled passes with their reasons.
 fn gpu_session(net: Network, s: &Setup, images: &[Image; 3]) -> (Session, Vec<(String, String)>) {
     let (w, h) = (images[0].width, images[0].height);
-    let scene = scene(s, w, h);
+    gpu_session_with(net, scene(s, w, h), std::slice::from_ref(images))
+}
+
+/// The same for `scene`, the frame's images the sets of `sets` in turn
+/// (frame 1 the first).
+fn gpu_session_with(net: Network, scene: Scene, sets: &[[Image; 3]]) -> (Session, Vec<(String, String)>) {
+    let (w, h) = (sets[0][0].width, sets[0][0].height);
     let network = Arc::new(net);
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
     let lib = crate::shader::library::read_tree(&root).unwrap();
     let loaded = crate::scene::Loaded { scene: scene.clone(), meshes: Default::default(), denoiser: Some(network.clone()), files: vec![] };
     let gpu = crate::gpu::testing::device();
-    let sources = [texture(&gpu, COLOR, &images[0]), texture(&gpu, HDR, &images[1]), texture(&gpu, HDR, &images[2])];
+    let sources: Vec<[Arc<wgpu::Texture>; 3]> = sets.iter().map(|i| [texture(&gpu, COLOR, &i[0]), texture(&gpu, HDR, &i[1]), texture(&gpu, HDR, &i[2])]).collect();
     let mut session = Session::new(gpu, &root, lib, &loaded);
 
     let mut g = GraphBuilder::new();
@@ -100,7 +107,8 @@ fn gpu_session(net: Network, s: &Setup, images: &[Image; 3]) -> (Session, Vec<(S
     let albedo = p.create("albedo", TextureDesc::d2(HDR, w32, h32), Access::CopyDst);
     let normal = p.create("normal", TextureDesc::d2(HDR, w32, h32), Access::CopyDst);
     p.execute(move |ctx| {
-        for (from, to) in sources.iter().zip([color, albedo, normal]) {
+        let set = &sources[(ctx.frame as usize - 1) % sources.len()];
+        for (from, to) in set.iter().zip([color, albedo, normal]) {
             ctx.encoder.copy_texture_to_texture(from.as_image_copy(), ctx.texture(to).as_image_copy(), from.size());
         }
     });
@@ -321,5 +329,25 @@ fn the_denoise_switch_culls_the_denoiser_with_the_reason() {
         let graph = g.build();
         let culled = graph.culled.iter().filter(|c| c.reason == "quality.denoise is off").count();
         assert_eq!(culled, if on { 0 } else { PASSES.len() });
+    }
+}
+
+/// `quality.denoise_at`: at doublings the denoiser runs at 1, 2, 4, …
+/// samples, and on the frames between its output keeps the newest
+/// denoised image; at every sample it runs each frame. The images change
+/// every frame (A, B, A), so the third frame's output tells which.
+#[test]
+fn the_denoiser_runs_at_doublings_of_the_samples_and_keeps_its_image_between() {
+    let net = crate::denoise::testing::network(&small_unet(9), 7);
+    let (w, h) = (24, 16);
+    let sets = [images(w, h, false, 1), images(w, h, false, 2)];
+    for (at, between) in [(DenoiseAt::Doublings, 1), (DenoiseAt::Every, 0)] {
+        let mut scene = scene(&Setup { hdr: false, f16: false, fused: true, kernel: "direct" }, w, h);
+        scene.quality.denoise_at = at;
+        let (mut session, _) = gpu_session_with(net.clone(), scene, &sets);
+        assert_eq!(session.install_missing(), vec![]);
+        let outputs: Vec<Vec<f32>> = (0..3).map(|_| frame(&mut session).captures.into_iter().find(|c| c.key() == "denoise/color").expect("captured").data).collect();
+        assert!(outputs[0] != outputs[1], "images A and B denoise differently");
+        assert!(outputs[2] == outputs[between], "{at:?}: the third frame (3 samples) does not show frame {}'s image", between + 1);
     }
 }
