@@ -6,7 +6,9 @@
 //! that a backend walks; `cpu` is the plain f32 reference of that walk;
 //! `process` is OIDN's pre- and post-processing around it (transfer
 //! functions, autoexposure, padding); `image` reads and writes the files
-//! `loupe denoise` takes; `offline` is that command.
+//! `loupe denoise` takes; `offline` is that command, which runs the network
+//! on the GPU (`on_gpu`: the frame's own denoiser passes, in tiles `tiles`
+//! cuts when the image is too large for the device) or on `cpu`.
 
 pub mod cpu;
 pub mod image;
