@@ -37,6 +37,18 @@ struct Incident {
 // Distances are clamped so a point on (or in) a light never divides by zero.
 const MIN_DISTANCE: f32 = 0.01;
 
+// A rect light's area.
+fn rect_area(light: Light) -> f32 {
+    return 4.0 * light.extra.x * light.extra.y;
+}
+
+// The cosine a rect light sees `dir` (from the shading point) at, or 0 when
+// its back faces that way and it is one-sided.
+fn rect_cosine(light: Light, dir: vec3<f32>) -> f32 {
+    let facing = dot(-dir, light.direction.xyz);
+    return select(max(facing, 0.0), abs(facing), light.extra.z > 0.5);
+}
+
 // Light arriving at `p` from a light treated as a point (or direction). Rect
 // lights are approximated by their centre here; the lighting pass integrates
 // them exactly with LTC.
@@ -53,10 +65,7 @@ fn incident(light: Light, p: vec3<f32>) -> Incident {
         let cos_angle = dot(-l, light.direction.xyz);
         radiance *= smoothstep(light.direction.w, light.extra.x, cos_angle);
     } else if kind == LIGHT_RECT {
-        let facing = dot(-l, light.direction.xyz);
-        let cosine = select(max(facing, 0.0), abs(facing), light.extra.z > 0.5);
-        let area = 4.0 * light.extra.x * light.extra.y;
-        radiance *= area * cosine;
+        radiance *= rect_area(light) * rect_cosine(light, l);
     }
     return Incident(l, d, radiance);
 }

@@ -4,7 +4,7 @@
 // The environment lights every surface; pixels without geometry show it.
 #import loupe::fullscreen::{FullscreenOut, fullscreen}
 #import loupe::view::{view, world_position}
-#import loupe::lights::{Light, lights, incident, light_type, LIGHT_RECT}
+#import loupe::lights::{Light, lights, incident, light_type, rect_area, rect_cosine, LIGHT_RECT}
 #import loupe::brdf::{brdf_cos, specular_f0}
 #import loupe::environment::{environment_radiance, environment_light}
 #ifdef SHADOWS
@@ -27,7 +27,6 @@ const RECT_GRID: u32 = 16u;
 // its area, each through the BRDF itself: Σ L brdf_cos cos_light A / (N² d²).
 fn rect_sampled(light: Light, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, base: vec3<f32>, metallic: f32, roughness: f32) -> vec3<f32> {
     let half = light.extra.xy;
-    let area = 4.0 * half.x * half.y;
     var sum = vec3(0.0);
     for (var j = 0u; j < RECT_GRID; j++) {
         for (var i = 0u; i < RECT_GRID; i++) {
@@ -36,12 +35,10 @@ fn rect_sampled(light: Light, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, base: ve
             let to_light = q - p;
             let d2 = max(dot(to_light, to_light), 1e-8);
             let l = to_light * inverseSqrt(d2);
-            let facing = dot(-l, light.direction.xyz);
-            let cosine = select(max(facing, 0.0), abs(facing), light.extra.z > 0.5);
-            sum += brdf_cos(n, v, l, base, metallic, roughness) * (cosine / d2);
+            sum += brdf_cos(n, v, l, base, metallic, roughness) * (rect_cosine(light, l) / d2);
         }
     }
-    return light.color.rgb * sum * (area / f32(RECT_GRID * RECT_GRID));
+    return light.color.rgb * sum * (rect_area(light) / f32(RECT_GRID * RECT_GRID));
 }
 #endif
 

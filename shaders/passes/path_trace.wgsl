@@ -12,7 +12,7 @@
 // density function: free flights by delta tracking against a majorant,
 // shadow rays by ratio tracking.
 #import loupe::view::{view, world_position}
-#import loupe::lights::{Light, lights, incident, light_type, LIGHT_RECT}
+#import loupe::lights::{Light, lights, incident, light_type, rect_area, rect_cosine, LIGHT_RECT}
 #import loupe::brdf::{brdf_cos, brdf_pdf, brdf_sample, basis, cosine_direction, PI}
 #import loupe::environment::environment_radiance
 #import loupe::geometry::Material
@@ -184,17 +184,6 @@ struct RectHit {
     // Solid-angle pdf of area sampling for this direction (0: no hit).
     pdf: f32,
     radiance: vec3<f32>,
-}
-
-fn rect_area(light: Light) -> f32 {
-    return 4.0 * light.extra.x * light.extra.y;
-}
-
-// The cosine the emitter sees `dir` (from the shading point) at, or 0 when
-// its back faces that way and it is one-sided.
-fn rect_cosine(light: Light, dir: vec3<f32>) -> f32 {
-    let facing = dot(-dir, light.direction.xyz);
-    return select(max(facing, 0.0), abs(facing), light.extra.z > 0.5);
 }
 
 fn hit_rect(light: Light, origin: vec3<f32>, dir: vec3<f32>) -> RectHit {
