@@ -74,6 +74,12 @@ impl Rows {
     }
 }
 
+/// A texture row of `bytes` in a buffer, padded to what copies between
+/// buffers and textures require.
+pub fn padded_row(bytes: u32) -> u32 {
+    bytes.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+}
+
 /// Copies `layers` layers of `texture` from `base_layer` on (the depth
 /// aspect of a depth format) into a new readback, one layer under
 /// another, texels of `bytes_per_texel`.
@@ -88,7 +94,7 @@ pub fn copy_texture(
 ) -> (Readback, Rows) {
     let (width, height) = (texture.width(), texture.height());
     let row = width * bytes_per_texel;
-    let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let padded = padded_row(row);
     let readback = Readback::new(device, label, u64::from(padded) * u64::from(height) * u64::from(layers));
     let aspect = if texture.format().has_depth_aspect() { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
     encoder.copy_texture_to_buffer(

@@ -54,7 +54,7 @@ struct Rows {
 }
 
 fn rgba_rows(image: Option<&Image>, w: usize, h: usize) -> Rows {
-    let stride = (w * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
+    let stride = crate::render::readback::padded_row(w as u32 * 16) as usize;
     let mut bytes = vec![0u8; stride * h];
     if let Some(image) = image {
         for (y, row) in bytes.chunks_mut(stride).enumerate() {
