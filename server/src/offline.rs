@@ -138,6 +138,12 @@ pub struct CulledReport {
     pub reason: String,
 }
 
+/// Frames a finished image of `scene` takes: the path tracer adds one
+/// sample a frame up to `quality.path_spp`; the raster needs one.
+pub fn frames_to_finish(scene: &scene::Scene) -> u32 {
+    if scene.quality.renderer == Renderer::Path { scene.quality.path_spp } else { 1 }
+}
+
 /// Renders `job` once and writes `<pass>.<output>.png` and `.exr` for every
 /// texture and `.npy` for every buffer into `out`; returns the report (the
 /// caller writes it as JSON).
@@ -145,9 +151,7 @@ pub fn render(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
     let mut session = prepare(job)?;
     // The path tracer adds a sample a frame: the frames before the last
     // accumulate, uncaptured.
-    let quality = &session.scene().quality;
-    let frames = if quality.renderer == Renderer::Path { quality.path_spp } else { 1 };
-    for _ in 1..frames {
+    for _ in 1..frames_to_finish(session.scene()) {
         frame(&mut session, Some(&BTreeSet::new()));
     }
     session.set_quads(true);

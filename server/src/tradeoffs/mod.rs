@@ -15,7 +15,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::offline::{OfflineError, frame};
+use crate::offline::{OfflineError, frame, frames_to_finish};
+use crate::render::frame::FrameResult;
 use crate::render::capture::CapturedImage;
 use crate::render::resource::ResourceDesc;
 use crate::render::session::Session;
@@ -173,7 +174,7 @@ fn image_names(session: &Session) -> BTreeSet<String> {
 }
 
 /// The frame's images from a capture of `image_names`.
-fn images(session: &Session, r: &crate::render::frame::FrameResult) -> Result<Images, OfflineError> {
+fn images(session: &Session, r: &FrameResult) -> Result<Images, OfflineError> {
     let names: Vec<String> = image_names(session).into_iter().collect();
     let find = |want: &str| r.captures.iter().find(|c| c.key() == want).cloned();
     let fin = session.graph().final_name().unwrap_or_default();
@@ -184,11 +185,16 @@ fn images(session: &Session, r: &crate::render::frame::FrameResult) -> Result<Im
     }
 }
 
-/// Frames to render for the scene as loaded: one sample a frame for the
-/// path tracer, else one.
-fn frames(session: &Session) -> u32 {
-    let q = &session.scene().quality;
-    if q.renderer == settings::Renderer::Path { q.path_spp } else { 1 }
+/// Renders the frames a finished image of the loaded scene takes, only
+/// the last capturing `names`; `each` sees every frame. Returns the last.
+fn finish(session: &mut Session, names: &BTreeSet<String>, mut each: impl FnMut(&FrameResult)) -> FrameResult {
+    let none = BTreeSet::new();
+    for _ in 1..frames_to_finish(session.scene()) {
+        each(&frame(session, Some(&none)));
+    }
+    let last = frame(session, Some(names));
+    each(&last);
+    last
 }
 
 /// The series' reference images, from the cache or rendered (and cached).
@@ -207,11 +213,7 @@ fn reference(session: &mut Session, job: &Job, text: &[u8], series: &Series) -> 
     }
     load(session, job, &overrides)?;
     let names = image_names(session);
-    let none = BTreeSet::new();
-    for _ in 1..frames(session) {
-        frame(session, Some(&none));
-    }
-    let r = frame(session, Some(&names));
+    let r = finish(session, &names, |_| {});
     let images = images(session, &r)?;
     // A cache that cannot be written costs the next run time, nothing else.
     let _ = std::fs::create_dir_all(&job.cache).and_then(|()| std::fs::write(&path, encode(&images)));
@@ -235,18 +237,12 @@ fn measure(session: &mut Session, job: &Job, series: &Series, value: &Value, ser
     let passes: Vec<String> = live.iter().filter(|p| affects.contains(&p.as_str()) || (series.accumulates() && p.starts_with("denoise"))).cloned().collect();
     let names = image_names(session);
     let none = BTreeSet::new();
-    let time = |r: &crate::render::frame::FrameResult| r.timings.iter().filter(|(n, _)| passes.contains(n)).map(|(_, t)| t).sum::<f64>();
+    let time = |r: &FrameResult| r.timings.iter().filter(|(n, _)| passes.contains(n)).map(|(_, t)| t).sum::<f64>();
     session.set_serial(serial);
     let mut times = Vec::new();
     let r = if series.accumulates() {
         // Every sample is a frame: time each of them, the last captured.
-        let n = frames(session);
-        for _ in 1..n {
-            times.push(time(&frame(session, Some(&none))));
-        }
-        let r = frame(session, Some(&names));
-        times.push(time(&r));
-        r
+        finish(session, &names, |r| times.push(time(r)))
     } else {
         for _ in 0..2 {
             frame(session, Some(&none));
