@@ -124,6 +124,15 @@ impl Schedule {
     fn due(self, samples: u32) -> bool {
         self.every || samples.is_power_of_two() || samples == self.last
     }
+
+    /// A pass's recording, done only on the frames that are due.
+    fn wrap(self, record: impl Fn(&mut PassContext<'_>) + Send + Sync + 'static) -> impl Fn(&mut PassContext<'_>) + Send + Sync + 'static {
+        move |ctx| {
+            if self.due(ctx.samples) {
+                record(ctx);
+            }
+        }
+    }
 }
 
 /// What the denoiser reads: the noisy colour (`Rgba32Float`), and the
@@ -218,10 +227,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
     let input = p.create("tensor", layout(net.input), Access::StorageWrite);
     tensors[net.input.0] = Some(input);
     let params = [w, h, pw, ph, channel_blocks(net.input), given, 0, 0];
-    p.execute(move |ctx| {
-        if !schedule.due(ctx.samples) {
-            return;
-        }
+    p.execute(schedule.wrap(move |ctx| {
         let u = ctx.uniform(bytemuck::cast_slice(&params));
         let mut b = vec![
             ("input_params", u.as_entire_binding()),
@@ -234,7 +240,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
             b.push(("scale", ctx.bind(s)));
         }
         ctx.dispatch(&key, &b, [pw.div_ceil(TILE), ph.div_ceil(TILE), 1]);
-    });
+    }));
 
     for (i, op) in net.ops.iter().enumerate() {
         let dst = op.dst();
@@ -279,10 +285,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
                     out_blocks: channel_blocks(dst),
                     relu: c.relu.into(),
                 };
-                p.execute(move |ctx| {
-                    if !schedule.due(ctx.samples) {
-                        return;
-                    }
+                p.execute(schedule.wrap(move |ctx| {
                     let Some(weights) = ctx.scene.denoiser.as_ref().and_then(|d| d.conv(i)) else {
                         return no_weights(ctx);
                     };
@@ -303,48 +306,39 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
                         b.push(("overflow", ctx.bind(o)));
                     }
                     ctx.dispatch(&key, &b, conv_workgroups(kernel, ow, oh, u.out_blocks));
-                });
+                }));
             }
             Op::Pool { src, .. } => {
                 let key = p.pipeline(PipelineKey::new(&POOL, &[(F16, f16)]));
                 let input = p.access(srcs[0], Access::StorageRead);
                 let (iw, ih) = size(*src);
                 let u = PoolUniform { width: iw, height: ih, blocks: channel_blocks(dst), pad: 0 };
-                p.execute(move |ctx| {
-                    if !schedule.due(ctx.samples) {
-                        return;
-                    }
+                p.execute(schedule.wrap(move |ctx| {
                     let params = ctx.uniform(bytemuck::bytes_of(&u));
                     let b = [("pool", params.as_entire_binding()), ("input", ctx.bind(input)), ("out", ctx.bind(out))];
                     ctx.dispatch(&key, &b, [ow.div_ceil(TILE), oh.div_ceil(TILE), u.blocks]);
-                });
+                }));
             }
             Op::Upsample { .. } => {
                 let key = p.pipeline(PipelineKey::new(&UPSAMPLE_NEAREST, &[(F16, f16)]));
                 let input = p.access(srcs[0], Access::StorageRead);
                 let u = PoolUniform { width: ow, height: oh, blocks: channel_blocks(dst), pad: 0 };
-                p.execute(move |ctx| {
-                    if !schedule.due(ctx.samples) {
-                        return;
-                    }
+                p.execute(schedule.wrap(move |ctx| {
                     let params = ctx.uniform(bytemuck::bytes_of(&u));
                     let b = [("upsample", params.as_entire_binding()), ("input", ctx.bind(input)), ("out", ctx.bind(out))];
                     ctx.dispatch(&key, &b, [ow.div_ceil(TILE), oh.div_ceil(TILE), u.blocks]);
-                });
+                }));
             }
             Op::Concat { first, second, .. } => {
                 let key = p.pipeline(PipelineKey::new(&CONCAT_CHANNELS, &[(F16, f16)]));
                 let (a, b) = (p.access(srcs[0], Access::StorageRead), p.access(srcs[1], Access::StorageRead));
                 let u = ConcatUniform { width: ow, height: oh, a_channels: net.tensor(*first).channels as u32, b_channels: net.tensor(*second).channels as u32 };
                 let out_blocks = channel_blocks(dst);
-                p.execute(move |ctx| {
-                    if !schedule.due(ctx.samples) {
-                        return;
-                    }
+                p.execute(schedule.wrap(move |ctx| {
                     let params = ctx.uniform(bytemuck::bytes_of(&u));
                     let b = [("concat", params.as_entire_binding()), ("a", ctx.bind(a)), ("b", ctx.bind(b)), ("out", ctx.bind(out))];
                     ctx.dispatch(&key, &b, [ow.div_ceil(TILE), oh.div_ceil(TILE), out_blocks]);
-                });
+                }));
             }
         }
     }
@@ -361,17 +355,14 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
     }
     let denoised = p.create("color", TextureDesc::d2(COLOR, w, h), Access::StorageWrite);
     let params = [w, h, pw, given];
-    p.execute(move |ctx| {
-        if !schedule.due(ctx.samples) {
-            return;
-        }
+    p.execute(schedule.wrap(move |ctx| {
         let u = ctx.uniform(bytemuck::cast_slice(&params));
         let mut b = vec![("output_params", u.as_entire_binding()), ("network_output", ctx.bind(result)), ("denoised", ctx.bind(denoised))];
         if let Some(s) = scale {
             b.push(("scale", ctx.bind(s)));
         }
         ctx.dispatch(&key, &b, [w.div_ceil(TILE), h.div_ceil(TILE), 1]);
-    });
+    }));
     denoised
 }
 
@@ -389,14 +380,11 @@ fn autoexposure(g: &mut GraphBuilder, color: Handle, w: u32, h: u32, schedule: S
     let (bw, bh) = (w.div_ceil(AUTOEXPOSURE_BIN), h.div_ceil(AUTOEXPOSURE_BIN));
     let bins = p.create("bins", TensorLayout::new(&[("y", bh), ("x", bw), ("luminance", 1)], Element::F32), Access::StorageWrite);
     let scale = p.create("scale", TensorLayout::new(&[("value", 1)], Element::F32), Access::StorageWrite);
-    p.execute(move |ctx| {
-        if !schedule.due(ctx.samples) {
-            return;
-        }
+    p.execute(schedule.wrap(move |ctx| {
         let b = [("color", ctx.bind(color)), ("bins", ctx.bind(bins)), ("scale", ctx.bind(scale))];
         ctx.dispatch(&bins_key, &b, [bw, bh, 1]);
         ctx.dispatch(&scale_key, &b, [1, 1, 1]);
-    });
+    }));
     scale
 }
 
