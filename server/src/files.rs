@@ -18,9 +18,7 @@ impl ReadError {
     pub fn diagnostic(self, what: &str, limit: u64) -> Diagnostic {
         match self {
             ReadError::Io(e) => Diagnostic::error(Code::Io, format!("cannot read {what}: {e}")),
-            ReadError::TooLarge(len) => {
-                Diagnostic::error(Code::FileTooLarge, format!("{what} is {len} bytes; the limit is {limit} bytes"))
-            }
+            ReadError::TooLarge(len) => Diagnostic::error(Code::FileTooLarge, format!("{what} is {len} bytes; the limit is {limit} bytes")),
         }
     }
 }

@@ -21,6 +21,6 @@ pub mod render;
 pub mod scene;
 pub mod serve;
 pub mod shader;
-pub mod tradeoffs;
 #[cfg(test)]
 mod testing;
+pub mod tradeoffs;

@@ -414,7 +414,14 @@ fn run_render(args: RenderArgs) -> ExitCode {
         return ExitCode::from(exit::USAGE);
     }
     let outputs: usize = report.passes.iter().map(|p| p.outputs.len()).sum();
-    println!("{}: {} passes ({} culled), {outputs} outputs written to {} [{}]", report.scene, report.passes.len(), report.culled.len(), args.out.display(), report.adapter);
+    println!(
+        "{}: {} passes ({} culled), {outputs} outputs written to {} [{}]",
+        report.scene,
+        report.passes.len(),
+        report.culled.len(),
+        args.out.display(),
+        report.adapter
+    );
     for e in &report.gpu_errors {
         eprintln!("loupe render: GPU error: {e}");
     }
@@ -489,7 +496,9 @@ fn run_denoise(args: DenoiseArgs) -> ExitCode {
 
 fn run_tradeoffs(args: TradeoffsArgs) -> ExitCode {
     let cache = args.cache.unwrap_or_else(|| {
-        let base = std::env::var_os("XDG_CACHE_HOME").map(PathBuf::from).or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")));
+        let base = std::env::var_os("XDG_CACHE_HOME")
+            .map(PathBuf::from)
+            .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")));
         base.unwrap_or_else(std::env::temp_dir).join("loupe/references")
     });
     let job = loupe::tradeoffs::Job {
@@ -596,7 +605,15 @@ fn run_serve(args: ServeArgs) -> ExitCode {
         eprintln!("loupe serve: scene `{}` does not exist", scene.display());
         return ExitCode::from(exit::USAGE);
     }
-    let opts = ServeOptions { root: args.root, scene, bind: args.bind, port: args.port, mode: args.render, max_fps: args.fps, debug_api: args.debug_api };
+    let opts = ServeOptions {
+        root: args.root,
+        scene,
+        bind: args.bind,
+        port: args.port,
+        mode: args.render,
+        max_fps: args.fps,
+        debug_api: args.debug_api,
+    };
     match serve::run(opts) {
         Ok(()) => ExitCode::from(exit::OK),
         Err(ServeError::NoDevice(e)) => {

@@ -172,7 +172,15 @@ pub fn render(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
             let stem = format!("{}.{}", c.pass, c.output);
             let png = write(format!("{stem}.png"), c.to_png())?;
             let exr = write(format!("{stem}.exr"), c.to_exr().map_err(OfflineError::Io)?)?;
-            outputs.push(OutputReport::Image { name: c.output.clone(), format: c.format.clone(), width: c.width, height: c.height, stats: c.stats.clone(), png, exr });
+            outputs.push(OutputReport::Image {
+                name: c.output.clone(),
+                format: c.format.clone(),
+                width: c.width,
+                height: c.height,
+                stats: c.stats.clone(),
+                png,
+                exr,
+            });
         }
         for t in result.tensors.iter().filter(|t| t.pass == pass.name) {
             let shape: Vec<usize> = t.layout.dims.iter().map(|&(_, n)| n as usize).collect();
@@ -249,7 +257,8 @@ pub fn bench(job: &Job, frames: u32, serial: bool) -> Result<BenchReport, Offlin
         frame(&mut session, None);
     }
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-    let [mut t_none, mut t_final, mut t_all, mut t_quads, mut c_none, mut c_final, mut c_all, mut c_quads] = std::array::from_fn(|_| Vec::new());
+    let [mut t_none, mut t_final, mut t_all, mut t_quads, mut c_none, mut c_final, mut c_all, mut c_quads] =
+        std::array::from_fn(|_| Vec::new());
     let mut timing = String::new();
     for _ in 0..frames {
         let settings = [

@@ -174,29 +174,67 @@ pub struct ReloadTimings {
 #[derive(Debug, Clone, Serialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum ServerEvent {
-    Hello { protocol: u32, status: Status },
-    ReloadStarted { id: u64, files: Vec<String>, pipelines: Vec<String> },
-    ReloadSucceeded { id: u64, files: Vec<String>, pipelines: Vec<String>, timings: ReloadTimings },
-    ReloadFailed { id: u64, files: Vec<String>, pipelines: Vec<String>, diagnostics: Vec<Diagnostic> },
+    Hello {
+        protocol: u32,
+        status: Status,
+    },
+    ReloadStarted {
+        id: u64,
+        files: Vec<String>,
+        pipelines: Vec<String>,
+    },
+    ReloadSucceeded {
+        id: u64,
+        files: Vec<String>,
+        pipelines: Vec<String>,
+        timings: ReloadTimings,
+    },
+    ReloadFailed {
+        id: u64,
+        files: Vec<String>,
+        pipelines: Vec<String>,
+        diagnostics: Vec<Diagnostic>,
+    },
     /// `reload`: the newest reload this frame is the first to show;
     /// `reloads`: every one of them (several can finish between frames).
-    Frame { frame: u64, passes: Vec<PassTiming>, total_ms: f64, timing: String, reload: Option<u64>, reloads: Vec<u64> },
-    Passes { passes: Vec<PassInfo> },
-    Diagnostics { diagnostics: Vec<Diagnostic> },
-    DeviceLost { message: String, recovered: bool },
+    Frame {
+        frame: u64,
+        passes: Vec<PassTiming>,
+        total_ms: f64,
+        timing: String,
+        reload: Option<u64>,
+        reloads: Vec<u64>,
+    },
+    Passes {
+        passes: Vec<PassInfo>,
+    },
+    Diagnostics {
+        diagnostics: Vec<Diagnostic>,
+    },
+    DeviceLost {
+        message: String,
+        recovered: bool,
+    },
     /// What this client missed because it read too slowly, since the
     /// previous `dropped`: `frames` rendered that it got no images of, and
     /// `events` it lost.
-    Dropped { frames: u64, events: u64 },
+    Dropped {
+        frames: u64,
+        events: u64,
+    },
     /// The server could not use a message this client sent (bad JSON, an
     /// unknown `type`, a binary message); the connection stays open.
-    Error { message: String },
+    Error {
+        message: String,
+    },
     /// The scene's live controls and the overrides set on top of the file
     /// (also `GET /api/controls`), after any change to either.
     Controls(ControlsReport),
     /// A traced frame's NaN report (also `GET /api/nan`); `null` once a
     /// later frame is clean again.
-    Nan { report: Option<NanReport> },
+    Nan {
+        report: Option<NanReport>,
+    },
     /// A frame's quad statistics (also `GET /api/quads`), for every frame
     /// while some client asks for them (`quad_statistics`).
     Quads(QuadReport),

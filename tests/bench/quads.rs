@@ -41,17 +41,8 @@ fn sphere(slices: u32, stacks: u32) -> (Vec<[f32; 4]>, Vec<u32>) {
         let theta = std::f64::consts::PI * f64::from(i) / f64::from(stacks);
         for j in 0..=slices {
             let phi = std::f64::consts::TAU * f64::from(j) / f64::from(slices);
-            let (x, y, z) = (
-                theta.sin() * phi.cos(),
-                theta.cos(),
-                theta.sin() * phi.sin() - 3.0,
-            );
-            let clip = [
-                f * x,
-                f * y,
-                far / (near - far) * z + near * far / (near - far),
-                -z,
-            ];
+            let (x, y, z) = (theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin() - 3.0);
+            let clip = [f * x, f * y, far / (near - far) * z + near * far / (near - far), -z];
             positions.push(clip.map(|c| c as f32));
         }
     }
@@ -87,10 +78,7 @@ struct Case<'a> {
 /// pass reused from run to run (`Pass::reset` between, untimed), and a
 /// fresh pass (its maps' allocation included); and the case's figures.
 fn run(case: &Case, runs: usize) -> (Vec<f64>, Vec<f64>, DrawStats) {
-    let cleared = case
-        .draw
-        .depth
-        .map(|_| vec![1.0; (WIDTH * HEIGHT) as usize]);
+    let cleared = case.draw.depth.map(|_| vec![1.0; (WIDTH * HEIGHT) as usize]);
     let mut reused = Pass::new(WIDTH, HEIGHT).expect("a 1080p target");
     let fresh = |depth: Option<Vec<f32>>| {
         let pass = Pass::new(WIDTH, HEIGHT).expect("a 1080p target");
@@ -133,72 +121,24 @@ fn main() -> ExitCode {
         }
     }
 
-    let fullscreen = [
-        [-1.0, -1.0, 0.5, 1.0],
-        [3.0, -1.0, 0.5, 1.0],
-        [-1.0, 3.0, 0.5, 1.0],
-    ];
+    let fullscreen = [[-1.0, -1.0, 0.5, 1.0], [3.0, -1.0, 0.5, 1.0], [-1.0, 3.0, 0.5, 1.0]];
     let c = |x: f32, y: f32| [x, y, 0.5, 1.0];
-    let two = [
-        c(-1.0, -1.0),
-        c(1.0, -1.0),
-        c(-1.0, 1.0),
-        c(-1.0, 1.0),
-        c(1.0, -1.0),
-        c(1.0, 1.0),
-    ];
+    let two = [c(-1.0, -1.0), c(1.0, -1.0), c(-1.0, 1.0), c(-1.0, 1.0), c(1.0, -1.0), c(1.0, 1.0)];
     let (positions, indices) = sphere(256, 196);
-    let mesh = Draw {
-        positions: &positions,
-        indices: Some(&indices),
-        cull: Some(Face::Back),
-        ..Draw::default()
-    };
+    let mesh = Draw { positions: &positions, indices: Some(&indices), cull: Some(Face::Back), ..Draw::default() };
     let less = Some(DepthState::new(Compare::Less, true));
     let case = |name, draw, goal| Case { name, draw, goal };
     let cases = [
-        case(
-            "fullscreen, 1 triangle",
-            Draw {
-                positions: &fullscreen,
-                ..Draw::default()
-            },
-            true,
-        ),
-        case(
-            "fullscreen, 2 triangles",
-            Draw {
-                positions: &two,
-                ..Draw::default()
-            },
-            true,
-        ),
+        case("fullscreen, 1 triangle", Draw { positions: &fullscreen, ..Draw::default() }, true),
+        case("fullscreen, 2 triangles", Draw { positions: &two, ..Draw::default() }, true),
         case("sphere, cull back", mesh.clone(), true),
-        case(
-            "sphere, cull back, depth",
-            Draw {
-                depth: less,
-                ..mesh.clone()
-            },
-            true,
-        ),
+        case("sphere, cull back, depth", Draw { depth: less, ..mesh.clone() }, true),
         // Both sides: a million quads rasterized, the far side's mostly
         // failing the depth test. Not one of the cases.
-        case(
-            "sphere, no culling, depth",
-            Draw {
-                cull: None,
-                depth: less,
-                ..mesh
-            },
-            false,
-        ),
+        case("sphere, no culling, depth", Draw { cull: None, depth: less, ..mesh }, false),
     ];
 
-    println!(
-        "bench-quads: one draw on a {WIDTH}x{HEIGHT} pass, median of {runs} runs, ms; {}",
-        machine()
-    );
+    println!("bench-quads: one draw on a {WIDTH}x{HEIGHT} pass, median of {runs} runs, ms; {}", machine());
     println!(
         "  {:<27} {:>7} {:>7} {:>7} {:>7} {:>7} {:>8} {:>8} {:>8} {:>8}",
         "case", "draw", "(min)", "fresh", "(min)", "tris", "culled", "quads", "helpers", "shaded q"
@@ -224,9 +164,7 @@ fn main() -> ExitCode {
             r.helper_lanes(),
             shaded.quads
         );
-        consistent &= shaded.quads <= r.quads
-            && shaded.pixels <= r.pixels
-            && r.pixels <= u64::from(WIDTH * HEIGHT) * r.triangles;
+        consistent &= shaded.quads <= r.quads && shaded.pixels <= r.pixels && r.pixels <= u64::from(WIDTH * HEIGHT) * r.triangles;
     }
     let verdict = |ms: f64| if ms < 20.0 { "met" } else { "NOT met" };
     println!(
@@ -236,9 +174,5 @@ fn main() -> ExitCode {
         worst[1],
         verdict(worst[1])
     );
-    if consistent {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::FAILURE
-    }
+    if consistent { ExitCode::SUCCESS } else { ExitCode::FAILURE }
 }

@@ -125,7 +125,13 @@ fn soak(bin: &std::path::Path, o: &Options) -> bool {
     let mib = |k: u64| k as f64 / 1024.0;
     let first = report.rss.first().map_or(0, |r| r.1);
     let last = report.rss.last().map_or(0, |r| r.1);
-    println!("soak: {} edit/break/fix cycles ({} saves), --render {}, {:.0} s", report.cycles, report.cycles * 3, o.render, started.elapsed().as_secs_f64());
+    println!(
+        "soak: {} edit/break/fix cycles ({} saves), --render {}, {:.0} s",
+        report.cycles,
+        report.cycles * 3,
+        o.render,
+        started.elapsed().as_secs_f64()
+    );
     println!("  {}", machine());
     println!("  outcomes as expected: {} of {}; lost: {}", report.outcomes, report.cycles * 3, report.lost.len());
     for l in report.lost.iter().take(10) {
@@ -149,7 +155,8 @@ fn soak(bin: &std::path::Path, o: &Options) -> bool {
         p[2],
         if report.final_matches() { "match" } else { "MISMATCH" }
     );
-    let ok = report.lost.is_empty() && report.dropped_events == 0 && report.final_matches() && report.rss_max_kib() <= o.rss_bound_mib * 1024;
+    let ok =
+        report.lost.is_empty() && report.dropped_events == 0 && report.final_matches() && report.rss_max_kib() <= o.rss_bound_mib * 1024;
     println!("  soak {}", if ok { "passed" } else { "FAILED" });
     ok
 }

@@ -45,7 +45,11 @@ async fn browser() -> (Driver, Client) {
     .unwrap();
     let start = Instant::now();
     loop {
-        match ClientBuilder::new(hyper_util::client::legacy::connect::HttpConnector::new()).capabilities(caps.clone()).connect(&format!("http://127.0.0.1:{port}")).await {
+        match ClientBuilder::new(hyper_util::client::legacy::connect::HttpConnector::new())
+            .capabilities(caps.clone())
+            .connect(&format!("http://127.0.0.1:{port}"))
+            .await
+        {
             Ok(c) => return (driver, c),
             Err(e) if start.elapsed() > LIMIT => panic!("cannot start chromium through chromedriver: {e}"),
             Err(_) => tokio::time::sleep(Duration::from_millis(200)).await,
@@ -103,9 +107,10 @@ async fn until(c: &Client, server: &impl Log, what: &str, js: &str) -> serde_jso
     let start = Instant::now();
     loop {
         if let Ok(v) = c.execute(&format!("return ({js});"), vec![]).await
-            && !(v.is_null() || v == false || v == "" || v == 0) {
-                return v;
-            }
+            && !(v.is_null() || v == false || v == "" || v == 0)
+        {
+            return v;
+        }
         if start.elapsed() > LIMIT {
             let html = c.source().await.unwrap_or_default();
             panic!("timed out waiting for {what}\n--- page ---\n{}\n--- server ---\n{}", &html[..html.len().min(4000)], server.log());
@@ -128,7 +133,13 @@ async fn page_shows_frame_and_errors_at_their_line_and_clears_them() {
     let before = shown(&c).await;
     // The inspector opens on the final output and, live, gets its exact
     // floats streamed over the WebSocket (a subscription of this page).
-    until(&c, &s, "a streamed capture in the inspector", "window.loupe.state.inspector.streamedLoads >= 1 && window.loupe.state.inspector.output === 'color'").await;
+    until(
+        &c,
+        &s,
+        "a streamed capture in the inspector",
+        "window.loupe.state.inspector.streamedLoads >= 1 && window.loupe.state.inspector.output === 'color'",
+    )
+    .await;
     let alpha = c.execute("return window.loupe.valueAt(480, 270)[3];", vec![]).await.unwrap();
     assert_eq!(alpha, 1.0, "the streamed final image is opaque");
     let page = c.execute("const s = window.loupe.state; return [s.protocol, s.problems, document.querySelectorAll('#notices .notice:not([hidden])').length];", vec![]).await.unwrap();
@@ -152,9 +163,14 @@ async fn page_shows_frame_and_errors_at_their_line_and_clears_them() {
     let at_diagnostic = shown(&c).await.frame;
     let (code, _) = s.post("/api/reload");
     assert_eq!(code, 202);
-    until(&c, &s, "a frame after the failed rebuild", &format!("Number(document.querySelector('#frame').dataset.frame) > {at_diagnostic}")).await;
+    until(&c, &s, "a frame after the failed rebuild", &format!("Number(document.querySelector('#frame').dataset.frame) > {at_diagnostic}"))
+        .await;
     let broken_shown = shown(&c).await;
-    assert_eq!(broken_shown.pixels, before.pixels, "the image is unchanged while the shader is broken (frames {} and {})", before.frame, broken_shown.frame);
+    assert_eq!(
+        broken_shown.pixels, before.pixels,
+        "the image is unchanged while the shader is broken (frames {} and {})",
+        before.frame, broken_shown.frame
+    );
 
     // Fix it with a new colour: the error clears, the pass is ok again and
     // the image changes to that colour.
@@ -213,9 +229,21 @@ async fn page_reconnects_by_itself_after_a_server_restart_and_shows_a_new_frame(
     // A new server on the same port: the page reconnects by itself and
     // shows the new server's frame.
     let s = Server::start_on(&p.root, port, &["--render", "on-change"]);
-    until(&c, &s, "connected again", "document.querySelector('#connection').textContent === 'connected' && window.loupe.state.connections === 2").await;
+    until(
+        &c,
+        &s,
+        "connected again",
+        "document.querySelector('#connection').textContent === 'connected' && window.loupe.state.connections === 2",
+    )
+    .await;
     until(&c, &s, "a new frame image", &format!("window.loupe.state.liveImages.received > {received}")).await;
-    until(&c, &s, "the new frame on screen", &format!("document.querySelector('#frame').getAttribute('src') !== {}", serde_json::json!(src))).await;
+    until(
+        &c,
+        &s,
+        "the new frame on screen",
+        &format!("document.querySelector('#frame').getAttribute('src') !== {}", serde_json::json!(src)),
+    )
+    .await;
     until(&c, &s, "the pass list again", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"ok\"]')").await;
     c.close().await.unwrap();
 }
@@ -245,7 +273,13 @@ async fn live_controls_override_the_scene_and_save_keeps_its_comments() {
     let after = p.read("scenes/pattern.toml");
     assert_eq!(after, before.replace("exposure_ev = 0.0\n", "exposure_ev = 1.0\n"), "only the value changed");
     // The reload of the saved file keeps the exposure pass live.
-    until(&c, &s, "still exposed after the file reload", "document.querySelector('#passes li[data-pass=\"exposure\"][data-status=\"ok\"]')").await;
+    until(
+        &c,
+        &s,
+        "still exposed after the file reload",
+        "document.querySelector('#passes li[data-pass=\"exposure\"][data-status=\"ok\"]')",
+    )
+    .await;
     c.close().await.unwrap();
 }
 
@@ -256,7 +290,8 @@ async fn any_pass_output_is_inspectable_with_exact_values() {
     let (_driver, c) = browser().await;
     c.goto(&s.url("/")).await.unwrap();
     until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
-    until(&c, &s, "volumes culled with its reason", "document.querySelector('#passes li[data-pass=\"volumes\"][data-status=\"culled\"]')").await;
+    until(&c, &s, "volumes culled with its reason", "document.querySelector('#passes li[data-pass=\"volumes\"][data-status=\"culled\"]')")
+        .await;
     // A G-buffer target, not the final image: the knot covers the centre
     // of minimal.toml's frame, so the normal there is a unit vector.
     let loaded = c.execute_async("window.loupe.inspect('gbuffer', 'normal').then(arguments[0]);", vec![]).await.unwrap();
@@ -289,8 +324,18 @@ async fn the_auto_exposure_histogram_is_a_plot_with_its_gpu_time() {
     assert!(meta.as_str().unwrap().contains("u32 [256]"), "the chip says what the buffer is: {meta}");
     c.find(Locator::Css(&chip)).await.unwrap().click().await.unwrap();
 
-    until(&c, &s, "the tensor view with 256 bars", "!document.querySelector('#tensor-panel').hidden && document.querySelector('#tensor-plot').dataset.bars === '256'").await;
-    assert_eq!(c.execute("return document.querySelector('#inspector').hidden;", vec![]).await.unwrap(), true, "the tensor view takes the inspector's place");
+    until(
+        &c,
+        &s,
+        "the tensor view with 256 bars",
+        "!document.querySelector('#tensor-panel').hidden && document.querySelector('#tensor-plot').dataset.bars === '256'",
+    )
+    .await;
+    assert_eq!(
+        c.execute("return document.querySelector('#inspector').hidden;", vec![]).await.unwrap(),
+        true,
+        "the tensor view takes the inspector's place"
+    );
     let shape = c.find(Locator::Css("#tensor-shape")).await.unwrap().text().await.unwrap();
     assert!(shape.contains("[bin 256] u32"), "{shape}");
     // The plot reads the captured values: hovering the fullest bin shows
@@ -321,7 +366,8 @@ async fn an_srgb_output_looks_in_the_inspector_as_in_the_live_frame() {
     let s = Server::start(&p.root, &["--render", "on-change"]);
     let (_driver, c) = browser().await;
     c.goto(&s.url("/")).await.unwrap();
-    until(&c, &s, "a frame", "document.querySelector('#frame').complete && Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    until(&c, &s, "a frame", "document.querySelector('#frame').complete && Number(document.querySelector('#frame').dataset.frame || 0)")
+        .await;
     // The inspector opens on the final output, tonemap/color (Rgba8UnormSrgb).
     let loaded = c.execute_async("window.loupe.inspect('tonemap', 'color').then(arguments[0]);", vec![]).await.unwrap();
     assert_eq!(loaded, true);
@@ -346,7 +392,12 @@ async fn an_srgb_output_looks_in_the_inspector_as_in_the_live_frame() {
     for sample in compared.as_array().unwrap() {
         let live: Vec<i64> = sample[2].as_array().unwrap().iter().map(|v| v.as_i64().unwrap()).collect();
         let shown: Vec<i64> = sample[3].as_array().unwrap().iter().map(|v| v.as_i64().unwrap()).collect();
-        assert!(live.iter().zip(&shown).all(|(a, b)| (a - b).abs() <= 1), "pixel ({}, {}): live {live:?}, inspector {shown:?}", sample[0], sample[1]);
+        assert!(
+            live.iter().zip(&shown).all(|(a, b)| (a - b).abs() <= 1),
+            "pixel ({}, {}): live {live:?}, inspector {shown:?}",
+            sample[0],
+            sample[1]
+        );
         differing += usize::from(live.iter().any(|v| *v != live[0]));
     }
     assert!(differing > 0, "the samples include coloured pixels, not only greys: {compared}");
@@ -360,7 +411,11 @@ async fn a_nan_made_by_a_pass_is_named_live_and_opened_at_its_pixel() {
     let (_driver, c) = browser().await;
     c.goto(&s.url("/")).await.unwrap();
     until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
-    assert_eq!(c.execute("return document.querySelector('#nan-notice').hidden;", vec![]).await.unwrap(), true, "a clean frame shows no NaN notice");
+    assert_eq!(
+        c.execute("return document.querySelector('#nan-notice').hidden;", vec![]).await.unwrap(),
+        true,
+        "a clean frame shows no NaN notice"
+    );
 
     // `view.environment_top.w` is always 0 (unused): a runtime divide by zero in lighting.
     const LIGHTING: &str = "shaders/passes/lighting.wgsl";
@@ -368,18 +423,33 @@ async fn a_nan_made_by_a_pass_is_named_live_and_opened_at_its_pixel() {
     let broken = good.replace("    return vec4(color, 1.0);\n}", "    return vec4(color / view.environment_top.w, 1.0);\n}");
     assert_ne!(broken, good, "the edit applies");
     p.save_by_rename(LIGHTING, &broken);
-    let pass = until(&c, &s, "the NaN notice naming a pass", "!document.querySelector('#nan-notice').hidden && document.querySelector('#nan-notice').dataset.pass").await;
+    let pass = until(
+        &c,
+        &s,
+        "the NaN notice naming a pass",
+        "!document.querySelector('#nan-notice').hidden && document.querySelector('#nan-notice').dataset.pass",
+    )
+    .await;
     assert_eq!(pass, "lighting", "the pass that divides by zero, not one it flowed into");
     let text = c.find(Locator::Css("#nan-text")).await.unwrap().text().await.unwrap();
     assert!(text.contains("lighting/color"), "{text}");
 
     // One click: that output, at that pixel, with the NaN overlay.
     c.find(Locator::Css("#nan-open")).await.unwrap().click().await.unwrap();
-    until(&c, &s, "the inspector on lighting/color", "window.loupe.state.inspector.pass === 'lighting' && window.loupe.state.inspector.output === 'color'").await;
+    until(
+        &c,
+        &s,
+        "the inspector on lighting/color",
+        "window.loupe.state.inspector.pass === 'lighting' && window.loupe.state.inspector.output === 'color'",
+    )
+    .await;
     let at = c.execute("return window.loupe.state.nan.origin.pixel;", vec![]).await.unwrap();
     let (x, y) = (at[0].as_u64().unwrap(), at[1].as_u64().unwrap());
     let v = until(&c, &s, "the value there", &format!("window.loupe.valueText({x}, {y})")).await;
-    assert!(v.as_array().unwrap()[..3].iter().any(|c| c == "NaN" || c == "Infinity" || c == "-Infinity"), "the pixel named holds the bad value: {v}");
+    assert!(
+        v.as_array().unwrap()[..3].iter().any(|c| c == "NaN" || c == "Infinity" || c == "-Infinity"),
+        "the pixel named holds the bad value: {v}"
+    );
     assert_eq!(c.execute("return document.querySelector('#overlay-nan').checked;", vec![]).await.unwrap(), true);
 
     // The fix clears it.
@@ -395,8 +465,15 @@ async fn a_nan_made_by_a_pass_is_named_live_and_opened_at_its_pixel() {
 async fn every_raster_pass_has_its_quad_table_and_maps() {
     let p = Project::copy_of_repo("browser-quads");
     // Small, with a small shadow map: the page reads every output whole.
-    let small = p.read("scenes/showcase.toml").replacen("width = 640", "width = 320", 1).replacen("height = 360", "height = 180", 1).replacen("shadow_map_size = 1024", "shadow_map_size = 256", 1);
-    assert!(small.contains("width = 320") && small.contains("height = 180") && small.contains("= 256"), "the showcase's settings moved: update this test");
+    let small = p
+        .read("scenes/showcase.toml")
+        .replacen("width = 640", "width = 320", 1)
+        .replacen("height = 360", "height = 180", 1)
+        .replacen("shadow_map_size = 1024", "shadow_map_size = 256", 1);
+    assert!(
+        small.contains("width = 320") && small.contains("height = 180") && small.contains("= 256"),
+        "the showcase's settings moved: update this test"
+    );
     p.write("scenes/small.toml", small);
     let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/small.toml"]);
     let (_driver, c) = browser().await;
@@ -410,23 +487,55 @@ async fn every_raster_pass_has_its_quad_table_and_maps() {
         )
         .await
         .unwrap();
-    let raster: Vec<(String, String)> = raster.as_array().unwrap().iter().map(|p| (p[0].as_str().unwrap().to_owned(), p[1].as_str().unwrap().to_owned())).collect();
+    let raster: Vec<(String, String)> =
+        raster.as_array().unwrap().iter().map(|p| (p[0].as_str().unwrap().to_owned(), p[1].as_str().unwrap().to_owned())).collect();
     assert!(raster.len() >= 6, "the showcase's raster passes: {raster:?}");
     for (pass, _) in &raster {
-        until(&c, &s, &format!("{pass}'s totals in the pass list"), &format!("document.querySelector('#passes li[data-pass=\"{pass}\"] .pass-quads')?.dataset.quads")).await;
+        until(
+            &c,
+            &s,
+            &format!("{pass}'s totals in the pass list"),
+            &format!("document.querySelector('#passes li[data-pass=\"{pass}\"] .pass-quads')?.dataset.quads"),
+        )
+        .await;
     }
     for (pass, output) in &raster {
         let shown = c.execute_async(&format!("window.loupe.inspect('{pass}', '{output}').then(arguments[0]);"), vec![]).await.unwrap();
         assert_eq!(shown, true, "{pass}/{output}");
-        let total = until(&c, &s, &format!("{pass}'s quad table"), &format!("document.querySelector('#quad-panel[data-pass=\"{pass}\"] #quad-table tr.total td[data-key=quads]')?.dataset.value")).await;
-        let served = c.execute_async(&format!("fetch('/api/quads').then(r => r.json()).then(q => arguments[0](q.passes.find(p => p.pass === '{pass}').quads.quads));"), vec![]).await.unwrap();
+        let total = until(
+            &c,
+            &s,
+            &format!("{pass}'s quad table"),
+            &format!("document.querySelector('#quad-panel[data-pass=\"{pass}\"] #quad-table tr.total td[data-key=quads]')?.dataset.value"),
+        )
+        .await;
+        let served = c
+            .execute_async(
+                &format!(
+                    "fetch('/api/quads').then(r => r.json()).then(q => arguments[0](q.passes.find(p => p.pass === '{pass}').quads.quads));"
+                ),
+                vec![],
+            )
+            .await
+            .unwrap();
         assert_eq!(total.as_str().unwrap(), served.to_string(), "{pass}: the table shows the server's figure");
         if pass == "tonemap" {
             assert_eq!(served, 160 * 90, "one fullscreen triangle over 320×180");
         }
         for kind in ["overdraw", "helpers"] {
-            c.execute(&format!("const s = document.querySelector('#quad-overlay'); s.value = '{kind}'; s.dispatchEvent(new Event('change'));"), vec![]).await.unwrap();
-            let size = until(&c, &s, &format!("{pass}'s {kind} map"), &format!("(o => o && o.kind === '{kind}' && [o.width, o.height])(window.loupe.state.inspector.overlay)")).await;
+            c.execute(
+                &format!("const s = document.querySelector('#quad-overlay'); s.value = '{kind}'; s.dispatchEvent(new Event('change'));"),
+                vec![],
+            )
+            .await
+            .unwrap();
+            let size = until(
+                &c,
+                &s,
+                &format!("{pass}'s {kind} map"),
+                &format!("(o => o && o.kind === '{kind}' && [o.width, o.height])(window.loupe.state.inspector.overlay)"),
+            )
+            .await;
             let a = c.execute("const i = window.loupe.state.inspector; return [i.width, i.height];", vec![]).await.unwrap();
             assert_eq!(size, a, "{pass}: the {kind} map covers the inspected output");
             let legend = c.find(Locator::Css("#quad-legend")).await.unwrap().text().await.unwrap();
@@ -444,7 +553,10 @@ async fn the_renderer_switch_counts_samples_and_measures_path_against_raster() {
     let p = Project::copy_of_repo("browser-path");
     // Small, with few samples: lavapipe traces it in a few frames.
     let small = p.read("scenes/minimal.toml").replacen("width = 640", "width = 96", 1).replacen("height = 360", "height = 54", 1);
-    assert!(small.contains("width = 96") && small.contains("height = 54") && !small.contains("[quality]"), "minimal.toml's settings moved: update this test");
+    assert!(
+        small.contains("width = 96") && small.contains("height = 54") && !small.contains("[quality]"),
+        "minimal.toml's settings moved: update this test"
+    );
     p.write("scenes/small.toml", small + "\n[quality]\npath_spp = 8\n");
     // Continuous: the path tracer adds one sample per frame rendered.
     let s = Server::start(&p.root, &["--render", "continuous", "--scene", "scenes/small.toml"]);
@@ -452,20 +564,31 @@ async fn the_renderer_switch_counts_samples_and_measures_path_against_raster() {
     c.goto(&s.url("/")).await.unwrap();
     until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
     until(&c, &s, "the switch showing raster", "document.querySelector('#renderer-raster').getAttribute('aria-pressed') === 'true'").await;
-    assert_eq!(c.execute("return document.querySelector('#path-panel').hidden;", vec![]).await.unwrap(), true, "no path tracing panel while rastering");
+    assert_eq!(
+        c.execute("return document.querySelector('#path-panel').hidden;", vec![]).await.unwrap(),
+        true,
+        "no path tracing panel while rastering"
+    );
     until(&c, &s, "the raster image kept by the page", "window.loupe.state.path.reference").await;
 
     c.find(Locator::Css("#renderer-path")).await.unwrap().click().await.unwrap();
-    until(&c, &s, "the switch showing path traced", "document.querySelector('#renderer-path').getAttribute('aria-pressed') === 'true'").await;
+    until(&c, &s, "the switch showing path traced", "document.querySelector('#renderer-path').getAttribute('aria-pressed') === 'true'")
+        .await;
     let control = c.execute("return document.querySelector('#controls [data-path=\"quality.renderer\"]').value;", vec![]).await.unwrap();
     assert_eq!(control, "path", "the Scene panel's control shows the override too");
     until(&c, &s, "the raster passes culled", "document.querySelector('#passes li[data-pass=\"lighting\"][data-status=\"culled\"]') && document.querySelector('#passes li[data-pass=\"path_trace\"][data-status=\"ok\"]')").await;
-    let counted = until(&c, &s, "some samples counted", "(n => n >= 2 && n)(Number(document.querySelector('#path-samples').dataset.samples))").await;
+    let counted =
+        until(&c, &s, "some samples counted", "(n => n >= 2 && n)(Number(document.querySelector('#path-samples').dataset.samples))").await;
     assert!(counted.as_u64().unwrap() <= 8);
     let text = until(&c, &s, "convergence", "document.querySelector('#path-samples[data-converged=\"true\"]')?.textContent").await;
     assert_eq!(text, "8 / 8 samples · converged");
     let served = s.get_json("/api/captures");
-    let samples = served.as_array().unwrap().iter().find(|c| c["pass"] == "path_trace" && c["output"] == "samples").expect("path_trace/samples captured");
+    let samples = served
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["pass"] == "path_trace" && c["output"] == "samples")
+        .expect("path_trace/samples captured");
     assert_eq!(samples["stats"]["min"][0], 8.0, "the count shown is the capture's");
 
     // The difference, against the page's raster image. Converged, the
@@ -498,11 +621,24 @@ async fn the_renderer_switch_counts_samples_and_measures_path_against_raster() {
     let (rmse, relative) = ((squares / channels).sqrt(), relative / channels);
     assert!(rmse > 0.0, "the path tracer and the raster differ");
     let text = shown[0].as_str().unwrap();
-    let number = |after: &str| -> f64 { text.split(after).nth(1).and_then(|t| t.split_whitespace().next()).and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("no number after {after:?} in {text:?}")) };
+    let number = |after: &str| -> f64 {
+        text.split(after)
+            .nth(1)
+            .and_then(|t| t.split_whitespace().next())
+            .and_then(|v| v.parse().ok())
+            .unwrap_or_else(|| panic!("no number after {after:?} in {text:?}"))
+    };
     let close = |got: f64, want: f64, tolerance: f64| (got - want).abs() <= tolerance * want.abs();
     // Three significant digits shown: within half a unit of the third.
-    assert!(close(number("RMSE "), rmse, 0.0051) && close(number("mean relative "), 100.0 * relative, 0.0051), "{text:?}: RMSE {rmse}, mean relative {}%", 100.0 * relative);
-    assert!(close(shown[1].as_f64().unwrap(), rmse, 1e-9) && close(shown[2].as_f64().unwrap(), relative, 1e-9), "exact figures {shown}: RMSE {rmse}, relative {relative}");
+    assert!(
+        close(number("RMSE "), rmse, 0.0051) && close(number("mean relative "), 100.0 * relative, 0.0051),
+        "{text:?}: RMSE {rmse}, mean relative {}%",
+        100.0 * relative
+    );
+    assert!(
+        close(shown[1].as_f64().unwrap(), rmse, 1e-9) && close(shown[2].as_f64().unwrap(), relative, 1e-9),
+        "exact figures {shown}: RMSE {rmse}, relative {relative}"
+    );
     assert_eq!((shown[3].as_u64(), shown[4].as_u64()), (Some(96), Some(54)), "a heat-map pixel per image pixel");
     assert!(shown[5].as_str().unwrap().contains("|path − raster|"), "the legend says what it shows: {}", shown[5]);
 
@@ -510,13 +646,24 @@ async fn the_renderer_switch_counts_samples_and_measures_path_against_raster() {
     // their image anew.
     let traced_frame = traced.frame;
     c.find(Locator::Css("#renderer-raster")).await.unwrap().click().await.unwrap();
-    until(&c, &s, "the switch showing raster again", "document.querySelector('#renderer-raster').getAttribute('aria-pressed') === 'true'").await;
+    until(&c, &s, "the switch showing raster again", "document.querySelector('#renderer-raster').getAttribute('aria-pressed') === 'true'")
+        .await;
     until(&c, &s, "lighting live again", "document.querySelector('#passes li[data-pass=\"lighting\"][data-status=\"ok\"]') && document.querySelector('#passes li[data-pass=\"path_trace\"][data-status=\"culled\"]')").await;
     until(&c, &s, "a new raster image kept", &format!("window.loupe.state.path.reference.frame > {traced_frame}")).await;
-    assert_eq!(c.execute("return document.querySelector('#path-panel').hidden;", vec![]).await.unwrap(), true, "no samples or difference while rastering");
+    assert_eq!(
+        c.execute("return document.querySelector('#path-panel').hidden;", vec![]).await.unwrap(),
+        true,
+        "no samples or difference while rastering"
+    );
     // Set in the Scene panel instead, the switch follows.
     c.execute("const s = document.querySelector('#controls [data-path=\"quality.renderer\"]'); s.value = 'path'; s.dispatchEvent(new Event('change')); return true;", vec![]).await.unwrap();
-    until(&c, &s, "the switch following the Scene panel", "document.querySelector('#renderer-path').getAttribute('aria-pressed') === 'true'").await;
+    until(
+        &c,
+        &s,
+        "the switch following the Scene panel",
+        "document.querySelector('#renderer-path').getAttribute('aria-pressed') === 'true'",
+    )
+    .await;
     c.close().await.unwrap();
 }
 
@@ -531,8 +678,12 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
     let p = Project::copy_of_repo("browser-denoiser");
     // Small, with few samples: lavapipe traces and denoises it in a few frames.
     let small = p.read("scenes/minimal.toml").replacen("width = 640", "width = 64", 1).replacen("height = 360", "height = 48", 1);
-    assert!(small.contains("width = 64") && small.contains("height = 48") && !small.contains("[quality]"), "minimal.toml's settings moved: update this test");
-    let denoiser = format!("\n[quality]\nrenderer = \"path\"\npath_spp = 2\n\n[denoiser]\nweights = \"{}\"\nmode = \"ldr\"\n", weights.display());
+    assert!(
+        small.contains("width = 64") && small.contains("height = 48") && !small.contains("[quality]"),
+        "minimal.toml's settings moved: update this test"
+    );
+    let denoiser =
+        format!("\n[quality]\nrenderer = \"path\"\npath_spp = 2\n\n[denoiser]\nweights = \"{}\"\nmode = \"ldr\"\n", weights.display());
     p.write("scenes/small.toml", small + &denoiser);
     let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/small.toml"]);
     let (_driver, c) = browser().await;
@@ -543,15 +694,34 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
     let chip = format!("#passes li[data-pass=\"{pass}\"][data-status=\"ok\"] .chip[data-output=\"tensor\"]");
     until(&c, &s, "the first convolution's chip", &format!("document.querySelector('{chip}')")).await;
     c.find(Locator::Css(&chip)).await.unwrap().click().await.unwrap();
-    until(&c, &s, "the RGB view", &format!("!document.querySelector('#tensor-image').hidden && document.querySelector('#tensor-rgb').width === {w}")).await;
+    until(
+        &c,
+        &s,
+        "the RGB view",
+        &format!("!document.querySelector('#tensor-image').hidden && document.querySelector('#tensor-rgb').width === {w}"),
+    )
+    .await;
 
     // Every denoiser tensor the frame makes is listed.
-    let tensors: Vec<String> = s.get_json("/api/passes").as_array().unwrap().iter()
+    let tensors: Vec<String> = s
+        .get_json("/api/passes")
+        .as_array()
+        .unwrap()
+        .iter()
         .filter(|p| p["name"].as_str().unwrap().starts_with("denoise") && p["status"] == "ok")
-        .flat_map(|p| p["writes"].as_array().unwrap().iter().filter(|w| w["kind"] == "buffer" && w["name"] != "overflow").map(|w| format!("{}/{}", p["name"].as_str().unwrap(), w["name"].as_str().unwrap())).collect::<Vec<_>>())
+        .flat_map(|p| {
+            p["writes"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter(|w| w["kind"] == "buffer" && w["name"] != "overflow")
+                .map(|w| format!("{}/{}", p["name"].as_str().unwrap(), w["name"].as_str().unwrap()))
+                .collect::<Vec<_>>()
+        })
         .collect();
     assert!(tensors.len() > 10 && tensors.iter().any(|t| t == "denoise.pool1/tensor"), "{tensors:?}");
-    until(&c, &s, "every denoiser tensor listed", &format!("document.querySelector('#tensor-list').dataset.count === '{}'", tensors.len())).await;
+    until(&c, &s, "every denoiser tensor listed", &format!("document.querySelector('#tensor-list').dataset.count === '{}'", tensors.len()))
+        .await;
     let listed = c.execute("return Array.from(document.querySelectorAll('#tensor-list tr[data-key]'), r => [r.dataset.key, ...Array.from(r.cells, d => d.textContent)]);", vec![]).await.unwrap();
     let listed = listed.as_array().unwrap();
     for t in &tensors {
@@ -566,7 +736,13 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
     assert_eq!(status, 200);
     let data: Vec<f32> = bytes.chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect();
     assert_eq!(data.len(), w * h * channels);
-    until(&c, &s, "the page showing the served frame", &format!("document.querySelector('#tensor-shape').textContent.endsWith('frame {}')", meta["frame"])).await;
+    until(
+        &c,
+        &s,
+        "the page showing the served frame",
+        &format!("document.querySelector('#tensor-shape').textContent.endsWith('frame {}')", meta["frame"]),
+    )
+    .await;
     assert_eq!(s.get_json(&format!("/api/tensors/{pass}/tensor"))["frame"], meta["frame"], "no frame rendered meanwhile");
     let row = listed.iter().find(|r| r[0] == format!("{pass}/tensor").as_str()).unwrap();
     let lo = meta["stats"]["min"].as_array().unwrap();
@@ -606,7 +782,12 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
         let got = [fitted[k][0].as_f64().unwrap(), fitted[k][1].as_f64().unwrap()];
         assert!(same(got[0], at(0.01)) && same(got[1], at(0.99)), "channel {ch}'s percentiles: {got:?}, want {} … {}", at(0.01), at(0.99));
     }
-    c.execute("const f = document.querySelector('#tensor-fit'); f.value = 'minmax'; f.dispatchEvent(new Event('change')); return true;", vec![]).await.unwrap();
+    c.execute(
+        "const f = document.querySelector('#tensor-fit'); f.value = 'minmax'; f.dispatchEvent(new Event('change')); return true;",
+        vec![],
+    )
+    .await
+    .unwrap();
 
     // Under the mouse: every channel's exact value at that pixel.
     let (x, y) = (41usize, 17usize);
@@ -623,12 +804,28 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
 
     // Small multiples: one cell per channel; a histogram per channel, of
     // every pixel; the colour map.
-    let view = |v: &str| format!("const s = document.querySelector('#tensor-view'); s.value = '{v}'; s.dispatchEvent(new Event('change'));");
-    let cells = c.execute(&format!("{} return document.querySelectorAll('#tensor-grid:not([hidden]) canvas[data-channel]').length;", view("grid")), vec![]).await.unwrap();
+    let view =
+        |v: &str| format!("const s = document.querySelector('#tensor-view'); s.value = '{v}'; s.dispatchEvent(new Event('change'));");
+    let cells = c
+        .execute(
+            &format!("{} return document.querySelectorAll('#tensor-grid:not([hidden]) canvas[data-channel]').length;", view("grid")),
+            vec![],
+        )
+        .await
+        .unwrap();
     assert_eq!(cells.as_u64(), Some(channels as u64), "one grid cell per channel");
     let bins = c.execute(&format!("{} return Array.from(document.querySelectorAll('#tensor-histograms:not([hidden]) canvas[data-channel]'), c => JSON.parse(c.dataset.bins).reduce((a, b) => a + b, 0));", view("histograms")), vec![]).await.unwrap();
     assert_eq!(bins, serde_json::json!(vec![w * h; channels]), "a histogram per channel, of every pixel");
-    let cmap = c.execute(&format!("{} return document.querySelector('#tensor-cmap').hidden ? 0 : document.querySelector('#tensor-cmap').width;", view("colormap")), vec![]).await.unwrap();
+    let cmap = c
+        .execute(
+            &format!(
+                "{} return document.querySelector('#tensor-cmap').hidden ? 0 : document.querySelector('#tensor-cmap').width;",
+                view("colormap")
+            ),
+            vec![],
+        )
+        .await
+        .unwrap();
     assert_eq!(cmap.as_u64(), Some(w as u64), "the colour map view");
     c.close().await.unwrap();
 }
@@ -640,7 +837,20 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_tradeoffs_chart_shows_the_sweep_and_applies_a_point() {
     let p = Project::copy_of_repo("browser-tradeoffs");
-    let sweep = ["bench", "tradeoffs", "--scene", "scenes/minimal.toml", "--size", "32x18", "--repeats", "1", "--reference-spp", "64", "--cache", "cache"];
+    let sweep = [
+        "bench",
+        "tradeoffs",
+        "--scene",
+        "scenes/minimal.toml",
+        "--size",
+        "32x18",
+        "--repeats",
+        "1",
+        "--reference-spp",
+        "64",
+        "--cache",
+        "cache",
+    ];
     p.run(&sweep).code(0);
     let s = Server::start(&p.root, &["--scene", "scenes/minimal.toml", "--render", "on-change"]);
     let (_driver, c) = browser().await;
@@ -656,9 +866,20 @@ async fn the_tradeoffs_chart_shows_the_sweep_and_applies_a_point() {
 
     let point = "document.querySelector('#tradeoffs-chart circle[data-series=\"2\"][data-index=\"2\"]')";
     c.execute(&format!("{point}.dispatchEvent(new MouseEvent('mouseenter')); return true;"), vec![]).await.unwrap();
-    let text = until(&c, &s, "the tip", "!document.querySelector('#tradeoffs-tip').hidden && document.querySelector('#tradeoffs-text').textContent").await;
+    let text = until(
+        &c,
+        &s,
+        "the tip",
+        "!document.querySelector('#tradeoffs-tip').hidden && document.querySelector('#tradeoffs-text').textContent",
+    )
+    .await;
     let text = text.as_str().unwrap().to_owned();
-    assert!(text.starts_with("path_spp: 4") && text.contains("quality.renderer = \"path\" · quality.path_spp = 4") && text.contains("relative MSE"), "{text}");
+    assert!(
+        text.starts_with("path_spp: 4")
+            && text.contains("quality.renderer = \"path\" · quality.path_spp = 4")
+            && text.contains("relative MSE"),
+        "{text}"
+    );
     until(&c, &s, "its image", "document.querySelector('#tradeoffs-image').naturalWidth === 32").await;
 
     c.execute(&format!("{point}.dispatchEvent(new MouseEvent('click')); return true;"), vec![]).await.unwrap();

@@ -224,10 +224,7 @@ fn clean_runs_print_no_error_lines() {
     // libwayland print `error: XDG_RUNTIME_DIR is invalid or not set` for
     // every clean run: removed here so the test holds on a desktop too.
     let p = Project::copy_of_repo("quiet");
-    for args in [
-        &["check", "--no-timings"][..],
-        &["render", "--scene", "scenes/minimal.toml", "--out", "out", "--size", "64x36"][..],
-    ] {
+    for args in [&["check", "--no-timings"][..], &["render", "--scene", "scenes/minimal.toml", "--out", "out", "--size", "64x36"][..]] {
         let out = std::process::Command::new(loupe_tests::loupe_bin())
             .args(args)
             .current_dir(&p.root)
@@ -311,7 +308,8 @@ fn toml_files_that_are_not_scenes_are_left_alone() {
 }
 
 /// A compute shader using f64 in a function's signature.
-const F64_SHADER: &str = "fn twice(x: f64) -> f64 {\n    return x * 2.0;\n}\n\n@compute @workgroup_size(1)\nfn main() {\n    _ = twice(1.0);\n}\n";
+const F64_SHADER: &str =
+    "fn twice(x: f64) -> f64 {\n    return x * 2.0;\n}\n\n@compute @workgroup_size(1)\nfn main() {\n    _ = twice(1.0);\n}\n";
 
 #[test]
 fn a_missing_capability_is_named_with_the_flag_that_allows_it() {

@@ -17,24 +17,42 @@ fn weights(name: &str) -> String {
 #[test]
 fn denoises_into_every_format() {
     let p = Project::empty("denoise");
-    let (w, color, albedo, normal) =
-        (weights("rt_ldr_alb_nrm.tza"), fixture("color.pfm"), fixture("albedo.pfm"), fixture("normal.pfm"));
+    let (w, color, albedo, normal) = (weights("rt_ldr_alb_nrm.tza"), fixture("color.pfm"), fixture("albedo.pfm"), fixture("normal.pfm"));
     let root = repo().display().to_string();
     for out in ["out.pfm", "out.exr", "out.png"] {
-        let args = ["denoise", "--root", &root, "--weights", &w, "--color", &color, "--albedo", &albedo, "--normal", &normal, "--ldr", "-o", out];
+        let args =
+            ["denoise", "--root", &root, "--weights", &w, "--color", &color, "--albedo", &albedo, "--normal", &normal, "--ldr", "-o", out];
         let run = p.run(&args);
-        run.code(0).stdout_has("32x24, colour, albedo and normal, input scale 1").check(!run.stdout.contains("CPU reference"), "the GPU by default");
+        run.code(0)
+            .stdout_has("32x24, colour, albedo and normal, input scale 1")
+            .check(!run.stdout.contains("CPU reference"), "the GPU by default");
     }
-    let cpu = ["denoise", "-d", "cpu", "--weights", &w, "--color", &color, "--albedo", &albedo, "--normal", &normal, "--ldr", "-o", "cpu.pfm"];
+    let cpu =
+        ["denoise", "-d", "cpu", "--weights", &w, "--color", &color, "--albedo", &albedo, "--normal", &normal, "--ldr", "-o", "cpu.pfm"];
     p.run(&cpu).code(0).stdout_has("on the CPU reference");
     assert!(std::fs::read(p.path("out.pfm")).unwrap().starts_with(b"PF\n32 24\n"));
     assert_eq!(image::open(p.path("out.png")).unwrap().to_rgb8().dimensions(), (32, 24));
     assert!(std::fs::metadata(p.path("out.exr")).unwrap().len() > 32 * 24 * 12);
 
     let ldr = weights("rt_ldr.tza");
-    p.run(&["denoise", "--root", &root, "--weights", &ldr, "--color", &color, "--hdr", "--precision", "f16", "-o", "hdr.exr", "--dump-tensors", "t"])
-        .code(0)
-        .stdout_has("29 tensors in t");
+    p.run(&[
+        "denoise",
+        "--root",
+        &root,
+        "--weights",
+        &ldr,
+        "--color",
+        &color,
+        "--hdr",
+        "--precision",
+        "f16",
+        "-o",
+        "hdr.exr",
+        "--dump-tensors",
+        "t",
+    ])
+    .code(0)
+    .stdout_has("29 tensors in t");
     let dumped = std::fs::read_dir(p.path("t")).unwrap().count();
     assert_eq!(dumped, 29);
     assert!(p.path("t/upsample4.npy").is_file());
@@ -45,9 +63,9 @@ fn bad_input_has_exit_codes() {
     let p = Project::empty("denoise-bad");
     let (w, color) = (weights("rt_ldr.tza"), fixture("color.pfm"));
     p.write("cut.tza", &std::fs::read(&w).unwrap()[..1000]);
-    p.run(&["denoise", "--weights", "cut.tza", "--color", &color, "--ldr", "-o", "o.pfm"])
-        .code(1)
-        .stderr_has("cut.tza:1:1: error[weights]: at byte 4: the tensor table is said to start at byte 1829504, past the end of the file (1000 bytes)");
+    p.run(&["denoise", "--weights", "cut.tza", "--color", &color, "--ldr", "-o", "o.pfm"]).code(1).stderr_has(
+        "cut.tza:1:1: error[weights]: at byte 4: the tensor table is said to start at byte 1829504, past the end of the file (1000 bytes)",
+    );
     p.write("bad.pfm", "PF\n2 2\n-1\n");
     p.run(&["denoise", "--weights", &w, "--color", "bad.pfm", "--ldr", "-o", "o.pfm"])
         .code(1)
@@ -58,7 +76,9 @@ fn bad_input_has_exit_codes() {
         .stderr_has("error[weights]: these weights take colour, but colour and albedo were given");
     p.run(&["denoise", "--weights", &w, "--color", "missing.pfm", "--ldr", "-o", "o.pfm"]).code(2).stderr_has("error[io]");
     // The GPU's shaders are under --root (here the empty project).
-    p.run(&["denoise", "--weights", &w, "--color", &color, "--ldr", "-o", "o.pfm"]).code(2).stderr_has("error[io]: cannot read the shaders");
+    p.run(&["denoise", "--weights", &w, "--color", &color, "--ldr", "-o", "o.pfm"])
+        .code(2)
+        .stderr_has("error[io]: cannot read the shaders");
     p.run(&["denoise", "--weights", &w, "--color", &color, "--ldr", "--tile", "100", "-o", "o.pfm"]).code(2).stderr_has("not a tile side");
     p.run(&["denoise", "--weights", &w, "--color", &color, "--ldr", "-o", "no/such/dir/o.pfm"]).code(2).stderr_has("error[io]");
     for usage in [

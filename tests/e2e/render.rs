@@ -74,7 +74,21 @@ fn showcase_renders_every_pass() {
     let r = report.expect("report.json written");
     assert_eq!(
         names(&r["passes"]),
-        ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volume_march", "volumes", "exposure_histogram", "exposure_adapt", "exposure", "tonemap", "debug_view"],
+        [
+            "shadows",
+            "depth_prepass",
+            "gbuffer",
+            "ltc_tables",
+            "lighting",
+            "volume_shadows",
+            "volume_march",
+            "volumes",
+            "exposure_histogram",
+            "exposure_adapt",
+            "exposure",
+            "tonemap",
+            "debug_view"
+        ],
         "{r}"
     );
     assert_eq!(names(&r["culled"]), ["path_trace", "denoise_autoexposure", "denoise_input", "denoise", "test_pattern"]);
@@ -90,7 +104,8 @@ fn showcase_renders_every_pass() {
     let state = &pass("exposure_adapt")["outputs"][0];
     let ev = npy_f32(&p.path(&format!("out/{}", state["npy"].as_str().unwrap())));
     assert!(ev[0].is_finite() && ev[0] == ev[1] && ev[3] == 1.0, "the first frame starts at its target: {ev:?}");
-    let pipelines: Vec<&str> = r["passes"].as_array().unwrap().iter().flat_map(|p| p["pipelines"].as_array().unwrap()).map(|v| v.as_str().unwrap()).collect();
+    let pipelines: Vec<&str> =
+        r["passes"].as_array().unwrap().iter().flat_map(|p| p["pipelines"].as_array().unwrap()).map(|v| v.as_str().unwrap()).collect();
     assert!(pipelines.contains(&"lighting.deferred[LIGHT_RECT,MEDIA_SHADOWS,SHADOWS]"), "{pipelines:?}");
     assert!(pipelines.contains(&"volume_march[SHADOWS,VOLUME_ANALYTIC]"), "{pipelines:?}");
     assert!(r["nan"].is_null() && r["gpu_errors"].as_array().unwrap().is_empty(), "{r}");
@@ -160,7 +175,10 @@ fn render_and_bench_read_the_scene_under_root_as_serve_does() {
     let elsewhere = Project::empty("render-root-cwd");
     let root = p.root.to_str().unwrap();
     let out = elsewhere.path("out");
-    let run = loupe_tests::loupe(&elsewhere.root, &["render", "--root", root, "--scene", "scenes/pattern.toml", "--size", "32x18", "--out", out.to_str().unwrap()]);
+    let run = loupe_tests::loupe(
+        &elsewhere.root,
+        &["render", "--root", root, "--scene", "scenes/pattern.toml", "--size", "32x18", "--out", out.to_str().unwrap()],
+    );
     run.code(0);
     assert!(out.join("report.json").is_file());
     let run = loupe_tests::loupe(&elsewhere.root, &["bench", "--root", root, "--size", "32x18", "--frames", "1", "scenes/pattern.toml"]);
@@ -227,7 +245,11 @@ fn two_triangles(w: u64, h: u64) -> (u64, u64) {
     for by in 0..h.div_ceil(2) {
         for bx in 0..w.div_ceil(2) {
             // Centre (x + ½, y + ½) below the line y = x·h/w, in integers.
-            let below: Vec<bool> = (0..4).map(|i| (2 * bx + i % 2, 2 * by + i / 2)).filter(|&(x, y)| x < w && y < h).map(|(x, y)| (2 * y + 1) * w > (2 * x + 1) * h).collect();
+            let below: Vec<bool> = (0..4)
+                .map(|i| (2 * bx + i % 2, 2 * by + i / 2))
+                .filter(|&(x, y)| x < w && y < h)
+                .map(|(x, y)| (2 * y + 1) * w > (2 * x + 1) * h)
+                .collect();
             quads += u64::from(below.contains(&true)) + u64::from(below.contains(&false));
         }
     }
@@ -281,7 +303,8 @@ fn camera_rays_through_the_hierarchy_hit_the_pixels_the_raster_covers() {
     let (mut covered, mut differ) = (0, 0);
     for y in 0..h {
         for x in 0..w {
-            let ndc = |z: f32| inv.project_point3(Vec3::new((x as f32 + 0.5) / w as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / h as f32 * 2.0, z));
+            let ndc =
+                |z: f32| inv.project_point3(Vec3::new((x as f32 + 0.5) / w as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / h as f32 * 2.0, z));
             let (near, far) = (ndc(0.0), ndc(1.0));
             let hit = bvh.intersect(near, (far - near).normalize(), 0.0, (far - near).length()).is_some();
             let drawn = normal.get_pixel(x, y).0[3] == 255;
@@ -334,7 +357,10 @@ fn the_environment_lights_the_scene_and_is_its_background() {
     let (white_min, white_max) = furnace("[1, 1, 1]");
     let (black_min, black_max) = furnace("[0, 0, 0]");
     for c in 0..3 {
-        assert!((white_min[c] - black_min[c] - 1.0).abs() < 2e-3 && (white_max[c] - black_max[c] - 1.0).abs() < 2e-3, "diffuse is albedo·L: white {white_min:?}..{white_max:?}, black {black_min:?}..{black_max:?}");
+        assert!(
+            (white_min[c] - black_min[c] - 1.0).abs() < 2e-3 && (white_max[c] - black_max[c] - 1.0).abs() < 2e-3,
+            "diffuse is albedo·L: white {white_min:?}..{white_max:?}, black {black_min:?}..{black_max:?}"
+        );
         assert!(black_min[c] > 0.005 && black_max[c] < 0.3, "the specular is F0·DFG: {black_min:?}..{black_max:?}");
     }
 }
@@ -357,7 +383,11 @@ fn the_path_tracer_renders_offline_with_albedo_and_normal() {
         assert!(p.path(&format!("out/path_trace.{output}.exr")).is_file(), "path_trace.{output}.exr missing");
     }
     let samples = traced["outputs"].as_array().unwrap().iter().find(|o| o["name"] == "samples").unwrap();
-    assert_eq!((samples["stats"]["min"][0].as_f64(), samples["stats"]["max"][0].as_f64()), (Some(5.0), Some(5.0)), "every pixel holds 5 samples");
+    assert_eq!(
+        (samples["stats"]["min"][0].as_f64(), samples["stats"]["max"][0].as_f64()),
+        (Some(5.0), Some(5.0)),
+        "every pixel holds 5 samples"
+    );
     let color = traced["outputs"].as_array().unwrap().iter().find(|o| o["name"] == "color").unwrap();
     assert_eq!(color["format"], "Rgba32Float");
     assert_eq!(color["stats"]["nan"], 0);
@@ -400,7 +430,9 @@ fn exr_rgb(path: &std::path::Path) -> Vec<[f32; 3]> {
     let image = read_first_rgba_layer_from_file(
         path,
         |size, _| (size.width(), vec![[0.0f32; 3]; size.width() * size.height()]),
-        |(w, px): &mut (usize, Vec<[f32; 3]>), at, (r, g, b, _): (f32, f32, f32, f32)| px[at.y() * *w + at.x()] = [r, g, b].map(|v| v.clamp(0.0, 1.0)),
+        |(w, px): &mut (usize, Vec<[f32; 3]>), at, (r, g, b, _): (f32, f32, f32, f32)| {
+            px[at.y() * *w + at.x()] = [r, g, b].map(|v| v.clamp(0.0, 1.0))
+        },
     )
     .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     image.layer_data.channel_data.pixels.1
@@ -427,8 +459,26 @@ fn the_denoiser_runs_after_the_path_tracer_and_writes_every_tensor() {
     run.code(0);
     let r = report.expect("report.json written");
     let layers = [
-        "enc_conv0", "enc_conv1", "pool1", "enc_conv2", "pool2", "enc_conv3", "pool3", "enc_conv4", "pool4", "enc_conv5a", "enc_conv5b",
-        "dec_conv4a", "dec_conv4b", "dec_conv3a", "dec_conv3b", "dec_conv2a", "dec_conv2b", "dec_conv1a", "dec_conv1b", "dec_conv0",
+        "enc_conv0",
+        "enc_conv1",
+        "pool1",
+        "enc_conv2",
+        "pool2",
+        "enc_conv3",
+        "pool3",
+        "enc_conv4",
+        "pool4",
+        "enc_conv5a",
+        "enc_conv5b",
+        "dec_conv4a",
+        "dec_conv4b",
+        "dec_conv3a",
+        "dec_conv3b",
+        "dec_conv2a",
+        "dec_conv2b",
+        "dec_conv1a",
+        "dec_conv1b",
+        "dec_conv0",
     ];
     let mut expected = vec!["path_trace".to_owned(), "denoise_input".to_owned()];
     expected.extend(layers.iter().map(|l| format!("denoise.{l}")));
@@ -456,7 +506,8 @@ fn the_denoiser_runs_after_the_path_tracer_and_writes_every_tensor() {
     let clean = exr_rgb(&p.path("out/denoise.color.exr"));
 
     // Upsample and concatenation as passes of their own: their tensors too.
-    let (run, report) = render_at(&p, "scenes/denoised.toml", "64x48", &["--renderer", "path", "--spp", "2", "--set", "quality.denoiser_fused=false"]);
+    let (run, report) =
+        render_at(&p, "scenes/denoised.toml", "64x48", &["--renderer", "path", "--spp", "2", "--set", "quality.denoiser_fused=false"]);
     run.code(0);
     let r = report.unwrap();
     let names = names(&r["passes"]);

@@ -66,7 +66,8 @@ fn a_change_to_an_imported_module_rebuilds_only_its_dependents() {
     let p = Project::copy_of_repo("serve-deps");
     let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/minimal.toml"]);
     s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
-    let all: BTreeSet<String> = s.get_json("/api/pipelines").as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap().to_owned()).collect();
+    let all: BTreeSet<String> =
+        s.get_json("/api/pipelines").as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap().to_owned()).collect();
     let lighting: BTreeSet<String> = all.iter().filter(|n| n.starts_with("lighting.deferred")).cloned().collect();
     assert!(!lighting.is_empty() && all.contains("post.tonemap") && all.iter().any(|n| n.starts_with("geometry.gbuffer")), "{all:?}");
 
@@ -124,11 +125,16 @@ fn api_shapes() {
     let row = 270 * 960 * 4; // middle row: colour bars
     let last_bar = row + 959 * 4; // white bar, 0.75 before tonemapping
     assert_eq!(px(row + 3), 1.0, "alpha of the final image");
-    assert!(px(last_bar) > 0.3 && px(last_bar + 1) > 0.3 && px(last_bar + 2) > 0.3, "white bar is lit: {:?}", (px(last_bar), px(last_bar + 1)));
+    assert!(
+        px(last_bar) > 0.3 && px(last_bar + 1) > 0.3 && px(last_bar + 2) > 0.3,
+        "white bar is lit: {:?}",
+        (px(last_bar), px(last_bar + 1))
+    );
     let (code, _) = s.get("/api/captures/nope/color.png");
     assert_eq!(code, 404);
     let captures = s.get_json("/api/captures");
-    let finals: Vec<&str> = captures.as_array().unwrap().iter().filter(|c| c["final"] == true).map(|c| c["pass"].as_str().unwrap()).collect();
+    let finals: Vec<&str> =
+        captures.as_array().unwrap().iter().filter(|c| c["final"] == true).map(|c| c["pass"].as_str().unwrap()).collect();
     assert_eq!(finals, ["tonemap"], "{captures}");
     // Without --debug-api there is no debug API.
     let (code, body) = s.post("/api/debug/lose-device");
@@ -431,7 +437,8 @@ fn break_and_mend_buffer(p: &Project, s: &Server, bin: &str) {
 #[test]
 fn broken_denoiser_weights_keep_the_last_good_denoiser_rendering() {
     let p = Project::copy_of_repo("serve-weights");
-    let weights = std::fs::read(loupe_tests::repo().join("../shared/weights/oidn/rt_ldr_alb_nrm.tza")).expect("OIDN's weights in ../shared/weights/oidn/");
+    let weights = std::fs::read(loupe_tests::repo().join("../shared/weights/oidn/rt_ldr_alb_nrm.tza"))
+        .expect("OIDN's weights in ../shared/weights/oidn/");
     p.write("weights/rt_ldr_alb_nrm.tza", &weights);
     let scene = p.read("scenes/minimal.toml").replace("width = 640\nheight = 360", "width = 64\nheight = 48")
         + "\n[quality]\nrenderer = \"path\"\npath_spp = 2\n\n[denoiser]\nweights = \"../weights/rt_ldr_alb_nrm.tza\"\nmode = \"ldr\"\n";
@@ -447,7 +454,10 @@ fn broken_denoiser_weights_keep_the_last_good_denoiser_rendering() {
     });
     // As the scene names it, relative to the scene's folder.
     assert_eq!(diagnostic["location"]["file"], "scenes/../weights/rt_ldr_alb_nrm.tza", "{diagnostic}");
-    assert!(diagnostic["labels"].as_array().unwrap().iter().any(|l| l["file"] == "scenes/denoised.toml"), "and where the scene names it: {diagnostic}");
+    assert!(
+        diagnostic["labels"].as_array().unwrap().iter().any(|l| l["file"] == "scenes/denoised.toml"),
+        "and where the scene names it: {diagnostic}"
+    );
     assert_eq!(pass_status(&s, "denoise").as_deref(), Some("ok"), "the last good denoiser still runs");
     // A frame rendered after the break still has every layer.
     let before = frame_of(&s);
@@ -473,7 +483,8 @@ fn quad_statistics_stream_while_asked_and_follow_a_vertex_stage_edit() {
     assert_eq!(s.get("/api/quads").0, 404, "not computed until asked");
     let mut ws = s.ws();
     ws.send(serde_json::json!({ "type": "quad_statistics", "on": true }));
-    let tonemap_quads = |ev: &serde_json::Value| ev["passes"].as_array()?.iter().find(|p| p["pass"] == "tonemap")?["quads"]["quads"].as_u64();
+    let tonemap_quads =
+        |ev: &serde_json::Value| ev["passes"].as_array()?.iter().find(|p| p["pass"] == "tonemap")?["quads"]["quads"].as_u64();
     // pattern.toml is 960×540: one triangle launches 480·270 quads.
     let ev = ws.event("quads", LIMIT, |_| true);
     assert_eq!(tonemap_quads(&ev), Some(480 * 270), "{ev}");
@@ -538,7 +549,10 @@ fn the_path_tracer_accumulates_to_its_samples_and_restarts_on_a_change() {
 
     // The pass's shader changes: its history is forgotten too.
     let shader = p.read("shaders/passes/path_trace.wgsl");
-    p.save_by_rename("shaders/passes/path_trace.wgsl", shader.replace("const ROULETTE_AFTER: u32 = 3u;", "const ROULETTE_AFTER: u32 = 2u;"));
+    p.save_by_rename(
+        "shaders/passes/path_trace.wgsl",
+        shader.replace("const ROULETTE_AFTER: u32 = 3u;", "const ROULETTE_AFTER: u32 = 2u;"),
+    );
     let counts = sample_counts(&mut ws, |c| c.len() > 1 && c.last() == Some(&6.0));
     assert!(counts.iter().any(|c| *c < 6.0), "restarted after the edit: {counts:?}");
 }

@@ -5,7 +5,11 @@ use loupe_tests::Project;
 
 fn cached(p: &Project) -> Vec<(String, std::time::SystemTime)> {
     let mut v: Vec<_> = std::fs::read_dir(p.path("cache"))
-        .map(|d| d.map(|e| e.unwrap()).map(|e| (e.file_name().to_string_lossy().into_owned(), e.metadata().unwrap().modified().unwrap())).collect())
+        .map(|d| {
+            d.map(|e| e.unwrap())
+                .map(|e| (e.file_name().to_string_lossy().into_owned(), e.metadata().unwrap().modified().unwrap()))
+                .collect()
+        })
         .unwrap_or_default();
     v.sort();
     v
@@ -15,7 +19,20 @@ fn cached(p: &Project) -> Vec<(String, std::time::SystemTime)> {
 fn sweeps_settings_into_a_table_a_plot_and_json_with_cached_references() {
     let p = Project::copy_of_repo("tradeoffs");
     let args = [
-        "bench", "tradeoffs", "--scene", "scenes/minimal.toml", "--size", "32x18", "--repeats", "1", "--reference-spp", "256", "--out", "out", "--cache", "cache",
+        "bench",
+        "tradeoffs",
+        "--scene",
+        "scenes/minimal.toml",
+        "--size",
+        "32x18",
+        "--repeats",
+        "1",
+        "--reference-spp",
+        "256",
+        "--out",
+        "out",
+        "--cache",
+        "cache",
     ];
     p.run(&args).code(0).stdout_has("## path_spp").stdout_has("Reference: the path tracer at 256 samples per pixel");
     let json: serde_json::Value = serde_json::from_slice(&std::fs::read(p.path("out/tradeoffs.json")).unwrap()).unwrap();

@@ -81,12 +81,7 @@ impl Run {
 
 /// Runs `loupe args...` in `dir` to completion.
 pub fn loupe(dir: &Path, args: &[&str]) -> Run {
-    let out = Command::new(loupe_bin())
-        .args(args)
-        .current_dir(dir)
-        .env("NO_COLOR", "1")
-        .output()
-        .expect("the loupe binary starts");
+    let out = Command::new(loupe_bin()).args(args).current_dir(dir).env("NO_COLOR", "1").output().expect("the loupe binary starts");
     Run {
         cmd: format!("(cd {} && loupe {})", dir.display(), args.join(" ")),
         code: out.status.code().unwrap_or(-1),

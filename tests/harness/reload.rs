@@ -209,7 +209,9 @@ pub fn soak(server: &Server, driver: &mut Driver, cycles: usize, sample_every: u
                     report.outcomes += 1;
                     last_frame = o.frame.unwrap_or(last_frame);
                 }
-                Some(o) => report.lost.push(format!("cycle {i} {step}: reload {} {}", o.reload, if o.succeeded { "succeeded" } else { "failed" })),
+                Some(o) => {
+                    report.lost.push(format!("cycle {i} {step}: reload {} {}", o.reload, if o.succeeded { "succeeded" } else { "failed" }))
+                }
                 None => report.lost.push(format!("cycle {i} {step}: no reload outcome within {EVENT_LIMIT:?}")),
             }
         }

@@ -58,8 +58,7 @@ impl Ws {
                 }
                 Ok(Message::Close(f)) => panic!("the server closed the WebSocket: {f:?}"),
                 Ok(_) => {}
-                Err(tungstenite::Error::Io(e))
-                    if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
+                Err(tungstenite::Error::Io(e)) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
                 Err(e) => panic!("WebSocket error: {e}"),
             }
         }

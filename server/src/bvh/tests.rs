@@ -6,7 +6,6 @@ use glam::Vec3;
 use super::*;
 use crate::testing::Rng;
 
-
 /// `n` triangles of size about `size` scattered in a cube of side `spread`.
 fn soup(rng: &mut Rng, n: usize, spread: f32, size: f32) -> Vec<([Vec3; 3], [u32; 2])> {
     (0..n as u32)
@@ -127,7 +126,8 @@ fn degenerate_inputs_build_and_trace() {
     assert!((hit.t - 5.0).abs() < 1e-5);
 
     // NaN and infinite vertices are left out and counted; the rest stay.
-    let mut bad = vec![([Vec3::new(f32::NAN, 0.0, 0.0), Vec3::X, Vec3::Y], [0, 0]), ([Vec3::splat(f32::INFINITY), Vec3::X, Vec3::Y], [0, 1])];
+    let mut bad =
+        vec![([Vec3::new(f32::NAN, 0.0, 0.0), Vec3::X, Vec3::Y], [0, 0]), ([Vec3::splat(f32::INFINITY), Vec3::X, Vec3::Y], [0, 1])];
     bad.push((one, [0, 2]));
     let bvh = Bvh::build(&bad);
     assert_eq!((bvh.stats.triangles, bvh.stats.skipped), (1, 2));

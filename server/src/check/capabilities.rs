@@ -122,7 +122,9 @@ pub fn explain(d: Diagnostic, checked: Capabilities, files: &[Arc<SourceFile>]) 
         notes: Vec::new(),
         ..d.clone()
     };
-    out = out.with_note(format!("allow it with `--capabilities {wanted}` (or `capabilities = [...]` under [check] in loupe.toml; `all` allows everything)"));
+    out = out.with_note(format!(
+        "allow it with `--capabilities {wanted}` (or `capabilities = [...]` under [check] in loupe.toml; `all` allows everything)"
+    ));
     if !features.is_empty() {
         out = out.with_note(format!("on a device, an adapter with {features} allows it"));
     }
@@ -258,8 +260,9 @@ mod tests {
             file("main.wgsl", "// no u64 here\nfn f() -> u32 { return 1u; }\n"),
             file("lib.wgsl", "// i64 in a comment\nfn g(x: u32) -> u64x { return x; }\nfn h(x: u64) -> u64 { return x; }\n"),
         ];
-        let spanless = Diagnostic::error(Code::Validation, "Using `u64` values requires the `naga::valid::Capabilities::SHADER_INT64` flag")
-            .at(Location::file_start("main.wgsl"));
+        let spanless =
+            Diagnostic::error(Code::Validation, "Using `u64` values requires the `naga::valid::Capabilities::SHADER_INT64` flag")
+                .at(Location::file_start("main.wgsl"));
         let d = explain(spanless, baseline(), &files);
         let loc = d.location.as_ref().unwrap();
         assert_eq!((loc.file.as_str(), loc.line, loc.column, loc.end_column), ("lib.wgsl", 3, 9, 12), "{d:?}");

@@ -19,7 +19,10 @@ use naga::valid::Capabilities;
 use rayon::prelude::*;
 
 use crate::diag::{Code, Diagnostic, Location, Severity, SourceFiles};
-use crate::gpu::{self, Gpu, pipeline::{self, PipelineSpec}};
+use crate::gpu::{
+    self, Gpu,
+    pipeline::{self, PipelineSpec},
+};
 use crate::shader::{Compose, Composed, Library, NagaOil, ShaderDefs, SourceFile, defs_key, library};
 
 /// naga's parser and validator recurse on nested expressions; a worker stack
@@ -69,21 +72,14 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
         Vec::new()
     };
     let canon = |p: &Path| p.canonicalize().unwrap_or_else(|_| p.to_owned());
-    let all: BTreeMap<PathBuf, PathBuf> =
-        targets.iter().chain(root_files.iter()).map(|p| (canon(p), p.clone())).collect();
+    let all: BTreeMap<PathBuf, PathBuf> = targets.iter().chain(root_files.iter()).map(|p| (canon(p), p.clone())).collect();
     let target_set: BTreeSet<PathBuf> = targets.iter().map(|p| canon(p)).collect();
 
-    let pool = rayon::ThreadPoolBuilder::new()
-        .stack_size(WORKER_STACK)
-        .build()
-        .expect("a thread pool with default thread count");
+    let pool = rayon::ThreadPoolBuilder::new().stack_size(WORKER_STACK).build().expect("a thread pool with default thread count");
     let _quiet = QuietPanics::install();
 
-    let read: Vec<(PathBuf, Result<SourceFile, Diagnostic>)> = pool.install(|| {
-        all.par_iter()
-            .map(|(canon, shown)| (canon.clone(), SourceFile::read(shown, library::display_path(shown))))
-            .collect()
-    });
+    let read: Vec<(PathBuf, Result<SourceFile, Diagnostic>)> = pool
+        .install(|| all.par_iter().map(|(canon, shown)| (canon.clone(), SourceFile::read(shown, library::display_path(shown)))).collect());
     let mut files = SourceFiles::default();
     let mut unreadable: BTreeMap<String, Diagnostic> = BTreeMap::new();
     let mut sources = Vec::new();
@@ -319,7 +315,9 @@ fn check_file(
                 diagnostics.push(
                     Diagnostic::warning(Code::UnusedModule, "no entry point and no `#define_import_path`: nothing can use this file")
                         .at(Location::file_start(&file.display))
-                        .with_note("add `#define_import_path some::name` to make it importable, or an @vertex/@fragment/@compute entry point"),
+                        .with_note(
+                            "add `#define_import_path some::name` to make it importable, or an @vertex/@fragment/@compute entry point",
+                        ),
                 );
             }
             Ok(Some(c)) => {
@@ -331,7 +329,8 @@ fn check_file(
             Err(ds) => {
                 // The shader, then what it imports: where a capability
                 // error without a span is looked for.
-                let sources: Vec<Arc<SourceFile>> = std::iter::once(file.clone()).chain(lib.dependencies(file).unwrap_or_default()).collect();
+                let sources: Vec<Arc<SourceFile>> =
+                    std::iter::once(file.clone()).chain(lib.dependencies(file).unwrap_or_default()).collect();
                 for d in ds {
                     let d = capabilities::explain(d, caps, &sources);
                     let d = if permutations.len() > 1 { d.with_note(format!("permutation: [{}]", defs_key(defs))) } else { d };

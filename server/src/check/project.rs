@@ -70,7 +70,9 @@ pub fn parse(display: &str, text: &str, root: &Path) -> Result<CheckDefaults, Di
         };
         for (key, item) in check.iter() {
             let key_span = check.key(key).and_then(|k| k.span());
-            let value = item.as_value().ok_or_else(|| error(span_of(item).or(key_span.clone()), format!("`{key}` must be a value, not a table")))?;
+            let value = item
+                .as_value()
+                .ok_or_else(|| error(span_of(item).or(key_span.clone()), format!("`{key}` must be a value, not a table")))?;
             let bad = |what: &str| error(value.span(), format!("`{key}` must be {what}"));
             match key {
                 "paths" => {

@@ -53,15 +53,14 @@ impl Format {
 }
 
 fn unknown_format(display: &str) -> Diagnostic {
-    Diagnostic::error(Code::Image, "unknown image format: the file name must end in .pfm, .exr or .png")
-        .at(Location::file_start(display))
+    Diagnostic::error(Code::Image, "unknown image format: the file name must end in .pfm, .exr or .png").at(Location::file_start(display))
 }
 
 /// Reads an image; `display` names it in diagnostics.
 pub fn read(path: &Path, display: &str) -> Result<Image, Diagnostic> {
     let format = Format::of(path).ok_or_else(|| unknown_format(display))?;
-    let bytes = read_capped(path, MAX_FILE_BYTES)
-        .map_err(|e| e.diagnostic("the image", MAX_FILE_BYTES).at(Location::file_start(display)))?;
+    let bytes =
+        read_capped(path, MAX_FILE_BYTES).map_err(|e| e.diagnostic("the image", MAX_FILE_BYTES).at(Location::file_start(display)))?;
     let error = |message: String| Diagnostic::error(Code::Image, message).at(Location::file_start(display));
     let image = match format {
         Format::Pfm => pfm::parse(&bytes).map_err(|e| error(e.to_string()))?,
@@ -82,14 +81,12 @@ pub fn write(path: &Path, image: &Image) -> Result<(), Diagnostic> {
         Format::Exr => encode_exr(image),
         Format::Png => encode_png(image),
     };
-    std::fs::write(path, bytes).map_err(|e| {
-        Diagnostic::error(Code::Io, format!("cannot write the image: {e}")).at(Location::file_start(&display))
-    })
+    std::fs::write(path, bytes)
+        .map_err(|e| Diagnostic::error(Code::Io, format!("cannot write the image: {e}")).at(Location::file_start(&display)))
 }
 
 fn too_large(width: usize, height: usize) -> Option<String> {
-    (width > MAX_SIDE || height > MAX_SIDE)
-        .then(|| format!("the image is {width}×{height}: the largest side loupe reads is {MAX_SIDE}"))
+    (width > MAX_SIDE || height > MAX_SIDE).then(|| format!("the image is {width}×{height}: the largest side loupe reads is {MAX_SIDE}"))
 }
 
 fn read_exr(bytes: Vec<u8>) -> Result<Image, String> {
@@ -139,16 +136,13 @@ fn encode_exr(image: &Image) -> Vec<u8> {
 }
 
 fn read_png(bytes: &[u8]) -> Result<Image, String> {
-    let decoder = image::codecs::png::PngDecoder::new(std::io::Cursor::new(bytes))
-        .map_err(|e| format!("cannot read the PNG file: {e}"))?;
+    let decoder = image::codecs::png::PngDecoder::new(std::io::Cursor::new(bytes)).map_err(|e| format!("cannot read the PNG file: {e}"))?;
     let (w, h) = image::ImageDecoder::dimensions(&decoder);
     let (w, h) = (w as usize, h as usize);
     if let Some(m) = too_large(w, h) {
         return Err(m);
     }
-    let rgb = image::DynamicImage::from_decoder(decoder)
-        .map_err(|e| format!("cannot read the PNG file: {e}"))?
-        .into_rgb32f();
+    let rgb = image::DynamicImage::from_decoder(decoder).map_err(|e| format!("cannot read the PNG file: {e}"))?.into_rgb32f();
     Ok(Image { width: w, height: h, data: rgb.into_raw() })
 }
 

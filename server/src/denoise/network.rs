@@ -93,11 +93,21 @@ pub struct Conv {
 pub enum Op {
     Conv(Conv),
     /// 2×2 max-pool, stride 2.
-    Pool { src: TensorId, dst: TensorId },
+    Pool {
+        src: TensorId,
+        dst: TensorId,
+    },
     /// 2× nearest-neighbour upsample.
-    Upsample { src: TensorId, dst: TensorId },
+    Upsample {
+        src: TensorId,
+        dst: TensorId,
+    },
     /// Channels of `first`, then of `second`.
-    Concat { first: TensorId, second: TensorId, dst: TensorId },
+    Concat {
+        first: TensorId,
+        second: TensorId,
+        dst: TensorId,
+    },
 }
 
 impl Op {
@@ -143,8 +153,9 @@ pub struct NetworkError {
 
 impl NetworkError {
     pub fn diagnostic(&self, display: &str) -> crate::diag::Diagnostic {
-        super::weights_error(display, self.at, self.message.clone())
-            .with_note("loupe runs OIDN's U-Nets: layers enc_conv<level>[a-z] and dec_conv<level>[a-z], each a .weight (oihw, 3×3) and a .bias (x)")
+        super::weights_error(display, self.at, self.message.clone()).with_note(
+            "loupe runs OIDN's U-Nets: layers enc_conv<level>[a-z] and dec_conv<level>[a-z], each a .weight (oihw, 3×3) and a .bias (x)",
+        )
     }
 }
 
@@ -231,7 +242,10 @@ impl<'a> Layers<'a> {
         for t in archive.tensors() {
             let unknown = || NetworkError {
                 at: t.entry_at,
-                message: format!("tensor `{}` is not part of a U-Net: expected <layer>.weight or <layer>.bias, the layer enc_conv<level>[a-z] or dec_conv<level>[a-z]", t.name),
+                message: format!(
+                    "tensor `{}` is not part of a U-Net: expected <layer>.weight or <layer>.bias, the layer enc_conv<level>[a-z] or dec_conv<level>[a-z]",
+                    t.name
+                ),
             };
             let layer = t.name.strip_suffix(".weight").or_else(|| t.name.strip_suffix(".bias")).ok_or_else(unknown)?;
             let (decoder, rest) = match (layer.strip_prefix("enc_conv"), layer.strip_prefix("dec_conv")) {
@@ -305,7 +319,8 @@ impl<'a> Layers<'a> {
             6 => Ok(Inputs::ColorAlbedo),
             9 => Ok(Inputs::ColorAlbedoNormal),
             n => {
-                let message = format!("the first layer `{name}` takes {n} input channels: expected 3 (colour), 6 (+ albedo) or 9 (+ normal)");
+                let message =
+                    format!("the first layer `{name}` takes {n} input channels: expected 3 (colour), 6 (+ albedo) or 9 (+ normal)");
                 Err(NetworkError { at: w.entry_at, message })
             }
         }

@@ -122,13 +122,15 @@ pub fn run(job: &Job) -> Result<Report, Diagnostic> {
             };
             report.network_seconds = start.elapsed().as_secs_f64();
             if let Some(dir) = &job.dump_tensors {
-                let named = net.tensors.iter().zip(&tensors).map(|(d, t)| (d.name.as_str(), [t.height, t.width, t.channels], t.data.clone()));
+                let named =
+                    net.tensors.iter().zip(&tensors).map(|(d, t)| (d.name.as_str(), [t.height, t.width, t.channels], t.data.clone()));
                 report.tensors_dumped = dump(dir, named)?;
             }
             process::output(&out, color.width, color.height, job.mode, scale)
         }
         Device::Gpu => {
-            let gpu = crate::gpu::open().map_err(|e| Diagnostic::error(Code::DeviceMissing, format!("{e} (--device cpu runs the CPU reference)")))?;
+            let gpu = crate::gpu::open()
+                .map_err(|e| Diagnostic::error(Code::DeviceMissing, format!("{e} (--device cpu runs the CPU reference)")))?;
             let settings = on_gpu::Settings {
                 mode: job.mode,
                 input_scale: scale,
@@ -140,7 +142,8 @@ pub fn run(job: &Job) -> Result<Report, Diagnostic> {
             let images = TileImages { color, albedo, normal };
             let done = on_gpu::denoise(gpu, &job.shader_root, Arc::new(net.clone()), &images, &settings)
                 .map_err(|d| if d.code == Code::Weights { d.at(Location::file_start(&weights)) } else { d })?;
-            (report.network_seconds, report.device, report.tiles, report.window) = (done.seconds, done.adapter, done.tiles.len(), Some(done.window));
+            (report.network_seconds, report.device, report.tiles, report.window) =
+                (done.seconds, done.adapter, done.tiles.len(), Some(done.window));
             if let Some(dir) = &job.dump_tensors {
                 let tiled = done.tiles.len() > 1;
                 for (i, (_, tensors)) in done.tiles.iter().enumerate() {
@@ -162,7 +165,11 @@ pub fn run(job: &Job) -> Result<Report, Diagnostic> {
 /// A captured tensor of the network as (name, shape, values): its
 /// channels without the padding to blocks of 4.
 fn unpadded<'t>(net: &'t Network, t: &crate::render::capture::CapturedTensor) -> Option<(&'t str, [usize; 3], Vec<f32>)> {
-    let name = if t.pass == "denoise_input" { &net.tensor(net.input).name } else { &net.tensors.iter().find(|d| Some(d.name.as_str()) == t.pass.strip_prefix("denoise."))?.name };
+    let name = if t.pass == "denoise_input" {
+        &net.tensor(net.input).name
+    } else {
+        &net.tensors.iter().find(|d| Some(d.name.as_str()) == t.pass.strip_prefix("denoise."))?.name
+    };
     let desc = net.tensors.iter().find(|d| d.name == *name)?;
     let [h, w, padded] = [0, 1, 2].map(|i| t.layout.dims.get(i).map_or(0, |d| d.1 as usize));
     if t.output != "tensor" || padded < desc.channels {

@@ -9,11 +9,11 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::Precision;
 use super::image::Image;
 use super::network::Network;
 use super::process::Mode;
 use super::tiles::{self, Rect, Tile};
-use super::Precision;
 use crate::diag::{Code, Diagnostic, Location};
 use crate::gpu::Gpu;
 use crate::render::capture::CapturedTensor;
@@ -56,7 +56,9 @@ pub fn denoise(gpu: Gpu, shader_root: &Path, net: Arc<Network>, images: &TileIma
     let overlap = tiles::overlap(&net);
     let plan = tiles::plan(w, h, side, overlap, net.alignment() as u32);
 
-    let lib = crate::shader::library::read_tree(shader_root).map_err(|e| Diagnostic::error(Code::Io, format!("cannot read the shaders: {e}")).at(Location::file_start(&shader_root.display().to_string())))?;
+    let lib = crate::shader::library::read_tree(shader_root).map_err(|e| {
+        Diagnostic::error(Code::Io, format!("cannot read the shaders: {e}")).at(Location::file_start(&shader_root.display().to_string()))
+    })?;
     let mut scene = crate::scene::parse("loupe denoise", "").expect("the empty scene is valid");
     // The renderer the denoiser follows in a frame: its weights go to the GPU.
     scene.quality.renderer = Renderer::Path;
@@ -81,7 +83,8 @@ pub fn denoise(gpu: Gpu, shader_root: &Path, net: Arc<Network>, images: &TileIma
     for tile in plan {
         let win = tile.window;
         let crop = |image: &Image| crop(image, win);
-        let tile_images = TileImages { color: crop(&images.color), albedo: images.albedo.as_ref().map(crop), normal: images.normal.as_ref().map(crop) };
+        let tile_images =
+            TileImages { color: crop(&images.color), albedo: images.albedo.as_ref().map(crop), normal: images.normal.as_ref().map(crop) };
         (scene.width, scene.height) = (win.width, win.height);
         session.use_graph(crate::render::denoise_graph(&scene, &net, Arc::new(tile_images)));
         let errors = session.install_missing();
@@ -125,7 +128,10 @@ fn window(net: &Network, limits: &wgpu::Limits, s: &Settings) -> Result<u32, Dia
         return Err(Diagnostic::error(Code::Weights, message));
     };
     if side <= 2 * overlap {
-        let message = format!("a tile of {side} pixels is too small for these weights: they see {overlap} pixels around each pixel, so a tile must be more than {}", 2 * overlap);
+        let message = format!(
+            "a tile of {side} pixels is too small for these weights: they see {overlap} pixels around each pixel, so a tile must be more than {}",
+            2 * overlap
+        );
         return Err(Diagnostic::error(Code::Weights, message));
     }
     Ok(side)
@@ -160,7 +166,13 @@ mod tests {
             let (all, largest) = tiles::window_bytes(&net, side, element);
             assert!(largest <= max_binding && all <= s.budget);
             let plan = tiles::plan(4096, 4096, side, tiles::overlap(&net), 16);
-            eprintln!("{precision:?}: {} tiles of {side}² ({} MiB of tensors, the largest {} MiB; the device's limit {} MiB)", plan.len(), all >> 20, largest >> 20, max_binding >> 20);
+            eprintln!(
+                "{precision:?}: {} tiles of {side}² ({} MiB of tensors, the largest {} MiB; the device's limit {} MiB)",
+                plan.len(),
+                all >> 20,
+                largest >> 20,
+                max_binding >> 20
+            );
             assert!(plan.len() > 1);
         }
     }

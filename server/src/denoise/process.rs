@@ -108,7 +108,11 @@ impl Transfer {
         match self {
             Transfer::Linear => y,
             Transfer::Srgb => {
-                if y <= srgb::Y0 { srgb::A * y } else { srgb::B * y.powf(srgb::C) + srgb::D }
+                if y <= srgb::Y0 {
+                    srgb::A * y
+                } else {
+                    srgb::B * y.powf(srgb::C) + srgb::D
+                }
             }
             Transfer::Pu => pu::forward(y) * (1.0 / pu::forward(Y_MAX)),
         }
@@ -118,7 +122,11 @@ impl Transfer {
         match self {
             Transfer::Linear => x,
             Transfer::Srgb => {
-                if x <= srgb::X0 { x / srgb::A } else { ((x - srgb::D) / srgb::B).powf(1.0 / srgb::C) }
+                if x <= srgb::X0 {
+                    x / srgb::A
+                } else {
+                    ((x - srgb::D) / srgb::B).powf(1.0 / srgb::C)
+                }
             }
             Transfer::Pu => pu::inverse(x * pu::forward(Y_MAX)),
         }

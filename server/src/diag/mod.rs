@@ -200,14 +200,7 @@ pub struct Diagnostic {
 
 impl Diagnostic {
     pub fn error(code: Code, message: impl Into<String>) -> Self {
-        Diagnostic {
-            severity: Severity::Error,
-            code,
-            message: message.into(),
-            location: None,
-            labels: Vec::new(),
-            notes: Vec::new(),
-        }
+        Diagnostic { severity: Severity::Error, code, message: message.into(), location: None, labels: Vec::new(), notes: Vec::new() }
     }
 
     pub fn warning(code: Code, message: impl Into<String>) -> Self {

@@ -234,7 +234,9 @@ mod tests {
     fn capabilities_without_device_allow_what_loupe_can_request() {
         use naga::valid::Capabilities as C;
         let caps = capabilities_without_device();
-        for c in [C::SHADER_FLOAT16, C::SUBGROUP, C::SUBGROUP_BARRIER, C::PRIMITIVE_INDEX, C::CUBE_ARRAY_TEXTURES, C::SHADER_FLOAT16_IN_FLOAT32] {
+        for c in
+            [C::SHADER_FLOAT16, C::SUBGROUP, C::SUBGROUP_BARRIER, C::PRIMITIVE_INDEX, C::CUBE_ARRAY_TEXTURES, C::SHADER_FLOAT16_IN_FLOAT32]
+        {
             assert!(caps.contains(c), "{c:?}");
         }
         for c in [C::FLOAT64, C::SHADER_INT64, C::RAY_QUERY] {

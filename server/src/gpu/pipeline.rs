@@ -23,11 +23,21 @@ pub const TWO_TRIANGLES: &str = "TWO_TRIANGLES";
 #[derive(Debug, Clone, Copy)]
 pub enum Stages {
     /// A fullscreen pass: vertices come from the vertex index, no buffers.
-    Fullscreen { fragment: &'static str, targets: &'static [wgpu::TextureFormat] },
+    Fullscreen {
+        fragment: &'static str,
+        targets: &'static [wgpu::TextureFormat],
+    },
     /// Scene geometry: `Vertex` buffers (position, normal), one draw per
     /// object with the object's index as the instance index.
-    Mesh { vertex: &'static str, fragment: Option<&'static str>, targets: &'static [wgpu::TextureFormat], depth: Depth },
-    Compute { entry: &'static str },
+    Mesh {
+        vertex: &'static str,
+        fragment: Option<&'static str>,
+        targets: &'static [wgpu::TextureFormat],
+        depth: Depth,
+    },
+    Compute {
+        entry: &'static str,
+    },
 }
 
 /// The slope-scaled bias of `Depth::Biased` (shadow maps).
@@ -129,9 +139,7 @@ impl PipelineSpec {
     /// Every def set the renderer can request: the power set of `defs`.
     pub fn permutations(&self) -> Vec<ShaderDefs> {
         let n = self.defs.len();
-        (0u32..1 << n)
-            .map(|mask| (0..n).filter(|i| mask & (1 << i) != 0).map(|i| self.defs[i].to_owned()).collect())
-            .collect()
+        (0u32..1 << n).map(|mask| (0..n).filter(|i| mask & (1 << i) != 0).map(|i| self.defs[i].to_owned()).collect()).collect()
     }
 
     /// The bindings of each group index for `defs`; `None` where the
@@ -202,7 +210,11 @@ pub const fn storage_texture(name: &'static str, binding: u32, format: wgpu::Tex
         entry: wgpu::BindGroupLayoutEntry {
             binding,
             visibility: COMPUTE,
-            ty: wgpu::BindingType::StorageTexture { access: wgpu::StorageTextureAccess::WriteOnly, format, view_dimension: wgpu::TextureViewDimension::D2 },
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format,
+                view_dimension: wgpu::TextureViewDimension::D2,
+            },
             count: None,
         },
     }
@@ -224,7 +236,12 @@ pub const fn depth_array(name: &'static str, binding: u32) -> Binding {
     image(name, binding, wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2Array)
 }
 
-const fn image(name: &'static str, binding: u32, sample_type: wgpu::TextureSampleType, view_dimension: wgpu::TextureViewDimension) -> Binding {
+const fn image(
+    name: &'static str,
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+    view_dimension: wgpu::TextureViewDimension,
+) -> Binding {
     Binding {
         name,
         entry: wgpu::BindGroupLayoutEntry {
@@ -297,22 +314,29 @@ pub fn create(
         targets.iter().map(|&format| Some(format.into())).collect()
     };
     let pipeline = match spec.stages {
-        Stages::Fullscreen { fragment, targets } => Pipeline::Render(Arc::new(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(spec.name),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState { module: &module, entry_point: Some("vs_fullscreen"), compilation_options: Default::default(), buffers: &[] },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some(fragment),
-                compilation_options: Default::default(),
-                targets: &color_targets(targets),
-            }),
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            multiview_mask: None,
-            cache: None,
-        }))),
+        Stages::Fullscreen { fragment, targets } => {
+            Pipeline::Render(Arc::new(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(spec.name),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_fullscreen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fragment),
+                    compilation_options: Default::default(),
+                    targets: &color_targets(targets),
+                }),
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: wgpu::MultisampleState::default(),
+                multiview_mask: None,
+                cache: None,
+            })))
+        }
         Stages::Mesh { vertex, fragment, targets, depth } => {
             let targets = color_targets(targets);
             Pipeline::Render(Arc::new(device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -353,11 +377,8 @@ pub fn create(
             cache: None,
         }))),
     };
-    let errors: Vec<String> = [pollster::block_on(oom.pop()), pollster::block_on(scope.pop())]
-        .into_iter()
-        .flatten()
-        .map(|e| e.to_string())
-        .collect();
+    let errors: Vec<String> =
+        [pollster::block_on(oom.pop()), pollster::block_on(scope.pop())].into_iter().flatten().map(|e| e.to_string()).collect();
     if errors.is_empty() {
         return Ok(pipeline);
     }
@@ -374,8 +395,7 @@ pub fn create(
 
 /// Where `fn <entry>` is written, or the file start.
 fn entry_location(composed: &Composed, lib: &Library, shader_display: &str, entry: &str) -> Location {
-    find_in_files(composed, lib, |line| line.contains(&format!("fn {entry}")))
-        .unwrap_or_else(|| Location::file_start(shader_display))
+    find_in_files(composed, lib, |line| line.contains(&format!("fn {entry}"))).unwrap_or_else(|| Location::file_start(shader_display))
 }
 
 fn find_in_files(composed: &Composed, lib: &Library, pred: impl Fn(&str) -> bool) -> Option<Location> {
@@ -412,11 +432,7 @@ fn check_bindings(spec: &PipelineSpec, defs: &ShaderDefs, composed: &Composed, l
             continue; // unused by this pipeline's entry points: wgpu ignores it too
         }
         let name = var.name.clone().unwrap_or_default();
-        let expected = layout
-            .get(rb.group as usize)
-            .copied()
-            .flatten()
-            .and_then(|g| g.iter().find(|b| b.entry.binding == rb.binding));
+        let expected = layout.get(rb.group as usize).copied().flatten().and_then(|g| g.iter().find(|b| b.entry.binding == rb.binding));
         let problem = match expected {
             None => Some(format!("the renderer binds nothing at @group({}) @binding({})", rb.group, rb.binding)),
             Some(b) => incompatibility(module, var, &b.entry.ty),
@@ -427,9 +443,12 @@ fn check_bindings(spec: &PipelineSpec, defs: &ShaderDefs, composed: &Composed, l
             let at = find_in_files(composed, lib, |l| l.contains(&g) && l.contains(&b))
                 .unwrap_or_else(|| Location::file_start(composed.files.last().map_or("", String::as_str)));
             out.push(
-                Diagnostic::error(Code::BindingMismatch, format!("binding `{}` does not match pipeline `{}`", crate::shader::compose::undecorate(&name), spec.name))
-                    .with_label(at, problem, true)
-                    .with_note(format!("pipeline `{}` binds: {}", spec.name, describe_layout(&layout))),
+                Diagnostic::error(
+                    Code::BindingMismatch,
+                    format!("binding `{}` does not match pipeline `{}`", crate::shader::compose::undecorate(&name), spec.name),
+                )
+                .with_label(at, problem, true)
+                .with_note(format!("pipeline `{}` binds: {}", spec.name, describe_layout(&layout))),
             );
         }
     }
@@ -438,7 +457,9 @@ fn check_bindings(spec: &PipelineSpec, defs: &ShaderDefs, composed: &Composed, l
 
 fn incompatibility(module: &naga::Module, var: &naga::GlobalVariable, ty: &wgpu::BindingType) -> Option<String> {
     let inner = &module.types[var.ty].inner;
-    if let (wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, min_binding_size: Some(bound), .. }, AddressSpace::Uniform) = (ty, var.space) {
+    if let (wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, min_binding_size: Some(bound), .. }, AddressSpace::Uniform) =
+        (ty, var.space)
+    {
         let size = u64::from(inner.size(module.to_ctx()));
         if size != bound.get() {
             return Some(format!("a uniform struct of {size} bytes, but the renderer binds {bound} bytes"));
@@ -450,21 +471,30 @@ fn incompatibility(module: &naga::Module, var: &naga::GlobalVariable, ty: &wgpu:
             !*read_only || !access.contains(naga::StorageAccess::STORE)
         }
         (wgpu::BindingType::Sampler(_), AddressSpace::Handle, TypeInner::Sampler { .. }) => true,
-        (wgpu::BindingType::Texture { sample_type, multisampled, view_dimension }, AddressSpace::Handle, TypeInner::Image { class, dim, arrayed }) => {
+        (
+            wgpu::BindingType::Texture { sample_type, multisampled, view_dimension },
+            AddressSpace::Handle,
+            TypeInner::Image { class, dim, arrayed },
+        ) => {
             let dims_match = match view_dimension {
                 wgpu::TextureViewDimension::D2 => *dim == naga::ImageDimension::D2 && !arrayed,
                 wgpu::TextureViewDimension::D2Array => *dim == naga::ImageDimension::D2 && *arrayed,
                 _ => true,
             };
-            dims_match && match (sample_type, class) {
-                (wgpu::TextureSampleType::Float { .. }, ImageClass::Sampled { kind: naga::ScalarKind::Float, multi }) => multi == multisampled,
-                (wgpu::TextureSampleType::Depth, ImageClass::Depth { multi }) => multi == multisampled,
-                (wgpu::TextureSampleType::Uint, ImageClass::Sampled { kind: naga::ScalarKind::Uint, multi }) => multi == multisampled,
-                (wgpu::TextureSampleType::Sint, ImageClass::Sampled { kind: naga::ScalarKind::Sint, multi }) => multi == multisampled,
-                _ => false,
-            }
+            dims_match
+                && match (sample_type, class) {
+                    (wgpu::TextureSampleType::Float { .. }, ImageClass::Sampled { kind: naga::ScalarKind::Float, multi }) => {
+                        multi == multisampled
+                    }
+                    (wgpu::TextureSampleType::Depth, ImageClass::Depth { multi }) => multi == multisampled,
+                    (wgpu::TextureSampleType::Uint, ImageClass::Sampled { kind: naga::ScalarKind::Uint, multi }) => multi == multisampled,
+                    (wgpu::TextureSampleType::Sint, ImageClass::Sampled { kind: naga::ScalarKind::Sint, multi }) => multi == multisampled,
+                    _ => false,
+                }
         }
-        (wgpu::BindingType::StorageTexture { .. }, AddressSpace::Handle, TypeInner::Image { class: ImageClass::Storage { .. }, .. }) => true,
+        (wgpu::BindingType::StorageTexture { .. }, AddressSpace::Handle, TypeInner::Image { class: ImageClass::Storage { .. }, .. }) => {
+            true
+        }
         _ => false,
     };
     (!ok).then(|| format!("declared as {}, but the renderer binds {}", describe_var(var, inner), describe_binding(ty)))
@@ -488,7 +518,11 @@ fn describe_binding(ty: &wgpu::BindingType) -> String {
         wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, .. } => "a uniform buffer".into(),
         wgpu::BindingType::Buffer { .. } => "a storage buffer".into(),
         wgpu::BindingType::Sampler(_) => "a sampler".into(),
-        wgpu::BindingType::Texture { sample_type: wgpu::TextureSampleType::Depth, view_dimension: wgpu::TextureViewDimension::D2Array, .. } => "a depth texture array".into(),
+        wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Depth,
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            ..
+        } => "a depth texture array".into(),
         wgpu::BindingType::Texture { sample_type: wgpu::TextureSampleType::Depth, .. } => "a depth texture".into(),
         wgpu::BindingType::Texture { sample_type, .. } => match sample_type {
             wgpu::TextureSampleType::Uint => "a uint texture".into(),

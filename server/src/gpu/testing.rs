@@ -55,7 +55,8 @@ fn join(ds: &[Diagnostic]) -> String {
 /// The device tests run on, as the renderer opens it. The suite runs on
 /// lavapipe where there is no GPU, so having none is a test failure.
 pub fn device() -> Gpu {
-    super::open().unwrap_or_else(|e| panic!("this test needs a GPU device (lavapipe will do: apt-get install mesa-vulkan-drivers libvulkan1): {e}"))
+    super::open()
+        .unwrap_or_else(|e| panic!("this test needs a GPU device (lavapipe will do: apt-get install mesa-vulkan-drivers libvulkan1): {e}"))
 }
 
 /// A compiled compute shader, ready to run over many inputs.
@@ -109,7 +110,10 @@ impl Kernel {
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("test kernel"), entries: &entries });
         let group1 = (buffers > 0).then(|| {
             let entries: Vec<_> = (0..buffers as u32).map(|b| pipeline::storage("group 1", b, wgpu::ShaderStages::COMPUTE).entry).collect();
-            (device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("test kernel group 1"), entries: &entries }), buffers)
+            (
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("test kernel group 1"), entries: &entries }),
+                buffers,
+            )
         });
         let mut layouts = vec![Some(&layout)];
         layouts.extend(group1.as_ref().map(|(l, _)| Some(l)));
@@ -196,11 +200,16 @@ impl Kernel {
             wgpu::BindGroupEntry { binding: 1, resource: output.as_entire_binding() },
         ];
         entries.extend(
-            textures.iter().zip(2..).map(|(view, binding)| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) }),
+            textures
+                .iter()
+                .zip(2..)
+                .map(|(view, binding)| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) }),
         );
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("test kernel"), layout: &self.layout, entries: &entries });
+        let bind_group =
+            device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("test kernel"), layout: &self.layout, entries: &entries });
         let group1 = self.group1.as_ref().map(|(layout, _)| {
-            let entries: Vec<_> = buffers.iter().zip(0..).map(|(b, binding)| wgpu::BindGroupEntry { binding, resource: b.as_entire_binding() }).collect();
+            let entries: Vec<_> =
+                buffers.iter().zip(0..).map(|(b, binding)| wgpu::BindGroupEntry { binding, resource: b.as_entire_binding() }).collect();
             device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("test kernel group 1"), layout, entries: &entries })
         });
         let mut encoder = device.create_command_encoder(&Default::default());
@@ -243,7 +252,11 @@ fn read_write(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: false }, has_dynamic_offset: false, min_binding_size: None },
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: false },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
         count: None,
     }
 }
@@ -283,7 +296,11 @@ fn texture_count(module: &naga::Module) -> Result<usize, Error> {
         }
         let sampled_2d = matches!(
             module.types[g.ty].inner,
-            TypeInner::Image { dim: naga::ImageDimension::D2, arrayed: false, class: naga::ImageClass::Sampled { kind: naga::ScalarKind::Float, multi: false } }
+            TypeInner::Image {
+                dim: naga::ImageDimension::D2,
+                arrayed: false,
+                class: naga::ImageClass::Sampled { kind: naga::ScalarKind::Float, multi: false }
+            }
         );
         if !sampled_2d {
             return Err(Error::Interface(format!("@binding({}) must be a texture_2d<f32>", b.binding)));

@@ -34,8 +34,7 @@ const LIMITS: Limits = Limits { triangles: MAX_TRIANGLES, vertices: MAX_VERTICES
 
 /// Geometry-encoding extensions: a file that requires one has no plain float
 /// geometry to read. (Required material extensions do not matter here.)
-const UNSUPPORTED_EXTENSIONS: [&str; 3] =
-    ["KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_mesh_quantization"];
+const UNSUPPORTED_EXTENSIONS: [&str; 3] = ["KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_mesh_quantization"];
 
 /// Loads the default scene of a .gltf or .glb as one mesh; `display` names
 /// the file in diagnostics.
@@ -44,16 +43,16 @@ pub fn load_gltf(path: &Path, display: &str) -> Result<MeshData, Diagnostic> {
 }
 
 pub(super) fn load(path: &Path, display: &str, limits: &Limits) -> Result<MeshData, Diagnostic> {
-    let bytes = read_capped(path, limits.file_bytes)
-        .map_err(|e| e.diagnostic("file", limits.file_bytes).at(Location::file_start(display)))?;
+    let bytes =
+        read_capped(path, limits.file_bytes).map_err(|e| e.diagnostic("file", limits.file_bytes).at(Location::file_start(display)))?;
     let is_glb = bytes.starts_with(glb::MAGIC);
     if !is_glb && path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) {
-        return Err(Diagnostic::error(Code::Scene, "not a binary glTF file: it does not start with `glTF`")
-            .at(Location::file_start(display)));
+        return Err(
+            Diagnostic::error(Code::Scene, "not a binary glTF file: it does not start with `glTF`").at(Location::file_start(display))
+        );
     }
     let (doc, json, bin) = if is_glb {
-        let glb =
-            glb::parse(&bytes).map_err(|e| Diagnostic::error(Code::Scene, e).at(Location::file_start(display)))?;
+        let glb = glb::parse(&bytes).map_err(|e| Diagnostic::error(Code::Scene, e).at(Location::file_start(display)))?;
         (Doc { display, text: None }, glb.json, glb.bin)
     } else {
         let text = std::str::from_utf8(&bytes).map_err(|e| not_utf8(display, &bytes, e))?;
@@ -111,11 +110,8 @@ impl Doc<'_> {
         let (line, column) = (e.line(), e.column());
         let full = e.to_string();
         let Some((text, lines)) = &self.text else {
-            return Diagnostic::error(
-                Code::Scene,
-                format!("invalid glTF JSON in the binary file's JSON chunk: {full}"),
-            )
-            .at(Location::file_start(self.display));
+            return Diagnostic::error(Code::Scene, format!("invalid glTF JSON in the binary file's JSON chunk: {full}"))
+                .at(Location::file_start(self.display));
         };
         let message = full.strip_suffix(&format!(" at line {line} column {column}")).unwrap_or(&full);
         let message = format!("invalid glTF JSON: {message}");
@@ -147,13 +143,7 @@ impl Doc<'_> {
     }
 }
 
-fn load_buffers<'a>(
-    doc: &Doc,
-    root: &Root,
-    base: &Path,
-    bin: Option<&'a [u8]>,
-    limits: &Limits,
-) -> Result<Vec<Cow<'a, [u8]>>, Diagnostic> {
+fn load_buffers<'a>(doc: &Doc, root: &Root, base: &Path, bin: Option<&'a [u8]>, limits: &Limits) -> Result<Vec<Cow<'a, [u8]>>, Diagnostic> {
     let mut budget = limits.file_bytes;
     let mut out = Vec::with_capacity(root.buffers.len());
     for (i, buffer) in root.buffers.iter().enumerate() {
@@ -177,10 +167,8 @@ fn load_buffers<'a>(
         };
         let declared = buffer.byte_length.0;
         if (data.len() as u64) < declared {
-            return Err(doc.error(
-                &path.field("byteLength"),
-                format!("{path} declares byteLength {declared}, but its data is {} bytes", data.len()),
-            ));
+            return Err(doc
+                .error(&path.field("byteLength"), format!("{path} declares byteLength {declared}, but its data is {} bytes", data.len())));
         }
         budget = budget.checked_sub(data.len() as u64).ok_or_else(|| {
             Diagnostic::error(
@@ -217,8 +205,7 @@ struct Want {
 }
 
 const VEC3_F32: Want = Want { type_: Type::Vec3, components: &[ComponentType::F32] };
-const INDICES: Want =
-    Want { type_: Type::Scalar, components: &[ComponentType::U8, ComponentType::U16, ComponentType::U32] };
+const INDICES: Want = Want { type_: Type::Scalar, components: &[ComponentType::U8, ComponentType::U16, ComponentType::U32] };
 
 struct Flattener<'a> {
     doc: &'a Doc<'a>,
@@ -245,10 +232,7 @@ impl Flattener<'_> {
         let (listed_at, roots) = match scene {
             Some((s, referenced_at)) => {
                 let scene = root.scenes.get(s).ok_or_else(|| {
-                    doc.error(
-                        &referenced_at,
-                        format!("scene {s} does not exist: the file has {} scenes", root.scenes.len()),
-                    )
+                    doc.error(&referenced_at, format!("scene {s} does not exist: the file has {} scenes", root.scenes.len()))
                 })?;
                 let path = JsonPath::element("scenes", s);
                 let roots = scene.nodes.iter().enumerate().map(|(k, n)| (n.value(), path.field("nodes").index(k)));
@@ -269,8 +253,7 @@ impl Flattener<'_> {
                         *flag = true;
                     }
                 }
-                let roots =
-                    (0..root.nodes.len()).filter(|&n| !has_parent[n]).map(|n| (n, JsonPath::element("nodes", n)));
+                let roots = (0..root.nodes.len()).filter(|&n| !has_parent[n]).map(|n| (n, JsonPath::element("nodes", n)));
                 (JsonPath::top("nodes"), roots.collect())
             }
         };
@@ -286,15 +269,11 @@ impl Flattener<'_> {
     fn walk(&mut self, out: &mut MeshData, roots: Vec<(usize, JsonPath)>) -> Result<(), Diagnostic> {
         let (doc, root) = (self.doc, self.root);
         let mut seen = vec![false; root.nodes.len()];
-        let mut stack: Vec<(usize, Mat4, JsonPath)> =
-            roots.into_iter().rev().map(|(n, at)| (n, IDENTITY, at)).collect();
+        let mut stack: Vec<(usize, Mat4, JsonPath)> = roots.into_iter().rev().map(|(n, at)| (n, IDENTITY, at)).collect();
         while let Some((n, parent, referenced_at)) = stack.pop() {
             let node = root.nodes.get(n).ok_or_else(|| {
                 let count = root.nodes.len();
-                doc.error(
-                    &referenced_at,
-                    format!("{referenced_at} refers to nodes[{n}], but the file has {count} nodes"),
-                )
+                doc.error(&referenced_at, format!("{referenced_at} refers to nodes[{n}], but the file has {count} nodes"))
             })?;
             if std::mem::replace(&mut seen[n], true) {
                 return Err(doc.error(
@@ -342,19 +321,10 @@ impl Flattener<'_> {
     }
 
     /// Appends mesh `m`, transformed by `world`, to `out`.
-    fn place(
-        &mut self,
-        out: &mut MeshData,
-        m: usize,
-        world: &Mat4,
-        referenced_at: &JsonPath,
-    ) -> Result<(), Diagnostic> {
+    fn place(&mut self, out: &mut MeshData, m: usize, world: &Mat4, referenced_at: &JsonPath) -> Result<(), Diagnostic> {
         if self.meshes.get(m).is_none() {
             let count = self.root.meshes.len();
-            return Err(self.doc.error(
-                referenced_at,
-                format!("{referenced_at} refers to meshes[{m}], but the file has {count} meshes"),
-            ));
+            return Err(self.doc.error(referenced_at, format!("{referenced_at} refers to meshes[{m}], but the file has {count} meshes")));
         }
         let part = match self.meshes[m].take() {
             Some(part) => part,
@@ -383,17 +353,11 @@ impl Flattener<'_> {
             Checked::Valid(mode) => {
                 return Err(doc.error(
                     &path.field("mode"),
-                    format!(
-                        "{path} has mode {} ({}); loupe draws only TRIANGLES (4)",
-                        mode.as_gl_enum(),
-                        mode_name(mode)
-                    ),
+                    format!("{path} has mode {} ({}); loupe draws only TRIANGLES (4)", mode.as_gl_enum(), mode_name(mode)),
                 ));
             }
             Checked::Invalid => {
-                return Err(
-                    doc.error(&path.field("mode"), format!("{path}.mode is not a glTF primitive mode (0 to 6)"))
-                );
+                return Err(doc.error(&path.field("mode"), format!("{path}.mode is not a glTF primitive mode (0 to 6)")));
             }
         }
         let attributes = path.field("attributes");
@@ -408,9 +372,7 @@ impl Flattener<'_> {
                 let normal_at = attributes.key("NORMAL");
                 let normals = self.read_vec3(normal, &normal_at)?;
                 if normals.len() != n {
-                    return Err(
-                        doc.error(&normal_at, format!("{path} has {} normals for {n} positions", normals.len()))
-                    );
+                    return Err(doc.error(&normal_at, format!("{path} has {} normals for {n} positions", normals.len())));
                 }
                 Some(normals)
             }
@@ -422,10 +384,7 @@ impl Flattener<'_> {
                 let (accessor_path, elements) = self.accessor(accessor, &indices_at, &INDICES)?;
                 if elements.count > self.limits.triangles * 3 {
                     let (count, limit) = (elements.count, self.limits.triangles);
-                    return Err(doc.error(
-                        &accessor_path,
-                        format!("{accessor_path} has {count} indices; the limit is {limit} triangles"),
-                    ));
+                    return Err(doc.error(&accessor_path, format!("{accessor_path} has {count} indices; the limit is {limit} triangles")));
                 }
                 let indices: Vec<u32> = elements
                     .iter()
@@ -447,9 +406,7 @@ impl Flattener<'_> {
         };
         if indices.len() % 3 != 0 {
             let what = if primitive.indices.is_some() { "indices" } else { "vertices and no indices" };
-            return Err(
-                doc.error(path, format!("{path} has {} {what}: TRIANGLES needs a multiple of 3", indices.len()))
-            );
+            return Err(doc.error(path, format!("{path} has {} {what}: TRIANGLES needs a multiple of 3", indices.len())));
         }
         let normals = normals.unwrap_or_else(|| smooth_normals(&positions, &indices));
         Ok(MeshData { positions, normals, indices })
@@ -465,10 +422,9 @@ impl Flattener<'_> {
         for (k, e) in elements.iter().enumerate() {
             let v = [0, 4, 8].map(|o| f32::from_le_bytes([e[o], e[o + 1], e[o + 2], e[o + 3]]));
             if let Some(bad) = v.iter().find(|c| !c.is_finite()) {
-                return Err(self.doc.error(
-                    &path,
-                    format!("{path} (used as {used_at}) holds {bad} in element {k}: vertex data must be finite"),
-                ));
+                return Err(self
+                    .doc
+                    .error(&path, format!("{path} (used as {used_at}) holds {bad} in element {k}: vertex data must be finite")));
             }
             out.push(v);
         }
@@ -487,17 +443,11 @@ impl Flattener<'_> {
         let a = index.value();
         let Some(accessor) = root.accessors.get(a) else {
             let count = root.accessors.len();
-            return Err(
-                doc.error(used_at, format!("{used_at} refers to accessors[{a}], but the file has {count} accessors"))
-            );
+            return Err(doc.error(used_at, format!("{used_at} refers to accessors[{a}], but the file has {count} accessors")));
         };
         let path = JsonPath::element("accessors", a);
         let component = match (accessor.type_, accessor.component_type) {
-            (Checked::Valid(t), Checked::Valid(GenericComponentType(c)))
-                if t == want.type_ && want.components.contains(&c) =>
-            {
-                c
-            }
+            (Checked::Valid(t), Checked::Valid(GenericComponentType(c))) if t == want.type_ && want.components.contains(&c) => c,
             (t, c) => {
                 let found = match (t, c) {
                     (Checked::Valid(t), Checked::Valid(GenericComponentType(c))) => {
@@ -508,18 +458,12 @@ impl Flattener<'_> {
                 let wanted: Vec<&str> = want.components.iter().map(|&c| component_name(c)).collect();
                 return Err(doc.error(
                     &path,
-                    format!(
-                        "{path}, used as {used_at}, is {found}; it must be {} of {}",
-                        type_name(want.type_),
-                        wanted.join(" or ")
-                    ),
+                    format!("{path}, used as {used_at}, is {found}; it must be {} of {}", type_name(want.type_), wanted.join(" or ")),
                 ));
             }
         };
         if accessor.sparse.is_some() {
-            return Err(
-                doc.error(&path.field("sparse"), format!("{path} is sparse; loupe does not read sparse accessors"))
-            );
+            return Err(doc.error(&path.field("sparse"), format!("{path} is sparse; loupe does not read sparse accessors")));
         }
         let Some(view_index) = accessor.buffer_view else {
             return Err(doc.error(&path, format!("{path} has no bufferView")));
@@ -527,19 +471,13 @@ impl Flattener<'_> {
         let v = view_index.value();
         let Some(view) = root.buffer_views.get(v) else {
             let count = root.buffer_views.len();
-            return Err(doc.error(
-                &path.field("bufferView"),
-                format!("{path} refers to bufferViews[{v}], but the file has {count}"),
-            ));
+            return Err(doc.error(&path.field("bufferView"), format!("{path} refers to bufferViews[{v}], but the file has {count}")));
         };
         let view_path = JsonPath::element("bufferViews", v);
         let b = view.buffer.value();
         let Some(buffer) = self.buffers.get(b) else {
             let count = self.buffers.len();
-            return Err(doc.error(
-                &view_path.field("buffer"),
-                format!("{view_path} refers to buffers[{b}], but the file has {count}"),
-            ));
+            return Err(doc.error(&view_path.field("buffer"), format!("{view_path} refers to buffers[{b}], but the file has {count}")));
         };
         let view_start = view.byte_offset.map_or(0, |o| o.0);
         let view_len = view.byte_length.0;
@@ -583,23 +521,14 @@ impl Flattener<'_> {
 }
 
 /// Appends `part` transformed by `m` to `out`, within the limits.
-fn extend(
-    out: &mut MeshData,
-    part: &MeshData,
-    m: &Mat4,
-    doc: &Doc,
-    at: &JsonPath,
-    limits: &Limits,
-) -> Result<(), Diagnostic> {
+fn extend(out: &mut MeshData, part: &MeshData, m: &Mat4, doc: &Doc, at: &JsonPath, limits: &Limits) -> Result<(), Diagnostic> {
     let vertices = out.positions.len() + part.positions.len();
     let triangles = out.triangle_count() + part.triangle_count();
     if vertices > limits.vertices || triangles > limits.triangles {
         let (max_v, max_t) = (limits.vertices, limits.triangles);
         return Err(doc.error(
             at,
-            format!(
-                "with {at} the mesh has {vertices} vertices and {triangles} triangles; the limits are {max_v} and {max_t}"
-            ),
+            format!("with {at} the mesh has {vertices} vertices and {triangles} triangles; the limits are {max_v} and {max_t}"),
         ));
     }
     let base = out.positions.len() as u32;

@@ -202,10 +202,7 @@ mod tests {
         assert_eq!(text_at(&prim.field("attributes").key("NORMAL")), "2");
         assert_eq!(text_at(&JsonPath::element("buffers", 0).field("uri")), r#""a\"b.bin""#);
         assert_eq!(text_at(&JsonPath::element("buffers", 0).field("byteLength")), "12");
-        assert_eq!(
-            prim.field("attributes").key("NORMAL").to_string(),
-            r#"meshes[0].primitives[1].attributes["NORMAL"]"#
-        );
+        assert_eq!(prim.field("attributes").key("NORMAL").to_string(), r#"meshes[0].primitives[1].attributes["NORMAL"]"#);
     }
 
     #[test]

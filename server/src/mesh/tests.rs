@@ -160,11 +160,9 @@ fn encode(mesh: &MeshData, index_size: Option<usize>, with_normals: bool) -> (Va
     })];
     if with_normals {
         attributes["NORMAL"] = json!(1);
-        accessors
-            .push(json!({ "bufferView": 0, "byteOffset": 12, "componentType": 5126, "count": count, "type": "VEC3" }));
+        accessors.push(json!({ "bufferView": 0, "byteOffset": 12, "componentType": 5126, "count": count, "type": "VEC3" }));
     }
-    let mut views =
-        vec![json!({ "buffer": 0, "byteOffset": 0, "byteLength": bin.len(), "byteStride": stride, "target": 34962 })];
+    let mut views = vec![json!({ "buffer": 0, "byteOffset": 0, "byteLength": bin.len(), "byteStride": stride, "target": 34962 })];
     let mut primitive = json!({ "attributes": attributes, "mode": 4 });
     if let Some(size) = index_size {
         let start = bin.len();
@@ -177,9 +175,7 @@ fn encode(mesh: &MeshData, index_size: Option<usize>, with_normals: bool) -> (Va
             _ => 5125,
         };
         primitive["indices"] = json!(accessors.len());
-        accessors.push(
-            json!({ "bufferView": 1, "componentType": component, "count": mesh.indices.len(), "type": "SCALAR" }),
-        );
+        accessors.push(json!({ "bufferView": 1, "componentType": component, "count": mesh.indices.len(), "type": "SCALAR" }));
         views.push(json!({ "buffer": 0, "byteOffset": start, "byteLength": bin.len() - start, "target": 34963 }));
     }
     bin.resize(bin.len().next_multiple_of(4), 0);
@@ -295,8 +291,7 @@ fn bundled_torus_knot_loads_as_generated() {
 
 #[test]
 fn node_transforms_are_applied() {
-    let m =
-        load_gltf(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src/mesh/fixtures/nodes.gltf"), "nodes.gltf").unwrap();
+    let m = load_gltf(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src/mesh/fixtures/nodes.gltf"), "nodes.gltf").unwrap();
     assert_consistent(&m);
     assert_eq!(m.triangle_count(), 3);
     let want: [(Vec3, [Vec3; 3]); 3] = [
@@ -422,21 +417,9 @@ fn missing_bin_is_located_at_its_uri() {
 #[test]
 fn bad_data_uris_are_located_at_the_bad_character() {
     assert_edit_fails(";base64,AAAA", ";base64,AA!A", "buffers[0].uri: `!` is not a base64 character", "!", 0);
-    assert_edit_fails(
-        "data:application/octet-stream;base64,",
-        "data:application/octet-stream,",
-        "not base64",
-        "\"data:",
-        0,
-    );
+    assert_edit_fails("data:application/octet-stream;base64,", "data:application/octet-stream,", "not base64", "\"data:", 0);
     assert_edit_fails("\"uri\": \"data:", "\"uri\": \"https:", "`https:` is not supported", "https:", 0);
-    assert_edit_fails(
-        "\"byteLength\": 40",
-        "\"byteLength\": 400",
-        "declares byteLength 400, but its data is 40 bytes",
-        "400",
-        0,
-    );
+    assert_edit_fails("\"byteLength\": 40", "\"byteLength\": 400", "declares byteLength 400, but its data is 40 bytes", "400", 0);
 }
 
 #[test]
@@ -463,13 +446,7 @@ fn out_of_range_accessors_and_views() {
         0,
     );
     assert_edit_fails("\"bufferView\": 0, ", "", "accessors[0] has no bufferView", "{ \"componentType\": 5126", 0);
-    assert_edit_fails(
-        "\"indices\": 1",
-        "\"indices\": 9",
-        "indices refers to accessors[9], but the file has 2",
-        "9, \"mode\"",
-        0,
-    );
+    assert_edit_fails("\"indices\": 1", "\"indices\": 9", "indices refers to accessors[9], but the file has 2", "9, \"mode\"", 0);
     assert_edit_fails(
         "\"type\": \"VEC3\"",
         "\"type\": \"VEC2\"",
@@ -488,27 +465,9 @@ fn out_of_range_accessors_and_views() {
 
 #[test]
 fn primitives_that_are_not_triangles() {
-    assert_edit_fails(
-        "\"mode\": 4",
-        "\"mode\": 1",
-        "meshes[0].primitives[0] has mode 1 (LINES); loupe draws only TRIANGLES",
-        "1 }",
-        0,
-    );
-    assert_edit_fails(
-        "\"mode\": 4",
-        "\"mode\": 9",
-        "meshes[0].primitives[0].mode is not a glTF primitive mode",
-        "9 }",
-        0,
-    );
-    assert_edit_fails(
-        "\"POSITION\": 0",
-        "\"TEXCOORD_0\": 0",
-        "meshes[0].primitives[0] has no POSITION attribute",
-        "{ \"TEXCOORD_0\"",
-        0,
-    );
+    assert_edit_fails("\"mode\": 4", "\"mode\": 1", "meshes[0].primitives[0] has mode 1 (LINES); loupe draws only TRIANGLES", "1 }", 0);
+    assert_edit_fails("\"mode\": 4", "\"mode\": 9", "meshes[0].primitives[0].mode is not a glTF primitive mode", "9 }", 0);
+    assert_edit_fails("\"POSITION\": 0", "\"TEXCOORD_0\": 0", "meshes[0].primitives[0] has no POSITION attribute", "{ \"TEXCOORD_0\"", 0);
     assert_edit_fails(
         "\"count\": 3, \"type\": \"SCALAR\"",
         "\"count\": 2, \"type\": \"SCALAR\"",
@@ -522,33 +481,15 @@ fn primitives_that_are_not_triangles() {
 fn files_without_triangles() {
     let d = load_one("empty.gltf", b"{\n  \"asset\": { \"version\": \"2.0\" }\n}\n").unwrap_err();
     assert_diag(&d, Code::Scene, "the file has no meshes", "empty.gltf", (1, 1));
-    assert_edit_fails(
-        "\"nodes\": [0, 2, 3]",
-        "\"nodes\": []",
-        "scenes[0] has no triangles to draw",
-        "{ \"nodes\": []",
-        0,
-    );
+    assert_edit_fails("\"nodes\": [0, 2, 3]", "\"nodes\": []", "scenes[0] has no triangles to draw", "{ \"nodes\": []", 0);
     assert_edit_fails("\"scene\": 0", "\"scene\": 4", "scene 4 does not exist: the file has 1 scenes", "4,", 0);
 }
 
 #[test]
 fn broken_node_trees() {
-    assert_edit_fails(
-        "\"children\": [1]",
-        "\"children\": [1, 0]",
-        "nodes[0].children[1] reaches nodes[0] a second time",
-        "0] }",
-        0,
-    );
+    assert_edit_fails("\"children\": [1]", "\"children\": [1, 0]", "nodes[0].children[1] reaches nodes[0] a second time", "0] }", 0);
     assert_edit_fails("[0, 2, 3]", "[0, 2, 3, 1]", "scenes[0].nodes[3] reaches nodes[1] a second time", "1] }", 0);
-    assert_edit_fails(
-        "[0, 2, 3]",
-        "[0, 2, 7]",
-        "scenes[0].nodes[2] refers to nodes[7], but the file has 4 nodes",
-        "7]",
-        0,
-    );
+    assert_edit_fails("[0, 2, 3]", "[0, 2, 7]", "scenes[0].nodes[2] refers to nodes[7], but the file has 4 nodes", "7]", 0);
     assert_edit_fails(
         "\"mesh\": 0 },\n    { \"name\": \"turned\"",
         "\"mesh\": 5 },\n    { \"name\": \"turned\"",
@@ -556,20 +497,8 @@ fn broken_node_trees() {
         "5 }",
         0,
     );
-    assert_edit_fails(
-        "[0, 0.7071068, 0, 0.7071068]",
-        "[0, 0, 0, 0]",
-        "nodes[2].rotation is not a unit quaternion",
-        "[0, 0, 0, 0]",
-        0,
-    );
-    assert_edit_fails(
-        "\"scale\": [2, 2, 2]",
-        "\"scale\": [2e39, 2, 2]",
-        "nodes[0].scale holds a number too large for f32",
-        "[2e39",
-        0,
-    );
+    assert_edit_fails("[0, 0.7071068, 0, 0.7071068]", "[0, 0, 0, 0]", "nodes[2].rotation is not a unit quaternion", "[0, 0, 0, 0]", 0);
+    assert_edit_fails("\"scale\": [2, 2, 2]", "\"scale\": [2e39, 2, 2]", "nodes[0].scale holds a number too large for f32", "[2e39", 0);
 }
 
 #[test]
@@ -603,8 +532,7 @@ fn out_of_range_indices_are_refused() {
     m.indices[4] = 9;
     let (json, bin) = encode(&m, Some(2), true);
     let d = load_one("bad.glb", &to_glb(&json, &bin)).unwrap_err();
-    let message =
-        "meshes[0].primitives[0]: index 9 (element 4 of its indices) is out of range: the primitive has 4 vertices";
+    let message = "meshes[0].primitives[0]: index 9 (element 4 of its indices) is out of range: the primitive has 4 vertices";
     assert_diag(&d, Code::Scene, message, "bad.glb", (1, 1));
 }
 
@@ -613,13 +541,7 @@ fn size_limits_hold_across_instances() {
     let text = NODES.as_bytes();
     let limits = Limits { triangles: 2, ..LIMITS };
     let d = load_files(&[("many.gltf", text)], &limits).unwrap_err();
-    assert_diag(
-        &d,
-        Code::Scene,
-        "with nodes[3].mesh the mesh has 9 vertices and 3 triangles",
-        "many.gltf",
-        line_col(NODES, "0 }\n  ]", 0),
-    );
+    assert_diag(&d, Code::Scene, "with nodes[3].mesh the mesh has 9 vertices and 3 triangles", "many.gltf", line_col(NODES, "0 }\n  ]", 0));
     let limits = Limits { vertices: 2, ..LIMITS };
     let d = load_files(&[("many.gltf", text)], &limits).unwrap_err();
     assert!(d.message.contains("accessors[0] has 3 vertices; the limit is 2"), "{d}");

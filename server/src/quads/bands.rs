@@ -32,64 +32,39 @@ pub(super) fn rasterize(
     let (width, height) = maps.size();
     // One band a thread: each band sets up every primitive again, so more
     // bands would cost more than their balance gains.
-    let block_rows = height
-        .div_ceil(2)
-        .div_ceil(rayon::current_num_threads() as u32)
-        .max(1);
+    let block_rows = height.div_ceil(2).div_ceil(rayon::current_num_threads() as u32).max(1);
     let maps = maps.bands(block_rows as usize);
     let depth: Vec<Option<&mut [f32]>> = match (depth, job.depth) {
-        (Some(buffer), Some(_)) => buffer
-            .chunks_mut(2 * block_rows as usize * width as usize)
-            .map(Some)
-            .collect(),
+        (Some(buffer), Some(_)) => buffer.chunks_mut(2 * block_rows as usize * width as usize).map(Some).collect(),
         _ => maps.iter().map(|_| None).collect(),
     };
     launches.resize_with(maps.len(), Vec::new);
-    let tallies: Vec<(QuadStats, QuadStats)> = (maps
-        .into_par_iter()
-        .zip(depth)
-        .zip(launches.par_iter_mut())
-        .enumerate())
-    .map(|(band, ((maps, depth), launches))| {
-        let first_row = 2 * block_rows * band as u32;
-        let rows = Rect {
-            y0: job.rect.y0.max(first_row.into()),
-            y1: job.rect.y1.min((first_row + 2 * block_rows).into()),
-            ..job.rect
-        };
-        let mut raster = Rasterizer {
-            rect: rows,
-            cull: job.draw.cull,
-            front_face: job.draw.front_face,
-            depth: depth.zip(job.depth).map(|(buffer, state)| {
-                DepthTest::new(buffer, first_row, width, state, &job.viewport)
-            }),
-            tally: Tally {
-                maps,
-                rasterized: QuadStats::default(),
-                shaded: QuadStats::default(),
-            },
-            launches,
-        };
-        let indices = job.draw.indices;
-        let vertex = |t: usize, k: usize| {
-            &job.vertices[indices.map_or(3 * t + k, |i| i[3 * t + k] as usize)]
-        };
-        for t in 0..job.triangles {
-            raster.triangle([vertex(t, 0), vertex(t, 1), vertex(t, 2)]);
-        }
-        (raster.tally.rasterized, raster.tally.shaded)
-    })
-    .collect();
+    let tallies: Vec<(QuadStats, QuadStats)> = (maps.into_par_iter().zip(depth).zip(launches.par_iter_mut()).enumerate())
+        .map(|(band, ((maps, depth), launches))| {
+            let first_row = 2 * block_rows * band as u32;
+            let rows = Rect { y0: job.rect.y0.max(first_row.into()), y1: job.rect.y1.min((first_row + 2 * block_rows).into()), ..job.rect };
+            let mut raster = Rasterizer {
+                rect: rows,
+                cull: job.draw.cull,
+                front_face: job.draw.front_face,
+                depth: depth.zip(job.depth).map(|(buffer, state)| DepthTest::new(buffer, first_row, width, state, &job.viewport)),
+                tally: Tally { maps, rasterized: QuadStats::default(), shaded: QuadStats::default() },
+                launches,
+            };
+            let indices = job.draw.indices;
+            let vertex = |t: usize, k: usize| &job.vertices[indices.map_or(3 * t + k, |i| i[3 * t + k] as usize)];
+            for t in 0..job.triangles {
+                raster.triangle([vertex(t, 0), vertex(t, 1), vertex(t, 2)]);
+            }
+            (raster.tally.rasterized, raster.tally.shaded)
+        })
+        .collect();
     // Every band counted every primitive; pixels and quads are its own.
     let first = tallies[0].0;
     let sum = |pick: fn(&(QuadStats, QuadStats)) -> QuadStats| QuadStats {
         triangles: first.triangles,
         culled_triangles: first.culled_triangles,
-        ..tallies
-            .iter()
-            .map(pick)
-            .fold(QuadStats::default(), |a, b| a + b)
+        ..tallies.iter().map(pick).fold(QuadStats::default(), |a, b| a + b)
     };
     (sum(|t| t.0), sum(|t| t.1))
 }

@@ -49,26 +49,15 @@ pub(super) struct Framebuffer {
 
 impl Framebuffer {
     pub fn new(viewport: &Viewport) -> Framebuffer {
-        let half = [
-            f64::from(viewport.width) / 2.0,
-            f64::from(viewport.height) / 2.0,
-        ];
-        let centre = [
-            f64::from(viewport.x) + half[0],
-            f64::from(viewport.y) + half[1],
-        ];
+        let half = [f64::from(viewport.width) / 2.0, f64::from(viewport.height) / 2.0];
+        let centre = [f64::from(viewport.x) + half[0], f64::from(viewport.y) + half[1]];
         Framebuffer { centre, half }
     }
 
     /// X/w = x0 + (x/w + 1)·width/2; Y/w = y0 + (1 - y/w)·height/2 (NDC y is up).
     pub fn map(&self, [x, y, z, w]: [f32; 4]) -> Homogeneous {
         let [x, y, z, w] = [x, y, z, w].map(f64::from);
-        [
-            self.centre[0] * w + self.half[0] * x,
-            self.centre[1] * w - self.half[1] * y,
-            z,
-            w,
-        ]
+        [self.centre[0] * w + self.half[0] * x, self.centre[1] * w - self.half[1] * y, z, w]
     }
 }
 
@@ -92,17 +81,12 @@ pub(super) fn outcode(v: &Homogeneous) -> u8 {
     if !v.iter().all(|c| c.is_finite()) {
         return NON_FINITE;
     }
-    (0..PLANES)
-        .filter(|&p| distance(p, v) < 0.0)
-        .fold(0, |code, p| code | 1 << p)
+    (0..PLANES).filter(|&p| distance(p, v) < 0.0).fold(0, |code, p| code | 1 << p)
 }
 
 impl Polygon {
     pub fn triangle(v: [Homogeneous; 3]) -> Polygon {
-        let mut p = Polygon {
-            v: [[0.0; 4]; MAX_VERTICES],
-            n: 3,
-        };
+        let mut p = Polygon { v: [[0.0; 4]; MAX_VERTICES], n: 3 };
         p.v[..3].copy_from_slice(&v);
         p
     }
@@ -114,13 +98,7 @@ impl Polygon {
     /// triangles sharing a clipped edge get the same point.
     pub fn clip(&mut self, planes: u8) {
         for plane in (0..PLANES).filter(|p| planes & 1 << p != 0) {
-            let input = std::mem::replace(
-                self,
-                Polygon {
-                    v: [[0.0; 4]; MAX_VERTICES],
-                    n: 0,
-                },
-            );
+            let input = std::mem::replace(self, Polygon { v: [[0.0; 4]; MAX_VERTICES], n: 0 });
             for i in 0..input.n {
                 let (a, b) = (input.v[i], input.v[(i + 1) % input.n]);
                 let (da, db) = (distance(plane, &a), distance(plane, &b));
@@ -128,15 +106,9 @@ impl Polygon {
                     self.push(a);
                 }
                 if (da >= 0.0) != (db >= 0.0) {
-                    let (inside, di, outside, dout) = if da >= 0.0 {
-                        (a, da, b, db)
-                    } else {
-                        (b, db, a, da)
-                    };
+                    let (inside, di, outside, dout) = if da >= 0.0 { (a, da, b, db) } else { (b, db, a, da) };
                     let t = di / (di - dout);
-                    self.push(std::array::from_fn(|k| {
-                        inside[k] + t * (outside[k] - inside[k])
-                    }));
+                    self.push(std::array::from_fn(|k| inside[k] + t * (outside[k] - inside[k])));
                 }
             }
         }
@@ -156,6 +128,5 @@ impl Polygon {
 /// framebuffer area, and for a triangle crossing w = 0 the orientation of
 /// the part in front of the eye. Positive: clockwise on screen (y down).
 pub(super) fn orientation([a, b, c]: &[Homogeneous; 3]) -> f64 {
-    a[0] * (b[1] * c[3] - c[1] * b[3]) - b[0] * (a[1] * c[3] - c[1] * a[3])
-        + c[0] * (a[1] * b[3] - b[1] * a[3])
+    a[0] * (b[1] * c[3] - c[1] * b[3]) - b[0] * (a[1] * c[3] - c[1] * a[3]) + c[0] * (a[1] * b[3] - b[1] * a[3])
 }

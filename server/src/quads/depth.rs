@@ -36,24 +36,10 @@ pub(super) struct DepthTest<'a> {
 impl<'a> DepthTest<'a> {
     /// `buffer` holds rows `first_row` on of the pass's depth buffer,
     /// `width` pixels a row.
-    pub fn new(
-        buffer: &'a mut [f32],
-        first_row: u32,
-        width: u32,
-        state: DepthState,
-        viewport: &Viewport,
-    ) -> DepthTest<'a> {
+    pub fn new(buffer: &'a mut [f32], first_row: u32, width: u32, state: DepthState, viewport: &Viewport) -> DepthTest<'a> {
         let range = [f64::from(viewport.min_depth), f64::from(viewport.max_depth)];
-        let passes =
-            [Ordering::Less, Ordering::Equal, Ordering::Greater].map(|o| passes(state.compare, o));
-        DepthTest {
-            buffer,
-            first_row: first_row as usize,
-            width: width as usize,
-            state,
-            range,
-            passes,
-        }
+        let passes = [Ordering::Less, Ordering::Equal, Ordering::Greater].map(|o| passes(state.compare, o));
+        DepthTest { buffer, first_row: first_row as usize, width: width as usize, state, range, passes }
     }
 
     /// The depth range value of an NDC depth.
@@ -71,19 +57,14 @@ impl<'a> DepthTest<'a> {
         let dx = ((z[1] - z[0]) * (y2 - y0) - (z[2] - z[0]) * (y1 - y0)) / area;
         let dy = ((x1 - x0) * (z[2] - z[0]) - (x2 - x0) * (z[1] - z[0])) / area;
         let b = self.state.bias;
-        let mut bias = f64::from(b.constant) * unit(max_depth)
-            + f64::from(b.slope_scale) * dx.abs().max(dy.abs());
+        let mut bias = f64::from(b.constant) * unit(max_depth) + f64::from(b.slope_scale) * dx.abs().max(dy.abs());
         let clamp = f64::from(b.clamp);
         if clamp > 0.0 {
             bias = bias.min(clamp);
         } else if clamp < 0.0 {
             bias = bias.max(clamp);
         }
-        Surface {
-            c: z[0] + bias - dx * (x0 - 0.5) - dy * (y0 - 0.5),
-            dx,
-            dy,
-        }
+        Surface { c: z[0] + bias - dx * (x0 - 0.5) - dy * (y0 - 0.5), dx, dy }
     }
 
     /// The lanes of `mask` in block (bx, by) whose fragments pass, writing
@@ -94,14 +75,10 @@ impl<'a> DepthTest<'a> {
         let at = (y - self.first_row) * self.width + x;
         let mut passed = 0;
         // Lanes in order: (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1).
-        for (lane, (z, at)) in [
-            (top_left, at),
-            (top_left + s.dx, at + 1),
-            (top_left + s.dy, at + self.width),
-            (top_left + s.dx + s.dy, at + self.width + 1),
-        ]
-        .into_iter()
-        .enumerate()
+        for (lane, (z, at)) in
+            [(top_left, at), (top_left + s.dx, at + 1), (top_left + s.dy, at + self.width), (top_left + s.dx + s.dy, at + self.width + 1)]
+                .into_iter()
+                .enumerate()
         {
             // An uncovered lane may lie outside the target.
             if mask & 1 << lane != 0 && self.test(z, at) {

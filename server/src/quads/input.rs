@@ -101,12 +101,7 @@ pub struct DepthState {
 
 impl DepthState {
     pub fn new(compare: Compare, write: bool) -> DepthState {
-        DepthState {
-            compare,
-            write,
-            bias: DepthBias::default(),
-            tolerance: DEPTH_TOLERANCE,
-        }
+        DepthState { compare, write, bias: DepthBias::default(), tolerance: DEPTH_TOLERANCE }
     }
 }
 
@@ -133,20 +128,12 @@ pub enum QuadError {
     #[error("the draw tests depth but the pass has no depth buffer")]
     NoDepthBuffer,
     #[error("index {value} (at {at}) is past the draw's {vertices} positions")]
-    Index {
-        at: usize,
-        value: u32,
-        vertices: usize,
-    },
-    #[error(
-        "viewport {0:?} is not a rectangle inside the {1}x{2} target with 0 <= min_depth <= max_depth <= 1"
-    )]
+    Index { at: usize, value: u32, vertices: usize },
+    #[error("viewport {0:?} is not a rectangle inside the {1}x{2} target with 0 <= min_depth <= max_depth <= 1")]
     Viewport(Viewport, u32, u32),
     #[error("scissor {0:?} is not inside the {1}x{2} target")]
     Scissor(Scissor, u32, u32),
-    #[error(
-        "depth state {0:?}: tolerance must be finite and at least 0, slope_scale and clamp finite"
-    )]
+    #[error("depth state {0:?}: tolerance must be finite and at least 0, slope_scale and clamp finite")]
     DepthState(DepthState),
 }
 
@@ -156,16 +143,8 @@ impl Draw<'_> {
         let triangles = self.indices.map_or(self.positions.len(), <[u32]>::len) / 3;
         let vertices = self.positions.len();
         let indices = self.indices.unwrap_or_default();
-        match indices
-            .iter()
-            .take(3 * triangles)
-            .position(|&i| i as usize >= vertices)
-        {
-            Some(at) => Err(QuadError::Index {
-                at,
-                value: indices[at],
-                vertices,
-            }),
+        match indices.iter().take(3 * triangles).position(|&i| i as usize >= vertices) {
+            Some(at) => Err(QuadError::Index { at, value: indices[at], vertices }),
             None => Ok(triangles),
         }
     }
@@ -174,26 +153,11 @@ impl Draw<'_> {
 impl Viewport {
     /// wgpu's default: the whole target, depth 0 to 1.
     pub fn whole(width: u32, height: u32) -> Viewport {
-        Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: width as f32,
-            height: height as f32,
-            min_depth: 0.0,
-            max_depth: 1.0,
-        }
+        Viewport { x: 0.0, y: 0.0, width: width as f32, height: height as f32, min_depth: 0.0, max_depth: 1.0 }
     }
 
     pub(super) fn check(&self, width: u32, height: u32) -> Result<(), QuadError> {
-        let v = [
-            self.x,
-            self.y,
-            self.width,
-            self.height,
-            self.min_depth,
-            self.max_depth,
-        ]
-        .map(f64::from);
+        let v = [self.x, self.y, self.width, self.height, self.min_depth, self.max_depth].map(f64::from);
         let [x, y, w, h, near, far] = v;
         let inside = v.iter().all(|c| c.is_finite())
             && x >= 0.0
@@ -205,18 +169,13 @@ impl Viewport {
             && 0.0 <= near
             && near <= far
             && far <= 1.0;
-        if inside {
-            Ok(())
-        } else {
-            Err(QuadError::Viewport(*self, width, height))
-        }
+        if inside { Ok(()) } else { Err(QuadError::Viewport(*self, width, height)) }
     }
 }
 
 impl Scissor {
     pub(super) fn check(&self, width: u32, height: u32) -> Result<(), QuadError> {
-        let fits =
-            |at: u32, size: u32, side: u32| u64::from(at) + u64::from(size) <= u64::from(side);
+        let fits = |at: u32, size: u32, side: u32| u64::from(at) + u64::from(size) <= u64::from(side);
         if fits(self.x, self.width, width) && fits(self.y, self.height, height) {
             Ok(())
         } else {
@@ -227,14 +186,7 @@ impl Scissor {
 
 impl DepthState {
     pub(super) fn check(&self) -> Result<(), QuadError> {
-        let ok = self.tolerance.is_finite()
-            && self.tolerance >= 0.0
-            && self.bias.slope_scale.is_finite()
-            && self.bias.clamp.is_finite();
-        if ok {
-            Ok(())
-        } else {
-            Err(QuadError::DepthState(*self))
-        }
+        let ok = self.tolerance.is_finite() && self.tolerance >= 0.0 && self.bias.slope_scale.is_finite() && self.bias.clamp.is_finite();
+        if ok { Ok(()) } else { Err(QuadError::DepthState(*self)) }
     }
 }

@@ -20,10 +20,7 @@ mod stats;
 #[cfg(test)]
 mod tests;
 
-pub use input::{
-    Compare, DEPTH_TOLERANCE, DepthBias, DepthState, Draw, Face, FrontFace, MAX_TARGET_SIZE,
-    QuadError, Scissor, Viewport,
-};
+pub use input::{Compare, DEPTH_TOLERANCE, DepthBias, DepthState, Draw, Face, FrontFace, MAX_TARGET_SIZE, QuadError, Scissor, Viewport};
 pub use raster::SUBPIXEL_BITS;
 pub use stats::{DrawStats, QuadMaps, QuadStats};
 
@@ -90,20 +87,12 @@ impl Pass {
     fn check_depth(&self, values: &[f32]) -> Result<(), QuadError> {
         let (width, height) = (self.width, self.height);
         if values.len() != width as usize * height as usize {
-            return Err(QuadError::DepthSize {
-                got: values.len(),
-                width,
-                height,
-            });
+            return Err(QuadError::DepthSize { got: values.len(), width, height });
         }
         match values.iter().position(|d| !d.is_finite()) {
             Some(at) => {
                 let (x, y) = ((at % width as usize) as u32, (at / width as usize) as u32);
-                Err(QuadError::DepthValue {
-                    x,
-                    y,
-                    value: values[at],
-                })
+                Err(QuadError::DepthValue { x, y, value: values[at] })
             }
             None => Ok(()),
         }
@@ -130,26 +119,10 @@ impl Pass {
 
         let frame = clip::Framebuffer::new(&viewport);
         self.vertices.clear();
-        self.vertices
-            .extend(draw.positions.iter().map(|&p| Vertex::new(&frame, p)));
-        let job = Job {
-            draw,
-            vertices: &self.vertices,
-            triangles,
-            rect,
-            viewport,
-            depth,
-        };
-        let (rasterized, shaded) = bands::rasterize(
-            &job,
-            &mut self.maps,
-            self.depth.as_deref_mut(),
-            &mut self.launches,
-        );
-        let stats = DrawStats {
-            rasterized,
-            shaded: depth.map(|_| shaded),
-        };
+        self.vertices.extend(draw.positions.iter().map(|&p| Vertex::new(&frame, p)));
+        let job = Job { draw, vertices: &self.vertices, triangles, rect, viewport, depth };
+        let (rasterized, shaded) = bands::rasterize(&job, &mut self.maps, self.depth.as_deref_mut(), &mut self.launches);
+        let stats = DrawStats { rasterized, shaded: depth.map(|_| shaded) };
         self.totals += stats;
         Ok(stats)
     }
@@ -184,30 +157,17 @@ impl Pass {
 /// (its left and top edges included, as the fill rule treats clipped
 /// edges) and inside the scissor rectangle. The viewport lies inside the
 /// target (checked).
-fn covered_rect(
-    viewport: &Viewport,
-    scissor: Option<Scissor>,
-    width: u32,
-    height: u32,
-) -> Result<Rect, QuadError> {
+fn covered_rect(viewport: &Viewport, scissor: Option<Scissor>, width: u32, height: u32) -> Result<Rect, QuadError> {
     let centres = |from: f32, size: f32| {
         let edge = |at: f64| (at - 0.5).ceil() as i64;
         (edge(from.into()), edge(f64::from(from) + f64::from(size)))
     };
-    let ((x0, x1), (y0, y1)) = (
-        centres(viewport.x, viewport.width),
-        centres(viewport.y, viewport.height),
-    );
+    let ((x0, x1), (y0, y1)) = (centres(viewport.x, viewport.width), centres(viewport.y, viewport.height));
     let rect = Rect { x0, y0, x1, y1 };
     let Some(s) = scissor else {
         return Ok(rect);
     };
     s.check(width, height)?;
     let (x, y) = (i64::from(s.x), i64::from(s.y));
-    Ok(Rect {
-        x0: rect.x0.max(x),
-        y0: rect.y0.max(y),
-        x1: rect.x1.min(x + i64::from(s.width)),
-        y1: rect.y1.min(y + i64::from(s.height)),
-    })
+    Ok(Rect { x0: rect.x0.max(x), y0: rect.y0.max(y), x1: rect.x1.min(x + i64::from(s.width)), y1: rect.y1.min(y + i64::from(s.height)) })
 }

@@ -6,9 +6,7 @@
 //! one primitive, so its fan pieces' blocks are merged: a quad touched by
 //! two pieces is launched once, not twice.
 
-use super::clip::{
-    self, DEPTH_PLANES, Framebuffer, Homogeneous, MAX_VERTICES, NON_FINITE, Polygon,
-};
+use super::clip::{self, DEPTH_PLANES, Framebuffer, Homogeneous, MAX_VERTICES, NON_FINITE, Polygon};
 use super::depth::DepthTest;
 use super::input::{Face, FrontFace};
 use super::raster::{self, Rect};
@@ -29,26 +27,14 @@ impl Vertex {
     pub fn new(frame: &Framebuffer, position: [f32; 4]) -> Vertex {
         let h = frame.map(position);
         let code = clip::outcode(&h);
-        let (fixed, ndc) = if code == 0 {
-            project(&h)
-        } else {
-            ([0, 0], 0.0)
-        };
-        Vertex {
-            h,
-            code,
-            fixed,
-            ndc,
-        }
+        let (fixed, ndc) = if code == 0 { project(&h) } else { ([0, 0], 0.0) };
+        Vertex { h, code, fixed, ndc }
     }
 }
 
 /// The divide by w and the snap, the same for a vertex however it was reached.
 fn project(h: &Homogeneous) -> ([i64; 2], f64) {
-    (
-        [raster::snap(h[0] / h[3]), raster::snap(h[1] / h[3])],
-        h[2] / h[3],
-    )
+    ([raster::snap(h[0] / h[3]), raster::snap(h[1] / h[3])], h[2] / h[3])
 }
 
 /// The lanes one primitive covers in one block, and which of them shade.
@@ -92,11 +78,7 @@ impl Rasterizer<'_> {
     /// Rasterizes and counts one triangle of the draw.
     pub fn triangle(&mut self, v: [&Vertex; 3]) {
         self.tally.rasterized.triangles += 1;
-        let drawn = if v.iter().all(|v| v.code == 0) {
-            self.unclipped(v)
-        } else {
-            self.clipped(v)
-        };
+        let drawn = if v.iter().all(|v| v.code == 0) { self.unclipped(v) } else { self.clipped(v) };
         if !drawn {
             self.tally.rasterized.culled_triangles += 1;
         }
@@ -181,12 +163,7 @@ impl Rasterizer<'_> {
     /// snapped.
     fn fan(&mut self, corners: &[([i64; 2], f64)], clockwise: bool) -> bool {
         let rect = self.rect;
-        let max_depth = self.depth.as_ref().map(|d| {
-            corners
-                .iter()
-                .map(|c| d.depth(c.1))
-                .fold(f64::MIN, f64::max)
-        });
+        let max_depth = self.depth.as_ref().map(|d| corners.iter().map(|c| d.depth(c.1)).fold(f64::MIN, f64::max));
         self.launches.clear();
         let mut drawn = false;
         for i in 1..corners.len() - 1 {
@@ -201,37 +178,21 @@ impl Rasterizer<'_> {
                 (b, c) = (c, b);
             }
             let fixed = [a.0, b.0, c.0];
-            let Rasterizer {
-                depth, launches, ..
-            } = self;
-            let surface = depth
-                .as_ref()
-                .zip(max_depth)
-                .map(|(d, max)| d.surface(&fixed, [a.1, b.1, c.1].map(|n| d.depth(n)), max));
+            let Rasterizer { depth, launches, .. } = self;
+            let surface = depth.as_ref().zip(max_depth).map(|(d, max)| d.surface(&fixed, [a.1, b.1, c.1].map(|n| d.depth(n)), max));
             raster::cover(&fixed, rect, |bx, by, covered| {
                 let shaded = match (depth.as_mut(), &surface) {
                     (Some(test), Some(s)) => test.shade(s, bx, by, covered),
                     _ => covered,
                 };
-                launches.push(Launch {
-                    block: u64::from(by) << 32 | u64::from(bx),
-                    covered,
-                    shaded,
-                });
+                launches.push(Launch { block: u64::from(by) << 32 | u64::from(bx), covered, shaded });
             });
         }
         // Pieces never share a pixel (the fill rule), only blocks.
         self.launches.sort_unstable_by_key(|l| l.block);
         for run in self.launches.chunk_by(|a, b| a.block == b.block) {
-            let (covered, shaded) = run
-                .iter()
-                .fold((0, 0), |(c, s), l| (c | l.covered, s | l.shaded));
-            self.tally.launch(
-                run[0].block as u32,
-                (run[0].block >> 32) as u32,
-                covered,
-                shaded,
-            );
+            let (covered, shaded) = run.iter().fold((0, 0), |(c, s), l| (c | l.covered, s | l.shaded));
+            self.tally.launch(run[0].block as u32, (run[0].block >> 32) as u32, covered, shaded);
         }
         drawn
     }

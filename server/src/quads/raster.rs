@@ -58,11 +58,7 @@ impl Edge {
         // cover a pixel and never both miss it. Elsewhere E must exceed 0,
         // i.e. E - 1 >= 0.
         let top_left = a > 0 || (a == 0 && b > 0);
-        Edge {
-            a,
-            b,
-            c: -(a * p[0] + b * p[1]) - i64::from(!top_left),
-        }
+        Edge { a, b, c: -(a * p[0] + b * p[1]) - i64::from(!top_left) }
     }
 }
 
@@ -126,16 +122,8 @@ pub(super) fn cover(v: &[[i64; 2]; 3], rect: Rect, mut launch: impl FnMut(u32, u
     // Blocks align to the target's origin: start at the even row at or above y0.
     let mut y = y0 & !1;
     while y < y1 {
-        let top = if y >= y0 {
-            span(&edges, y, x0, x1)
-        } else {
-            EMPTY
-        };
-        let bottom = if y + 1 < y1 {
-            span(&edges, y + 1, x0, x1)
-        } else {
-            EMPTY
-        };
+        let top = if y >= y0 { span(&edges, y, x0, x1) } else { EMPTY };
+        let bottom = if y + 1 < y1 { span(&edges, y + 1, x0, x1) } else { EMPTY };
         let (l, r) = match (top.0 < top.1, bottom.0 < bottom.1) {
             (true, true) => (top.0.min(bottom.0), top.1.max(bottom.1)),
             (true, false) => top,

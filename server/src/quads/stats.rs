@@ -100,12 +100,8 @@ impl DrawStats {
 impl Add for DrawStats {
     type Output = DrawStats;
     fn add(self, o: DrawStats) -> DrawStats {
-        let shaded = (self.shaded.is_some() || o.shaded.is_some())
-            .then(|| self.shaded_or_rasterized() + o.shaded_or_rasterized());
-        DrawStats {
-            rasterized: self.rasterized + o.rasterized,
-            shaded,
-        }
+        let shaded = (self.shaded.is_some() || o.shaded.is_some()).then(|| self.shaded_or_rasterized() + o.shaded_or_rasterized());
+        DrawStats { rasterized: self.rasterized + o.rasterized, shaded }
     }
 }
 
@@ -134,12 +130,7 @@ pub struct QuadMaps {
 impl QuadMaps {
     pub(super) fn new(width: u32, height: u32) -> QuadMaps {
         let blocks = width.div_ceil(2) as usize * height.div_ceil(2) as usize;
-        QuadMaps {
-            width,
-            height,
-            quads: vec![0; blocks],
-            helper_lanes: vec![0; width as usize * height as usize],
-        }
+        QuadMaps { width, height, quads: vec![0; blocks], helper_lanes: vec![0; width as usize * height as usize] }
     }
 
     pub(super) fn clear(&mut self) {
@@ -172,20 +163,10 @@ impl QuadMaps {
     /// pixel rows), top first, for bands of the target drawn in parallel.
     pub(super) fn bands(&mut self, block_rows: usize) -> Vec<MapRows<'_>> {
         let (width, height) = (self.width, self.height);
-        let quads = self
-            .quads
-            .chunks_mut(block_rows * width.div_ceil(2) as usize);
-        let helpers = self
-            .helper_lanes
-            .chunks_mut(2 * block_rows * width as usize);
+        let quads = self.quads.chunks_mut(block_rows * width.div_ceil(2) as usize);
+        let helpers = self.helper_lanes.chunks_mut(2 * block_rows * width as usize);
         (quads.zip(helpers).enumerate())
-            .map(|(i, (quads, helper_lanes))| MapRows {
-                quads,
-                helper_lanes,
-                width,
-                height,
-                first_block_row: (i * block_rows) as u32,
-            })
+            .map(|(i, (quads, helper_lanes))| MapRows { quads, helper_lanes, width, height, first_block_row: (i * block_rows) as u32 })
             .collect()
     }
 }

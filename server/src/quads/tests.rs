@@ -13,41 +13,22 @@ use super::*;
 /// Clip-space position of a framebuffer point (pixels, y down) in a
 /// `width` × `height` target, at depth `z`, with w = 1.
 fn at(width: u32, height: u32, [x, y]: [f64; 2], z: f32) -> [f32; 4] {
-    [
-        (x / f64::from(width) * 2.0 - 1.0) as f32,
-        (1.0 - y / f64::from(height) * 2.0) as f32,
-        z,
-        1.0,
-    ]
+    [(x / f64::from(width) * 2.0 - 1.0) as f32, (1.0 - y / f64::from(height) * 2.0) as f32, z, 1.0]
 }
 
 /// The fullscreen triangle at depth `z`.
 fn fullscreen(z: f32) -> [[f32; 4]; 3] {
-    [
-        [-1.0, -1.0, z, 1.0],
-        [3.0, -1.0, z, 1.0],
-        [-1.0, 3.0, z, 1.0],
-    ]
+    [[-1.0, -1.0, z, 1.0], [3.0, -1.0, z, 1.0], [-1.0, 3.0, z, 1.0]]
 }
 
 /// The target as two triangles, (-1,-1),(1,-1),(-1,1) then (-1,1),(1,-1),(1,1).
 fn two_triangles(z: f32) -> [[f32; 4]; 6] {
     let c = |x: f32, y: f32| [x, y, z, 1.0];
-    [
-        c(-1.0, -1.0),
-        c(1.0, -1.0),
-        c(-1.0, 1.0),
-        c(-1.0, 1.0),
-        c(1.0, -1.0),
-        c(1.0, 1.0),
-    ]
+    [c(-1.0, -1.0), c(1.0, -1.0), c(-1.0, 1.0), c(-1.0, 1.0), c(1.0, -1.0), c(1.0, 1.0)]
 }
 
 fn draw(positions: &[[f32; 4]]) -> Draw<'_> {
-    Draw {
-        positions,
-        ..Draw::default()
-    }
+    Draw { positions, ..Draw::default() }
 }
 
 fn one_draw(width: u32, height: u32, d: &Draw) -> DrawStats {
@@ -55,12 +36,7 @@ fn one_draw(width: u32, height: u32, d: &Draw) -> DrawStats {
 }
 
 fn stats(triangles: u64, culled_triangles: u64, pixels: u64, quads: u64) -> QuadStats {
-    QuadStats {
-        triangles,
-        culled_triangles,
-        pixels,
-        quads,
-    }
+    QuadStats { triangles, culled_triangles, pixels, quads }
 }
 
 /// A small deterministic generator (xorshift64*), for meshes and jitter.
@@ -115,11 +91,7 @@ fn covers(t: &Tri, c: [f64; 2]) -> bool {
     (0..3).all(|i| {
         let (p, q, r) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
         let side = cross(p, q, c);
-        if side == 0.0 {
-            top_or_left(p, q, r)
-        } else {
-            (side > 0.0) == (cross(p, q, r) > 0.0)
-        }
+        if side == 0.0 { top_or_left(p, q, r) } else { (side > 0.0) == (cross(p, q, r) > 0.0) }
     })
 }
 
@@ -128,12 +100,7 @@ fn covers(t: &Tri, c: [f64; 2]) -> bool {
 /// `width` × `height` target, with vertices snapped to 1/256 pixel.
 fn reference(width: u32, height: u32, rect: [u32; 4], primitives: &[Vec<Tri>]) -> Reference {
     let (qw, qh) = (width.div_ceil(2), height.div_ceil(2));
-    let mut r = Reference {
-        pixels: 0,
-        quads: 0,
-        overdraw: vec![0; (qw * qh) as usize],
-        helpers: vec![0; (width * height) as usize],
-    };
+    let mut r = Reference { pixels: 0, quads: 0, overdraw: vec![0; (qw * qh) as usize], helpers: vec![0; (width * height) as usize] };
     for primitive in primitives {
         let mut covered = HashSet::new();
         for t in primitive {
@@ -151,12 +118,7 @@ fn reference(width: u32, height: u32, rect: [u32; 4], primitives: &[Vec<Tri>]) -
         r.quads += blocks.len() as u64;
         for (bx, by) in blocks {
             r.overdraw[(by * qw + bx) as usize] += 1;
-            for (x, y) in [
-                (2 * bx, 2 * by),
-                (2 * bx + 1, 2 * by),
-                (2 * bx, 2 * by + 1),
-                (2 * bx + 1, 2 * by + 1),
-            ] {
+            for (x, y) in [(2 * bx, 2 * by), (2 * bx + 1, 2 * by), (2 * bx, 2 * by + 1), (2 * bx + 1, 2 * by + 1)] {
                 if x < width && y < height && !covered.contains(&(x, y)) {
                     r.helpers[(y * width + x) as usize] += 1;
                 }
@@ -169,19 +131,12 @@ fn reference(width: u32, height: u32, rect: [u32; 4], primitives: &[Vec<Tri>]) -
 /// The model against the reference: each triangle of `tris` one primitive,
 /// drawn unculled in one draw.
 fn check_against_reference(width: u32, height: u32, tris: &[Tri]) {
-    let positions: Vec<[f32; 4]> = tris
-        .iter()
-        .flatten()
-        .map(|&p| at(width, height, p, 0.5))
-        .collect();
+    let positions: Vec<[f32; 4]> = tris.iter().flatten().map(|&p| at(width, height, p, 0.5)).collect();
     let mut pass = Pass::new(width, height).unwrap();
     let got = pass.draw(&draw(&positions)).unwrap().rasterized;
     let primitives: Vec<Vec<Tri>> = tris.iter().map(|&t| vec![t]).collect();
     let want = reference(width, height, [0, 0, width, height], &primitives);
-    assert_eq!(
-        (got.pixels, got.quads, got.helper_lanes()),
-        (want.pixels, want.quads, want.helper_lanes())
-    );
+    assert_eq!((got.pixels, got.quads, got.helper_lanes()), (want.pixels, want.quads, want.helper_lanes()));
     assert_eq!(pass.maps().quads(), &want.overdraw[..]);
     assert_eq!(pass.maps().helper_lanes(), &want.helpers[..]);
 }
@@ -225,20 +180,12 @@ fn two_triangles_pay_the_diagonal() {
     assert_eq!(maps.blocks(), (256, 256));
     for by in 0..256 {
         for bx in 0..256 {
-            assert_eq!(
-                maps.quads()[by * 256 + bx],
-                1 + u32::from(bx == by),
-                "block ({bx}, {by})"
-            );
+            assert_eq!(maps.quads()[by * 256 + bx], 1 + u32::from(bx == by), "block ({bx}, {by})");
         }
     }
     for y in 0..512 {
         for x in 0..512 {
-            assert_eq!(
-                maps.helper_lanes()[y * 512 + x],
-                u32::from(x / 2 == y / 2),
-                "pixel ({x}, {y})"
-            );
+            assert_eq!(maps.helper_lanes()[y * 512 + x], u32::from(x / 2 == y / 2), "pixel ({x}, {y})");
         }
     }
 }
@@ -262,15 +209,9 @@ fn odd_sizes_count_lanes_outside_the_target_as_helpers() {
     let s = one_draw(333, 211, &draw(&two_triangles(0.0))).rasterized;
     assert_eq!(s.pixels, 70_263);
     let corners = [[0.0, 211.0], [333.0, 211.0], [0.0, 0.0], [333.0, 0.0]];
-    let halves = [
-        vec![[corners[0], corners[1], corners[2]]],
-        vec![[corners[2], corners[1], corners[3]]],
-    ];
+    let halves = [vec![[corners[0], corners[1], corners[2]]], vec![[corners[2], corners[1], corners[3]]]];
     let want = reference(333, 211, [0, 0, 333, 211], &halves);
-    assert_eq!(
-        (s.pixels, s.quads, s.helper_lanes()),
-        (want.pixels, want.quads, want.helper_lanes())
-    );
+    assert_eq!((s.pixels, s.quads, s.helper_lanes()), (want.pixels, want.quads, want.helper_lanes()));
 }
 
 #[test]
@@ -279,83 +220,30 @@ fn scissor_and_viewport_bound_coverage() {
     // 1..=51 (pixels 2..=103: 51) and block rows 2..=27 (pixels 4..=55:
     // 26): 1,326 quads, 5,304 - 5,000 = 304 helper lanes: the columns
     // x = 2 and 103 and rows y = 4 and 55 just outside it, 2·52 + 2·102 - 4.
-    let scissor = Scissor {
-        x: 3,
-        y: 5,
-        width: 100,
-        height: 50,
-    };
+    let scissor = Scissor { x: 3, y: 5, width: 100, height: 50 };
     let positions = fullscreen(0.0);
-    let s = one_draw(
-        512,
-        512,
-        &Draw {
-            scissor: Some(scissor),
-            ..draw(&positions)
-        },
-    )
-    .rasterized;
+    let s = one_draw(512, 512, &Draw { scissor: Some(scissor), ..draw(&positions) }).rasterized;
     assert_eq!(s, stats(1, 0, 5_000, 1_326));
     assert_eq!(s.helper_lanes(), 304);
 
     // A viewport maps NDC onto its rectangle: the fullscreen triangle covers
     // exactly it. 100×50 at (10, 20): blocks 5..=54 × 10..=34, 50·25 =
     // 1,250 quads, no helpers.
-    let viewport = Viewport {
-        x: 10.0,
-        y: 20.0,
-        width: 100.0,
-        height: 50.0,
-        min_depth: 0.0,
-        max_depth: 1.0,
-    };
-    let s = one_draw(
-        512,
-        512,
-        &Draw {
-            viewport: Some(viewport),
-            ..draw(&positions)
-        },
-    )
-    .rasterized;
+    let viewport = Viewport { x: 10.0, y: 20.0, width: 100.0, height: 50.0, min_depth: 0.0, max_depth: 1.0 };
+    let s = one_draw(512, 512, &Draw { viewport: Some(viewport), ..draw(&positions) }).rasterized;
     assert_eq!(s, stats(1, 0, 5_000, 1_250));
 
     // Both: the intersection, x 10..103, y 20..55: 93·35 = 3,255 pixels in
     // blocks 5..=51 (47) × 10..=27 (18) = 846 quads.
-    let both = Draw {
-        viewport: Some(viewport),
-        scissor: Some(scissor),
-        ..draw(&positions)
-    };
-    assert_eq!(
-        one_draw(512, 512, &both).rasterized,
-        stats(1, 0, 3_255, 846)
-    );
+    let both = Draw { viewport: Some(viewport), scissor: Some(scissor), ..draw(&positions) };
+    assert_eq!(one_draw(512, 512, &both).rasterized, stats(1, 0, 3_255, 846));
 
     // A quarter of the target through the viewport, the same triangle: a
     // viewport at half-pixel offsets takes the centres on its left and top
     // edges, not those on its right and bottom ones. x from 0.5 to 2.5
     // holds centres 0.5, 1.5 (2.5 excluded); y likewise.
-    let half = Viewport {
-        x: 0.5,
-        y: 0.5,
-        width: 2.0,
-        height: 2.0,
-        min_depth: 0.0,
-        max_depth: 1.0,
-    };
-    assert_eq!(
-        one_draw(
-            8,
-            8,
-            &Draw {
-                viewport: Some(half),
-                ..draw(&positions)
-            }
-        )
-        .rasterized,
-        stats(1, 0, 4, 1)
-    );
+    let half = Viewport { x: 0.5, y: 0.5, width: 2.0, height: 2.0, min_depth: 0.0, max_depth: 1.0 };
+    assert_eq!(one_draw(8, 8, &Draw { viewport: Some(half), ..draw(&positions) }).rasterized, stats(1, 0, 4, 1));
 }
 
 // ---- the fill rule and snapping, against the reference ---------------
@@ -399,15 +287,8 @@ fn a_mesh_of_sub_pixel_triangles_covers_like_the_reference() {
     // A mesh covers each centre inside it exactly once: the sum over its
     // triangles is the size of the union.
     let one_primitive = reference(width, height, [0, 0, width, height], &[tris.clone()]);
-    let positions: Vec<[f32; 4]> = tris
-        .iter()
-        .flatten()
-        .map(|&p| at(width, height, p, 0.5))
-        .collect();
-    assert_eq!(
-        one_draw(width, height, &draw(&positions)).rasterized.pixels,
-        one_primitive.pixels
-    );
+    let positions: Vec<[f32; 4]> = tris.iter().flatten().map(|&p| at(width, height, p, 0.5)).collect();
+    assert_eq!(one_draw(width, height, &draw(&positions)).rasterized.pixels, one_primitive.pixels);
 }
 
 #[test]
@@ -419,12 +300,7 @@ fn random_small_triangles_off_the_sub_pixel_grid_cover_like_the_reference() {
         .map(|_| {
             let centre = [rng.next() * 40.0 - 2.0, rng.next() * 26.0 - 2.0];
             let size = 0.1 + rng.next() * 6.0;
-            std::array::from_fn(|_| {
-                [
-                    centre[0] + (rng.next() - 0.5) * size,
-                    centre[1] + (rng.next() - 0.5) * size,
-                ]
-            })
+            std::array::from_fn(|_| [centre[0] + (rng.next() - 0.5) * size, centre[1] + (rng.next() - 0.5) * size])
         })
         .collect();
     check_against_reference(37, 23, &tris);
@@ -436,11 +312,7 @@ fn thin_nearly_horizontal_slivers_cover_like_the_reference() {
     let tris: Vec<Tri> = (0..40)
         .map(|i| {
             let y = 1.0 + f64::from(i) * 0.37;
-            [
-                [0.3, y],
-                [31.7, y + 1.9],
-                [0.3, y + 0.05 + f64::from(i % 7) * 0.02],
-            ]
+            [[0.3, y], [31.7, y + 1.9], [0.3, y + 0.05 + f64::from(i % 7) * 0.02]]
         })
         .collect();
     check_against_reference(32, 20, &tris);
@@ -451,23 +323,10 @@ fn thin_nearly_horizontal_slivers_cover_like_the_reference() {
 #[test]
 fn face_culling_follows_wgpus_winding() {
     // Counter-clockwise in NDC (y up): lower-left, lower-right, upper-left.
-    let ccw = [
-        [-1.0, -1.0, 0.5, 1.0],
-        [1.0, -1.0, 0.5, 1.0],
-        [-1.0, 1.0, 0.5, 1.0],
-    ];
+    let ccw = [[-1.0, -1.0, 0.5, 1.0], [1.0, -1.0, 0.5, 1.0], [-1.0, 1.0, 0.5, 1.0]];
     let cw = [ccw[0], ccw[2], ccw[1]];
     let culled = |positions: &[[f32; 4]], cull: Option<Face>, front_face: FrontFace| {
-        let s = one_draw(
-            64,
-            64,
-            &Draw {
-                cull,
-                front_face,
-                ..draw(positions)
-            },
-        )
-        .rasterized;
+        let s = one_draw(64, 64, &Draw { cull, front_face, ..draw(positions) }).rasterized;
         assert_eq!(s.triangles, 1);
         // Half the target when drawn, the centres below its diagonal (the
         // diagonal is its right edge): 64·63/2 = 2,016, either winding.
@@ -478,16 +337,8 @@ fn face_culling_follows_wgpus_winding() {
         for front_face in [FrontFace::Ccw, FrontFace::Cw] {
             let front = ccw_winding == (front_face == FrontFace::Ccw);
             assert!(!culled(positions, None, front_face));
-            assert_eq!(
-                culled(positions, Some(Face::Back), front_face),
-                !front,
-                "{ccw_winding} {front_face:?}"
-            );
-            assert_eq!(
-                culled(positions, Some(Face::Front), front_face),
-                front,
-                "{ccw_winding} {front_face:?}"
-            );
+            assert_eq!(culled(positions, Some(Face::Back), front_face), !front, "{ccw_winding} {front_face:?}");
+            assert_eq!(culled(positions, Some(Face::Front), front_face), front, "{ccw_winding} {front_face:?}");
         }
     }
 }
@@ -498,33 +349,15 @@ fn a_draw_off_screen_counts_only_its_triangles() {
     let mut positions = Vec::new();
     for i in 0..10 {
         let x = 1.5 + i as f32 * 0.1;
-        positions.extend([
-            [x, -0.5, 0.5, 1.0],
-            [x + 1.0, -0.5, 0.5, 1.0],
-            [x, 0.5, 0.5, 1.0],
-        ]);
+        positions.extend([[x, -0.5, 0.5, 1.0], [x + 1.0, -0.5, 0.5, 1.0], [x, 0.5, 0.5, 1.0]]);
     }
-    let s = one_draw(
-        128,
-        128,
-        &Draw {
-            cull: Some(Face::Back),
-            ..draw(&positions)
-        },
-    );
+    let s = one_draw(128, 128, &Draw { cull: Some(Face::Back), ..draw(&positions) });
     assert_eq!(s.rasterized, stats(10, 0, 0, 0));
     assert_eq!(s.rasterized.quad_efficiency(), None);
 
     // Far beyond the guard band (x/w = 10^7): the same.
-    let far = [
-        [1.0e7, 0.0, 0.5, 1.0],
-        [2.0e7, 0.0, 0.5, 1.0],
-        [1.0e7, 1.0e7, 0.5, 1.0],
-    ];
-    assert_eq!(
-        one_draw(128, 128, &draw(&far)).rasterized,
-        stats(1, 0, 0, 0)
-    );
+    let far = [[1.0e7, 0.0, 0.5, 1.0], [2.0e7, 0.0, 0.5, 1.0], [1.0e7, 1.0e7, 0.5, 1.0]];
+    assert_eq!(one_draw(128, 128, &draw(&far)).rasterized, stats(1, 0, 0, 0));
 
     // Behind the near plane, beyond the far one, behind the eye: culled.
     let clipped = [
@@ -538,10 +371,7 @@ fn a_draw_off_screen_counts_only_its_triangles() {
         [3.0, -1.0, -0.5, -1.0],
         [-1.0, 3.0, -0.5, -1.0],
     ];
-    assert_eq!(
-        one_draw(128, 128, &draw(&clipped)).rasterized,
-        stats(3, 3, 0, 0)
-    );
+    assert_eq!(one_draw(128, 128, &draw(&clipped)).rasterized, stats(3, 3, 0, 0));
 }
 
 #[test]
@@ -561,10 +391,7 @@ fn degenerate_and_non_finite_triangles_are_culled() {
         [3.0, nan, 0.5, 1.0],
         [-1.0, 3.0, 0.5, 1.0],
     ];
-    assert_eq!(
-        one_draw(128, 128, &draw(&positions)).rasterized,
-        stats(3, 3, 0, 0)
-    );
+    assert_eq!(one_draw(128, 128, &draw(&positions)).rasterized, stats(3, 3, 0, 0));
 }
 
 #[test]
@@ -573,28 +400,13 @@ fn the_near_plane_clips_to_the_analytic_polygon() {
     // lower half of the 512×512 target, a 4-sided polygon rasterized as two
     // fan pieces. 512·256 = 131,072 pixels in 256·128 = 32,768 quads, no
     // helper lanes: the blocks along the fan's diagonal are launched once.
-    let positions = [
-        [-1.0, -1.0, 0.5, 1.0],
-        [3.0, -1.0, 0.5, 1.0],
-        [-1.0, 3.0, -1.5, 1.0],
-    ];
-    assert_eq!(
-        one_draw(512, 512, &draw(&positions)).rasterized,
-        stats(1, 0, 131_072, 32_768)
-    );
+    let positions = [[-1.0, -1.0, 0.5, 1.0], [3.0, -1.0, 0.5, 1.0], [-1.0, 3.0, -1.5, 1.0]];
+    assert_eq!(one_draw(512, 512, &draw(&positions)).rasterized, stats(1, 0, 131_072, 32_768));
 
     // z = 0.5 - 0.5·(x + 1) - 0.5·(y + 1): the clipped triangle is
     // (-1,-1),(0,-1),(-1,0), exactly as if drawn directly.
-    let clipped = [
-        [-1.0, -1.0, 0.5, 1.0],
-        [3.0, -1.0, -1.5, 1.0],
-        [-1.0, 3.0, -1.5, 1.0],
-    ];
-    let direct = [
-        [-1.0, -1.0, 0.5, 1.0],
-        [0.0, -1.0, 0.0, 1.0],
-        [-1.0, 0.0, 0.0, 1.0],
-    ];
+    let clipped = [[-1.0, -1.0, 0.5, 1.0], [3.0, -1.0, -1.5, 1.0], [-1.0, 3.0, -1.5, 1.0]];
+    let direct = [[-1.0, -1.0, 0.5, 1.0], [0.0, -1.0, 0.0, 1.0], [-1.0, 0.0, 0.0, 1.0]];
     let got = one_draw(512, 512, &draw(&clipped)).rasterized;
     assert_eq!(got, one_draw(512, 512, &draw(&direct)).rasterized);
     assert_eq!(got.pixels, 256 * 255 / 2);
@@ -604,68 +416,28 @@ fn the_near_plane_clips_to_the_analytic_polygon() {
     // (∓0.75, 0). The visible part is the trapezoid (-0.5,-0.5),
     // (0.5,-0.5), (0.75,0), (-0.75,0), wider away from the eye: in pixels
     // (128,384), (384,384), (448,256), (64,256).
-    let behind = [
-        [-0.5, -0.5, 0.5, 1.0],
-        [0.5, -0.5, 0.5, 1.0],
-        [0.0, 1.5, -1.5, -1.0],
-    ];
+    let behind = [[-0.5, -0.5, 0.5, 1.0], [0.5, -0.5, 0.5, 1.0], [0.0, 1.5, -1.5, -1.0]];
     let got = one_draw(512, 512, &draw(&behind)).rasterized;
-    let (a, b, q, p) = (
-        [128.0, 384.0],
-        [384.0, 384.0],
-        [448.0, 256.0],
-        [64.0, 256.0],
-    );
+    let (a, b, q, p) = ([128.0, 384.0], [384.0, 384.0], [448.0, 256.0], [64.0, 256.0]);
     let want = reference(512, 512, [0, 0, 512, 512], &[vec![[a, b, q], [a, q, p]]]);
-    assert_eq!(
-        (got.culled_triangles, got.pixels, got.quads),
-        (0, want.pixels, want.quads)
-    );
+    assert_eq!((got.culled_triangles, got.pixels, got.quads), (0, want.pixels, want.quads));
 
     // Its facing is that of the visible trapezoid: A, B, Q, P runs
     // counter-clockwise on screen, front-facing for wgpu's default.
     let back = Some(Face::Back);
-    assert_eq!(
-        one_draw(
-            512,
-            512,
-            &Draw {
-                cull: back,
-                ..draw(&behind)
-            }
-        )
-        .rasterized,
-        got
-    );
+    assert_eq!(one_draw(512, 512, &Draw { cull: back, ..draw(&behind) }).rasterized, got);
     let reversed = [behind[0], behind[2], behind[1]];
-    assert_eq!(
-        one_draw(
-            512,
-            512,
-            &Draw {
-                cull: back,
-                ..draw(&reversed)
-            }
-        )
-        .rasterized,
-        stats(1, 1, 0, 0)
-    );
+    assert_eq!(one_draw(512, 512, &Draw { cull: back, ..draw(&reversed) }).rasterized, stats(1, 1, 0, 0));
 }
 
 // ---- depth -----------------------------------------------------------
 
 fn depth_pass(width: u32, height: u32, depth: f32) -> Pass {
-    Pass::new(width, height)
-        .unwrap()
-        .with_depth(vec![depth; (width * height) as usize])
-        .unwrap()
+    Pass::new(width, height).unwrap().with_depth(vec![depth; (width * height) as usize]).unwrap()
 }
 
 fn with_depth<'a>(positions: &'a [[f32; 4]], state: DepthState) -> Draw<'a> {
-    Draw {
-        depth: Some(state),
-        ..draw(positions)
-    }
+    Draw { depth: Some(state), ..draw(positions) }
 }
 
 #[test]
@@ -676,14 +448,8 @@ fn nearer_draws_shade_and_farther_ones_only_rasterize() {
 
     // Far then near: both pass everywhere.
     let mut pass = depth_pass(512, 512, 1.0);
-    assert_eq!(
-        pass.draw(&with_depth(&far, less)).unwrap().shaded,
-        Some(full)
-    );
-    assert_eq!(
-        pass.draw(&with_depth(&near, less)).unwrap().shaded,
-        Some(full)
-    );
+    assert_eq!(pass.draw(&with_depth(&far, less)).unwrap().shaded, Some(full));
+    assert_eq!(pass.draw(&with_depth(&near, less)).unwrap().shaded, Some(full));
     assert!(pass.depth().unwrap().iter().all(|&d| d == 0.25));
 
     // Near then far: the second rasterizes every quad and shades none.
@@ -692,10 +458,7 @@ fn nearer_draws_shade_and_farther_ones_only_rasterize() {
     let s = pass.draw(&with_depth(&far, less)).unwrap();
     assert_eq!((s.rasterized, s.shaded), (full, Some(stats(1, 0, 0, 0))));
     let totals = pass.totals();
-    assert_eq!(
-        (totals.rasterized.quads, totals.shaded.unwrap().quads),
-        (131_072, 65_536)
-    );
+    assert_eq!((totals.rasterized.quads, totals.shaded.unwrap().quads), (131_072, 65_536));
     assert!(pass.maps().quads().iter().all(|&q| q == 1));
 }
 
@@ -708,21 +471,10 @@ fn an_occluder_edge_inside_a_quad_makes_helper_lanes() {
     let less = DepthState::new(Compare::Less, true);
     let edge = -2.0 / 512.0;
     let c = |x: f32, y: f32| [x, y, 0.25, 1.0];
-    let occluder = [
-        c(-1.0, -1.0),
-        c(edge, -1.0),
-        c(-1.0, 1.0),
-        c(-1.0, 1.0),
-        c(edge, -1.0),
-        c(edge, 1.0),
-    ];
+    let occluder = [c(-1.0, -1.0), c(edge, -1.0), c(-1.0, 1.0), c(-1.0, 1.0), c(edge, -1.0), c(edge, 1.0)];
     let mut pass = depth_pass(512, 512, 1.0);
     pass.draw(&with_depth(&occluder, less)).unwrap();
-    let s = pass
-        .draw(&with_depth(&fullscreen(0.5), less))
-        .unwrap()
-        .shaded
-        .unwrap();
+    let s = pass.draw(&with_depth(&fullscreen(0.5), less)).unwrap().shaded.unwrap();
     assert_eq!(s, stats(1, 0, 131_584, 33_024));
     assert_eq!(s.helper_lanes(), 512);
 }
@@ -731,25 +483,15 @@ fn an_occluder_edge_inside_a_quad_makes_helper_lanes() {
 fn pixels_failing_depth_in_a_shaded_quad_are_helpers() {
     // A checkerboard of depth 0 and 1: half of every quad passes.
     let (w, h) = (512, 512);
-    let initial = (0..w * h)
-        .map(|i| if (i % w + i / w) % 2 == 0 { 0.0 } else { 1.0 })
-        .collect();
+    let initial = (0..w * h).map(|i| if (i % w + i / w) % 2 == 0 { 0.0 } else { 1.0 }).collect();
     let mut pass = Pass::new(w, h).unwrap().with_depth(initial).unwrap();
-    let s = pass
-        .draw(&with_depth(
-            &fullscreen(0.5),
-            DepthState::new(Compare::Less, false),
-        ))
-        .unwrap();
+    let s = pass.draw(&with_depth(&fullscreen(0.5), DepthState::new(Compare::Less, false))).unwrap();
     assert_eq!(s.rasterized, stats(1, 0, 262_144, 65_536));
     assert_eq!(s.shaded, Some(stats(1, 0, 131_072, 65_536)));
     assert_eq!(s.shaded.unwrap().helper_lanes(), 131_072);
     assert_eq!(s.shaded.unwrap().quad_efficiency(), Some(0.5));
     for (i, &helper) in pass.maps().helper_lanes().iter().enumerate() {
-        assert_eq!(
-            helper,
-            u32::from((i as u32 % w + i as u32 / w).is_multiple_of(2))
-        );
+        assert_eq!(helper, u32::from((i as u32 % w + i as u32 / w).is_multiple_of(2)));
     }
 }
 
@@ -760,14 +502,9 @@ fn equal_depth_tests_pass_within_the_tolerance() {
     let none = Some(stats(1, 0, 0, 0));
 
     // A sloped triangle after a prepass of itself.
-    let sloped = [
-        [-1.0, -1.0, 0.2, 1.0],
-        [3.0, -1.0, 0.6, 1.0],
-        [-1.0, 3.0, 0.9, 1.0],
-    ];
+    let sloped = [[-1.0, -1.0, 0.2, 1.0], [3.0, -1.0, 0.6, 1.0], [-1.0, 3.0, 0.9, 1.0]];
     let mut pass = depth_pass(512, 512, 1.0);
-    pass.draw(&with_depth(&sloped, DepthState::new(Compare::Less, true)))
-        .unwrap();
+    pass.draw(&with_depth(&sloped, DepthState::new(Compare::Less, true))).unwrap();
     assert_eq!(pass.draw(&with_depth(&sloped, equal)).unwrap().shaded, full);
 
     // The same after a prepass the way a GPU might compute it: barycentric
@@ -788,10 +525,7 @@ fn equal_depth_tests_pass_within_the_tolerance() {
     let within = 0.5 + 1.0 / (1 << 21) as f32;
     let beyond = 0.5 + 1.0 / (1 << 19) as f32;
     let shaded = |stored: f32, compare: Compare| {
-        depth_pass(512, 512, stored)
-            .draw(&with_depth(&flat, DepthState::new(compare, false)))
-            .unwrap()
-            .shaded
+        depth_pass(512, 512, stored).draw(&with_depth(&flat, DepthState::new(compare, false))).unwrap().shaded
     };
     assert_eq!(shaded(within, Compare::Equal), full);
     assert_eq!(shaded(beyond, Compare::Equal), none);
@@ -810,54 +544,21 @@ fn depth_bias_moves_fragments() {
     let full = Some(stats(1, 0, 262_144, 65_536));
     let none = Some(stats(1, 0, 0, 0));
     let shaded = |positions: &[[f32; 4]], stored: f32, bias: DepthBias| {
-        let state = DepthState {
-            bias,
-            ..DepthState::new(Compare::Less, false)
-        };
-        depth_pass(512, 512, stored)
-            .draw(&with_depth(positions, state))
-            .unwrap()
-            .shaded
+        let state = DepthState { bias, ..DepthState::new(Compare::Less, false) };
+        depth_pass(512, 512, stored).draw(&with_depth(positions, state)).unwrap().shaded
     };
     // Constant: units of 2^(e - 23) with e = -1 at depth 0.5, so 2^20 units
     // are 2^-4 = 0.0625: 0.5625 is not less than 0.55.
-    let constant = DepthBias {
-        constant: 1 << 20,
-        ..DepthBias::default()
-    };
+    let constant = DepthBias { constant: 1 << 20, ..DepthBias::default() };
     assert_eq!(shaded(&flat, 0.55, DepthBias::default()), full);
     assert_eq!(shaded(&flat, 0.55, constant), none);
     // Clamped to 0.01: 0.51 is.
-    assert_eq!(
-        shaded(
-            &flat,
-            0.55,
-            DepthBias {
-                clamp: 0.01,
-                ..constant
-            }
-        ),
-        full
-    );
+    assert_eq!(shaded(&flat, 0.55, DepthBias { clamp: 0.01, ..constant }), full);
     // Slope: z rises 0.125 per NDC unit in x, 256 pixels, so 2^-11 per
     // pixel; slope_scale 1024 adds 0.5, lifting 0.25..0.5 above 0.7.
-    let sloped = [
-        [-1.0, -1.0, 0.25, 1.0],
-        [3.0, -1.0, 0.75, 1.0],
-        [-1.0, 3.0, 0.25, 1.0],
-    ];
+    let sloped = [[-1.0, -1.0, 0.25, 1.0], [3.0, -1.0, 0.75, 1.0], [-1.0, 3.0, 0.25, 1.0]];
     assert_eq!(shaded(&sloped, 0.7, DepthBias::default()), full);
-    assert_eq!(
-        shaded(
-            &sloped,
-            0.7,
-            DepthBias {
-                slope_scale: 1024.0,
-                ..DepthBias::default()
-            }
-        ),
-        none
-    );
+    assert_eq!(shaded(&sloped, 0.7, DepthBias { slope_scale: 1024.0, ..DepthBias::default() }), none);
 }
 
 // ---- sums, serialization, refusals -------------------------------------
@@ -866,39 +567,17 @@ fn depth_bias_moves_fragments() {
 fn a_pass_sums_its_draws_and_maps() {
     let mut pass = depth_pass(64, 64, 1.0);
     let a = pass.draw(&draw(&two_triangles(0.5))).unwrap();
-    let b = pass
-        .draw(&with_depth(
-            &fullscreen(0.25),
-            DepthState::new(Compare::Less, true),
-        ))
-        .unwrap();
-    let c = pass
-        .draw(&with_depth(
-            &fullscreen(0.75),
-            DepthState::new(Compare::Less, true),
-        ))
-        .unwrap();
+    let b = pass.draw(&with_depth(&fullscreen(0.25), DepthState::new(Compare::Less, true))).unwrap();
+    let c = pass.draw(&with_depth(&fullscreen(0.75), DepthState::new(Compare::Less, true))).unwrap();
     let totals = pass.totals();
     assert_eq!(totals, [a, b, c].into_iter().sum());
     // A draw without a depth test adds its rasterized figure to the shaded sum.
     let shaded = totals.shaded.unwrap();
     assert_eq!(shaded, a.rasterized + b.shaded.unwrap() + c.shaded.unwrap());
-    assert_eq!(
-        (shaded.quads, shaded.pixels),
-        (1_024 + 32 + 1_024, 4_096 + 4_096)
-    );
+    assert_eq!((shaded.quads, shaded.pixels), (1_024 + 32 + 1_024, 4_096 + 4_096));
     let maps = pass.maps();
-    assert_eq!(
-        maps.quads().iter().map(|&q| u64::from(q)).sum::<u64>(),
-        shaded.quads
-    );
-    assert_eq!(
-        maps.helper_lanes()
-            .iter()
-            .map(|&h| u64::from(h))
-            .sum::<u64>(),
-        shaded.helper_lanes()
-    );
+    assert_eq!(maps.quads().iter().map(|&q| u64::from(q)).sum::<u64>(), shaded.quads);
+    assert_eq!(maps.helper_lanes().iter().map(|&h| u64::from(h)).sum::<u64>(), shaded.helper_lanes());
 }
 
 #[test]
@@ -909,30 +588,14 @@ fn a_reset_pass_starts_over_with_the_depth_it_is_given() {
     let half = vec![0.5; 64 * 64];
     pass.reset(Some(&half)).unwrap();
     assert_eq!(pass.totals(), DrawStats::default());
-    assert!(
-        pass.maps()
-            .quads()
-            .iter()
-            .chain(pass.maps().helper_lanes())
-            .all(|&n| n == 0)
-    );
+    assert!(pass.maps().quads().iter().chain(pass.maps().helper_lanes()).all(|&n| n == 0));
     assert_eq!(pass.depth(), Some(&half[..]));
     // 0.75 is behind what it was given, not behind 1.0 or 0.25.
     let s = pass.draw(&with_depth(&fullscreen(0.75), less)).unwrap();
     assert_eq!(s.shaded, Some(stats(1, 0, 0, 0)));
-    assert_eq!(
-        pass.reset(Some(&half[1..])).unwrap_err(),
-        QuadError::DepthSize {
-            got: 4_095,
-            width: 64,
-            height: 64
-        }
-    );
+    assert_eq!(pass.reset(Some(&half[1..])).unwrap_err(), QuadError::DepthSize { got: 4_095, width: 64, height: 64 });
     pass.reset(None).unwrap();
-    assert_eq!(
-        pass.draw(&with_depth(&fullscreen(0.75), less)).unwrap_err(),
-        QuadError::NoDepthBuffer
-    );
+    assert_eq!(pass.draw(&with_depth(&fullscreen(0.75), less)).unwrap_err(), QuadError::NoDepthBuffer);
 }
 
 #[test]
@@ -947,41 +610,19 @@ fn any_number_of_threads_draws_the_same_pass() {
             let centre = [rng.next() * 100.0 - 2.0, rng.next() * 220.0 - 4.0];
             let size = 0.5 + rng.next() * 30.0;
             let z = rng.next() as f32;
-            let mut corner = || {
-                [
-                    centre[0] + (rng.next() - 0.5) * size,
-                    centre[1] + (rng.next() - 0.5) * size,
-                ]
-            };
+            let mut corner = || [centre[0] + (rng.next() - 0.5) * size, centre[1] + (rng.next() - 0.5) * size];
             [corner(), corner(), corner()].map(|p| at(width, height, p, z))
         })
-        .chain([
-            [-1.0, -1.0, 0.5, 1.0],
-            [3.0, -1.0, 0.5, 1.0],
-            [-1.0, 3.0, -1.5, 1.0],
-        ])
+        .chain([[-1.0, -1.0, 0.5, 1.0], [3.0, -1.0, 0.5, 1.0], [-1.0, 3.0, -1.5, 1.0]])
         .collect();
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| {
             let mut pass = depth_pass(width, height, 1.0);
             let less = DepthState::new(Compare::LessEqual, true);
             let first = pass.draw(&with_depth(&tris, less)).unwrap();
-            let second = pass
-                .draw(&Draw {
-                    cull: Some(Face::Back),
-                    ..with_depth(&tris, less)
-                })
-                .unwrap();
-            (
-                first,
-                second,
-                pass.maps().clone(),
-                pass.depth().unwrap().to_vec(),
-            )
+            let second = pass.draw(&Draw { cull: Some(Face::Back), ..with_depth(&tris, less) }).unwrap();
+            (first, second, pass.maps().clone(), pass.depth().unwrap().to_vec())
         })
     };
     let (one, five) = (run(1), run(5));
@@ -1002,106 +643,38 @@ fn stats_serialize_with_the_report_keys() {
             "helper_lanes": 2, "quad_efficiency": 0.75
         })
     );
-    assert_eq!(
-        serde_json::to_value(stats(1, 1, 0, 0)).unwrap()["quad_efficiency"],
-        serde_json::Value::Null
-    );
+    assert_eq!(serde_json::to_value(stats(1, 1, 0, 0)).unwrap()["quad_efficiency"], serde_json::Value::Null);
 }
 
 #[test]
 fn bad_input_is_refused_with_a_reason() {
-    assert_eq!(
-        Pass::new(0, 4).unwrap_err(),
-        QuadError::TargetSize {
-            width: 0,
-            height: 4
-        }
-    );
+    assert_eq!(Pass::new(0, 4).unwrap_err(), QuadError::TargetSize { width: 0, height: 4 });
     assert!(Pass::new(MAX_TARGET_SIZE + 1, 4).is_err());
-    assert_eq!(
-        Pass::new(4, 4)
-            .unwrap()
-            .with_depth(vec![1.0; 15])
-            .unwrap_err(),
-        QuadError::DepthSize {
-            got: 15,
-            width: 4,
-            height: 4
-        }
-    );
+    assert_eq!(Pass::new(4, 4).unwrap().with_depth(vec![1.0; 15]).unwrap_err(), QuadError::DepthSize { got: 15, width: 4, height: 4 });
     let mut bad = vec![1.0; 16];
     bad[6] = f32::NAN;
-    assert!(matches!(
-        Pass::new(4, 4).unwrap().with_depth(bad),
-        Err(QuadError::DepthValue { x: 2, y: 1, .. })
-    ));
+    assert!(matches!(Pass::new(4, 4).unwrap().with_depth(bad), Err(QuadError::DepthValue { x: 2, y: 1, .. })));
 
     let positions = fullscreen(0.5);
     let mut pass = Pass::new(4, 4).unwrap();
     let indices = [0, 1, 3];
-    let err = pass
-        .draw(&Draw {
-            indices: Some(&indices),
-            ..draw(&positions)
-        })
-        .unwrap_err();
-    assert_eq!(
-        err,
-        QuadError::Index {
-            at: 2,
-            value: 3,
-            vertices: 3
-        }
-    );
+    let err = pass.draw(&Draw { indices: Some(&indices), ..draw(&positions) }).unwrap_err();
+    assert_eq!(err, QuadError::Index { at: 2, value: 3, vertices: 3 });
     let test = DepthState::new(Compare::Less, true);
-    assert_eq!(
-        pass.draw(&with_depth(&positions, test)).unwrap_err(),
-        QuadError::NoDepthBuffer
-    );
-    let viewport = Viewport {
-        x: 1.0,
-        ..Viewport::whole(4, 4)
-    };
-    assert!(matches!(
-        pass.draw(&Draw {
-            viewport: Some(viewport),
-            ..draw(&positions)
-        }),
-        Err(QuadError::Viewport(..))
-    ));
-    let scissor = Scissor {
-        x: 2,
-        y: 0,
-        width: 3,
-        height: 1,
-    };
-    assert!(matches!(
-        pass.draw(&Draw {
-            scissor: Some(scissor),
-            ..draw(&positions)
-        }),
-        Err(QuadError::Scissor(..))
-    ));
-    let nan_tolerance = DepthState {
-        tolerance: f32::NAN,
-        ..test
-    };
+    assert_eq!(pass.draw(&with_depth(&positions, test)).unwrap_err(), QuadError::NoDepthBuffer);
+    let viewport = Viewport { x: 1.0, ..Viewport::whole(4, 4) };
+    assert!(matches!(pass.draw(&Draw { viewport: Some(viewport), ..draw(&positions) }), Err(QuadError::Viewport(..))));
+    let scissor = Scissor { x: 2, y: 0, width: 3, height: 1 };
+    assert!(matches!(pass.draw(&Draw { scissor: Some(scissor), ..draw(&positions) }), Err(QuadError::Scissor(..))));
+    let nan_tolerance = DepthState { tolerance: f32::NAN, ..test };
     let mut depth = depth_pass(4, 4, 1.0);
-    assert!(matches!(
-        depth.draw(&with_depth(&positions, nan_tolerance)),
-        Err(QuadError::DepthState(_))
-    ));
+    assert!(matches!(depth.draw(&with_depth(&positions, nan_tolerance)), Err(QuadError::DepthState(_))));
     // Refused draws leave the pass as it was.
     assert_eq!(pass.totals(), DrawStats::default());
 
     // Indexed draws read their triangles through the indices; a last
     // incomplete triangle is ignored.
     let indices = [2, 1, 0, 0];
-    let s = pass
-        .draw(&Draw {
-            indices: Some(&indices),
-            ..draw(&positions)
-        })
-        .unwrap();
+    let s = pass.draw(&Draw { indices: Some(&indices), ..draw(&positions) }).unwrap();
     assert_eq!(s.rasterized, stats(1, 0, 16, 4));
 }

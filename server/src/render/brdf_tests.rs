@@ -99,7 +99,12 @@ fn hemisphere(n_theta: usize, n_phi: usize) -> Vec<([f32; 3], f64)> {
 
 fn query(theta: f64, roughness: f32, metallic: f32, base: [f32; 3], l: [f32; 3], u: [f32; 3]) -> Query {
     let v = view(theta);
-    Query { v: [v[0], v[1], v[2], roughness], l: [l[0], l[1], l[2], metallic], base: [base[0], base[1], base[2], 1.0], u: [u[0], u[1], u[2], 0.0] }
+    Query {
+        v: [v[0], v[1], v[2], roughness],
+        l: [l[0], l[1], l[2], metallic],
+        base: [base[0], base[1], base[2], 1.0],
+        u: [u[0], u[1], u[2], 0.0],
+    }
 }
 
 /// A small PCG: the same uniform numbers every run.
@@ -136,7 +141,10 @@ fn the_brdf_pdf_is_a_density_and_sampling_estimates_the_albedo_it_integrates() {
         let queries: Vec<Query> = u.iter().map(|u| query(theta, roughness, metallic, base, [0.0; 3], *u)).collect();
         let out: Vec<Out> = sample.run(&gpu, &queries, queries.len(), &[]).unwrap();
         let valid = out.iter().filter(|o| o.a[3] > 0.0).count() as f64 / out.len() as f64;
-        assert!(integral <= 1.0 + 0.005 && (integral - valid).abs() < 0.01, "{case}: the pdf integrates to {integral}; {valid} of the samples are valid");
+        assert!(
+            integral <= 1.0 + 0.005 && (integral - valid).abs() < 0.01,
+            "{case}: the pdf integrates to {integral}; {valid} of the samples are valid"
+        );
         // Where the samples land: the pdf's bins, within a total variation
         // distance that 2^18 samples over 128 bins comfortably meet (their
         // noise is about 0.01).

@@ -89,7 +89,9 @@ enum Kind {
     /// shader sampling the texture sees it (alpha stays linear).
     Srgb8,
     /// 8-bit BGRA, swizzled to RGBA; `srgb` decodes as `Srgb8` does.
-    Bgra8 { srgb: bool },
+    Bgra8 {
+        srgb: bool,
+    },
 }
 
 impl Layout {
@@ -175,16 +177,7 @@ fn srgb8_to_linear() -> &'static [f32; 256] {
 impl CapturedImage {
     pub fn new(pass: &str, output: &str, frame: u64, width: u32, height: u32, format: wgpu::TextureFormat, data: Vec<f32>) -> Self {
         let stats = ImageStats::of(&data, width);
-        CapturedImage {
-            pass: pass.to_owned(),
-            output: output.to_owned(),
-            frame,
-            width,
-            height,
-            format: format!("{format:?}"),
-            data,
-            stats,
-        }
+        CapturedImage { pass: pass.to_owned(), output: output.to_owned(), frame, width, height, format: format!("{format:?}"), data, stats }
     }
 
     /// `pass/output`, the key captures are listed and fetched by.
@@ -288,7 +281,11 @@ impl TensorStats {
         for (i, &v) in data.iter().enumerate() {
             let c = i % channels;
             if !v.is_finite() {
-                if v.is_nan() { s.nan += 1 } else { s.inf += 1 }
+                if v.is_nan() {
+                    s.nan += 1
+                } else {
+                    s.inf += 1
+                }
                 s.first_nan.get_or_insert(i as u64);
                 continue;
             }
@@ -351,10 +348,22 @@ mod tests {
     #[test]
     fn stats_count_nan_inf_negative_and_find_the_first_bad_pixel() {
         let data = vec![
-            0.5, 0.0, -1.0, 1.0, // (0,0): one negative
-            f32::NAN, 0.0, 0.0, 1.0, // (1,0): NaN
-            f32::INFINITY, 2.0, 0.0, 1.0, // (0,1): Inf
-            0.25, 0.0, 0.0, 1.0,
+            0.5,
+            0.0,
+            -1.0,
+            1.0, // (0,0): one negative
+            f32::NAN,
+            0.0,
+            0.0,
+            1.0, // (1,0): NaN
+            f32::INFINITY,
+            2.0,
+            0.0,
+            1.0, // (0,1): Inf
+            0.25,
+            0.0,
+            0.0,
+            1.0,
         ];
         let s = ImageStats::of(&data, 2);
         assert_eq!((s.nan, s.inf, s.negative), (1, 1, 1));
@@ -410,10 +419,7 @@ mod tests {
     #[test]
     fn half_floats_convert_exactly() {
         let l = Layout::of(wgpu::TextureFormat::Rgba16Float).unwrap();
-        let bytes: Vec<u8> = [1.5f32, -2.0, 65504.0, 0.0]
-            .iter()
-            .flat_map(|v| half::f16::from_f32(*v).to_le_bytes())
-            .collect();
+        let bytes: Vec<u8> = [1.5f32, -2.0, 65504.0, 0.0].iter().flat_map(|v| half::f16::from_f32(*v).to_le_bytes()).collect();
         let mut out = Vec::new();
         l.extend_rgba_f32(&bytes, &mut out);
         assert_eq!(out, [1.5, -2.0, 65504.0, 0.0]);
@@ -437,7 +443,8 @@ mod tests {
 
     #[test]
     fn encodings_round_trip() {
-        let img = CapturedImage::new("p", "o", 1, 2, 1, wgpu::TextureFormat::Rgba16Float, vec![0.5, 1.0, 2.0, 1.0, f32::NAN, 0.0, 0.0, 1.0]);
+        let img =
+            CapturedImage::new("p", "o", 1, 2, 1, wgpu::TextureFormat::Rgba16Float, vec![0.5, 1.0, 2.0, 1.0, f32::NAN, 0.0, 0.0, 1.0]);
         let png = image::load_from_memory(&img.to_png()).unwrap().to_rgba8();
         assert_eq!(png.get_pixel(1, 0).0, [255, 0, 255, 255], "NaN shows magenta");
         let raw = img.raw_f32();

@@ -8,9 +8,9 @@ use std::sync::Arc;
 
 use wgpu::util::DeviceExt;
 
-use super::resource::{Handle, Physical, PipelineKey};
 use super::quads::{PendingDepth, PendingDraw, PendingTarget, QuadRecorder, depth_state};
 use super::readback::copy_texture;
+use super::resource::{Handle, Physical, PipelineKey};
 use super::scene_gpu::SceneGpu;
 use super::vertex_capture::{self, Vertices};
 use crate::gpu::pipeline::{self, Pipeline};
@@ -126,7 +126,12 @@ impl<'a> PassContext<'a> {
     /// `bindings` (extra names are ignored: a permutation may leave a
     /// group out). `None`, with the pass marked skipped, when the pipeline
     /// never built or a binding is missing.
-    fn bind_groups(&mut self, key: &PipelineKey, layout_of: impl Fn(u32) -> wgpu::BindGroupLayout, bindings: &Bindings<'_>) -> Option<Vec<(u32, wgpu::BindGroup)>> {
+    fn bind_groups(
+        &mut self,
+        key: &PipelineKey,
+        layout_of: impl Fn(u32) -> wgpu::BindGroupLayout,
+        bindings: &Bindings<'_>,
+    ) -> Option<Vec<(u32, wgpu::BindGroup)>> {
         let mut groups = Vec::new();
         for (i, group) in key.spec.layout(&key.defs).into_iter().enumerate() {
             let Some(group) = group else { continue };
@@ -140,7 +145,10 @@ impl<'a> PassContext<'a> {
                 entries.push(wgpu::BindGroupEntry { binding: b.entry.binding, resource: resource.clone() });
             }
             let layout = layout_of(i as u32);
-            groups.push((i as u32, self.device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(self.pass), layout: &layout, entries: &entries })));
+            groups.push((
+                i as u32,
+                self.device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(self.pass), layout: &layout, entries: &entries }),
+            ));
         }
         Some(groups)
     }
@@ -245,7 +253,13 @@ impl<'a> PassContext<'a> {
 
     /// Records the positions of `draws` (named) for quad statistics; `None`
     /// with a warning when the vertex stage cannot be captured.
-    fn capture_positions(&mut self, key: &PipelineKey, bindings: &Bindings<'_>, draws: &[(String, vertex_capture::Draw<'_>)], depth: Option<crate::quads::DepthState>) -> Option<Vec<PendingDraw>> {
+    fn capture_positions(
+        &mut self,
+        key: &PipelineKey,
+        bindings: &Bindings<'_>,
+        draws: &[(String, vertex_capture::Draw<'_>)],
+        depth: Option<crate::quads::DepthState>,
+    ) -> Option<Vec<PendingDraw>> {
         let rec = self.quads.as_ref()?;
         let Some(capture) = rec.captures.get(key) else {
             log::warn!("quad statistics of `{}`: no vertex capture for pipeline {}", self.pass, key.label());
@@ -267,7 +281,13 @@ impl<'a> PassContext<'a> {
 
     /// Adds one render pass's recorded draws (`None`: not capturable, so the
     /// pass is left out rather than counted short).
-    fn record_target(&mut self, size: wgpu::Extent3d, depth: Option<PendingDepth>, draws: Option<Vec<PendingDraw>>, fullscreen: Option<bool>) {
+    fn record_target(
+        &mut self,
+        size: wgpu::Extent3d,
+        depth: Option<PendingDepth>,
+        draws: Option<Vec<PendingDraw>>,
+        fullscreen: Option<bool>,
+    ) {
         let pass = self.pass.to_owned();
         let Some(rec) = self.quads.as_mut() else { return };
         match draws {
@@ -334,7 +354,9 @@ impl<'a> PassContext<'a> {
                     let vertices = Vertices::Indexed { indices: &m.indices, first: 0, base_vertex: 0 };
                     // Layers of one texture are one pass's targets: say which.
                     let name = match depth_target {
-                        Some(d) if self.texture(d.texture).size().depth_or_array_layers > 1 => format!("layer {}: {}", d.layer, scene.names[object]),
+                        Some(d) if self.texture(d.texture).size().depth_or_array_layers > 1 => {
+                            format!("layer {}: {}", d.layer, scene.names[object])
+                        }
                         _ => scene.names[object].clone(),
                     };
                     (name, vertex_capture::Draw { buffer: Some(&m.vertices), vertices, count: m.index_count, instance: object as u32 })

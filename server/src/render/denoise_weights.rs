@@ -113,7 +113,11 @@ impl DenoiseWeights {
                 };
                 let (w, bias) = pack_conv(&c.weight, &c.bias, a, b, c.out_channels);
                 let storage = |label: String, data: &[f32]| {
-                    device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(&label), contents: bytemuck::cast_slice(data), usage: wgpu::BufferUsages::STORAGE })
+                    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some(&label),
+                        contents: bytemuck::cast_slice(data),
+                        usage: wgpu::BufferUsages::STORAGE,
+                    })
                 };
                 Some(ConvWeights { weights: storage(format!("{} weights", c.name), &w), bias: storage(format!("{} bias", c.name), &bias) })
             })

@@ -12,9 +12,9 @@ use super::graph::{Graph, PassKind, Resource};
 use super::pool::ResourcePool;
 use super::quads::{PendingTarget, QuadRecorder};
 use super::readback::{Readback, Rows, copy_texture};
-use super::vertex_capture::VertexCapture;
 use super::resource::{Physical, PipelineKey, ResourceDesc, TensorLayout, TextureDesc};
 use super::scene_gpu::SceneGpu;
+use super::vertex_capture::VertexCapture;
 use crate::gpu::pipeline::Pipeline;
 
 /// Everything one frame's recording needs from its owner.
@@ -127,18 +127,39 @@ fn first_bad(name: &str, images: &[CapturedImage], tensors: &[CapturedTensor]) -
     if let Some(c) = images.iter().find(|c| c.key() == name) {
         return Some(c.stats.has_non_finite().then(|| {
             let pixel = c.stats.first_nan.expect("non-finite values have a first pixel");
-            NanOrigin { pass: c.pass.clone(), output: c.output.clone(), pixel, value: c.pixel(pixel[0], pixel[1]), nan: c.stats.nan, inf: c.stats.inf, inputs_checked: true }
+            NanOrigin {
+                pass: c.pass.clone(),
+                output: c.output.clone(),
+                pixel,
+                value: c.pixel(pixel[0], pixel[1]),
+                nan: c.stats.nan,
+                inf: c.stats.inf,
+                inputs_checked: true,
+            }
         }));
     }
     let t = tensors.iter().find(|t| t.key() == name)?;
     Some(t.stats.has_non_finite().then(|| {
         let i = t.stats.first_nan.expect("non-finite values have a first index");
         let v = t.data[i as usize];
-        NanOrigin { pass: t.pass.clone(), output: t.output.clone(), pixel: [i as u32, 0], value: [v, 0.0, 0.0, 0.0], nan: t.stats.nan, inf: t.stats.inf, inputs_checked: true }
+        NanOrigin {
+            pass: t.pass.clone(),
+            output: t.output.clone(),
+            pixel: [i as u32, 0],
+            value: [v, 0.0, 0.0, 0.0],
+            nan: t.stats.nan,
+            inf: t.stats.inf,
+            inputs_checked: true,
+        }
     }))
 }
 
-fn nan_origin(passes: &[String], io: &[(Vec<String>, Vec<String>)], images: &[CapturedImage], tensors: &[CapturedTensor]) -> Option<NanOrigin> {
+fn nan_origin(
+    passes: &[String],
+    io: &[(Vec<String>, Vec<String>)],
+    images: &[CapturedImage],
+    tensors: &[CapturedTensor],
+) -> Option<NanOrigin> {
     for (_, (reads, writes)) in passes.iter().zip(io) {
         let inputs: Vec<Option<Option<NanOrigin>>> = reads.iter().map(|r| first_bad(r, images, tensors)).collect();
         if inputs.iter().flatten().any(Option::is_some) {
@@ -162,7 +183,11 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
 
     let gpu_timing = f.features.contains(wgpu::Features::TIMESTAMP_QUERY) && !graph.passes.is_empty();
     let query_set = gpu_timing.then(|| {
-        f.device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("pass timings"), ty: wgpu::QueryType::Timestamp, count: graph.passes.len() as u32 * 2 })
+        f.device.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some("pass timings"),
+            ty: wgpu::QueryType::Timestamp,
+            count: graph.passes.len() as u32 * 2,
+        })
     });
 
     let statistics_set = (f.statistics && f.features.contains(wgpu::Features::PIPELINE_STATISTICS_QUERY)).then(|| {
@@ -228,18 +253,16 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
             }
         }
         if let Some(times) = serial.as_mut() {
-            let done = std::mem::replace(&mut encoder, f.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") }));
+            let done =
+                std::mem::replace(&mut encoder, f.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") }));
             f.queue.submit([done.finish()]);
             let _ = f.device.poll(wgpu::PollType::wait_indefinitely());
             times.push((pass.name.clone(), started.elapsed().as_secs_f64() * 1e3));
         }
     }
-    let timestamps = query_set.map(|qs| {
-        (resolve(f.device, &mut encoder, &qs, graph.passes.len() as u32 * 2, "timestamps"), f.queue.get_timestamp_period())
-    });
-    let statistics = statistics_set.map(|set| {
-        (resolve(f.device, &mut encoder, &set, next_query, "fragment invocations"), queries)
-    });
+    let timestamps = query_set
+        .map(|qs| (resolve(f.device, &mut encoder, &qs, graph.passes.len() as u32 * 2, "timestamps"), f.queue.get_timestamp_period()));
+    let statistics = statistics_set.map(|set| (resolve(f.device, &mut encoder, &set, next_query, "fragment invocations"), queries));
     f.queue.submit([encoder.finish()]);
     for c in &captures {
         c.readback.map();
@@ -299,7 +322,13 @@ fn read_u64s(r: &Readback) -> Option<Vec<u64>> {
     r.read(|bytes| bytes.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes"))).collect())
 }
 
-fn copy_out(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, physical: &Physical, r: &Resource, pass: &str) -> Option<PendingCapture> {
+fn copy_out(
+    device: &wgpu::Device,
+    encoder: &mut wgpu::CommandEncoder,
+    physical: &Physical,
+    r: &Resource,
+    pass: &str,
+) -> Option<PendingCapture> {
     let (what, readback) = match (&r.desc, physical) {
         (ResourceDesc::Texture(desc), Physical::Texture { texture, .. }) => {
             let layout = Layout::of(desc.format)?;
@@ -370,12 +399,28 @@ impl PendingFrame {
         let counts = self.statistics.as_ref().and_then(|(r, queries)| Some((read_u64s(r)?, queries)));
         let fragment_invocations = counts
             .map(|(counts, queries)| {
-                self.passes.iter().zip(queries).filter(|(_, q)| !q.is_empty()).map(|(n, q)| (n.clone(), q.iter().map(|&i| counts[i as usize]).sum())).collect()
+                self.passes
+                    .iter()
+                    .zip(queries)
+                    .filter(|(_, q)| !q.is_empty())
+                    .map(|(n, q)| (n.clone(), q.iter().map(|&i| counts[i as usize]).sum()))
+                    .collect()
             })
             .unwrap_or_default();
         let recorded: Vec<_> = self.quad_targets.into_iter().filter_map(PendingTarget::read).collect();
         let quads = super::quads::replay(&recorded);
         let nan = nan_origin(&self.passes, &self.io, &captures, &tensors);
-        FrameResult { frame: self.frame, timings, total_ms, timing, captures, tensors, skipped: self.skipped, fragment_invocations, quads, nan }
+        FrameResult {
+            frame: self.frame,
+            timings,
+            total_ms,
+            timing,
+            captures,
+            tensors,
+            skipped: self.skipped,
+            fragment_invocations,
+            quads,
+            nan,
+        }
     }
 }

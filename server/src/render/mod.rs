@@ -121,7 +121,8 @@ mod tests {
         for e in std::fs::read_dir(&dir).unwrap().chain(std::fs::read_dir(dir.join("passes")).unwrap()) {
             files.push(e.unwrap().path());
         }
-        let modules: BTreeSet<String> = files.iter().filter_map(|p| Some(p.file_stem()?.to_str()?.to_owned())).filter(|m| m != "mod" && m != "tests").collect();
+        let modules: BTreeSet<String> =
+            files.iter().filter_map(|p| Some(p.file_stem()?.to_str()?.to_owned())).filter(|m| m != "mod" && m != "tests").collect();
         for path in files.iter().filter(|p| p.extension().is_some_and(|e| e == "rs")) {
             let in_passes = path.parent().is_some_and(|d| d.ends_with("passes"));
             let module = if in_passes { "passes".to_owned() } else { path.file_stem().unwrap().to_str().unwrap().to_owned() };

@@ -14,7 +14,7 @@ use std::sync::Arc;
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
-use crate::bvh::{Bvh, BuildStats};
+use crate::bvh::{BuildStats, Bvh};
 
 /// A world-space triangle and its `[object, primitive]`.
 pub type SourceTriangle = ([Vec3; 3], [u32; 2]);
@@ -37,7 +37,12 @@ impl PathGeometry {
     /// Builds over `source`, or keeps `previous`'s hierarchy when it was
     /// built from the same triangles. `shade(ids)` gives each triangle's
     /// three normals and material, in the hierarchy's order.
-    pub fn new(device: &wgpu::Device, source: Vec<SourceTriangle>, previous: Option<&PathGeometry>, shade: impl Fn(&[[u32; 2]]) -> Vec<[[f32; 4]; 3]>) -> Self {
+    pub fn new(
+        device: &wgpu::Device,
+        source: Vec<SourceTriangle>,
+        previous: Option<&PathGeometry>,
+        shade: impl Fn(&[[u32; 2]]) -> Vec<[[f32; 4]; 3]>,
+    ) -> Self {
         let hierarchy = match previous {
             Some(p) if p.hierarchy.source == source => p.hierarchy.clone(),
             _ => {

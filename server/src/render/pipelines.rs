@@ -11,7 +11,10 @@ use serde::Serialize;
 
 use super::resource::PipelineKey;
 use crate::diag::Diagnostic;
-use crate::gpu::{self, pipeline::{self, Pipeline}};
+use crate::gpu::{
+    self,
+    pipeline::{self, Pipeline},
+};
 use crate::shader::{Compose, Composed, Library};
 
 /// A composed module and the content of the sources it was composed from.
@@ -127,11 +130,13 @@ impl PipelineCache {
             sources: None,
         });
         if let Ok(c) = &result
-            && entry.current.is_some() && Some(c.sources) == entry.sources {
-                entry.files = c.composed.files.clone();
-                entry.diagnostics.clear();
-                return Installed::Unchanged;
-            }
+            && entry.current.is_some()
+            && Some(c.sources) == entry.sources
+        {
+            entry.files = c.composed.files.clone();
+            entry.diagnostics.clear();
+            return Installed::Unchanged;
+        }
         let created = result.and_then(|Compiled { composed, sources }| {
             entry.files = composed.files.clone();
             pipeline::create(device, key.spec, &key.defs, &composed, lib, shader_display).map(|p| (p, composed, sources))

@@ -35,7 +35,10 @@ pub struct PendingTarget {
 pub enum PendingDepth {
     Clear(f32),
     /// The depth layer copied out before the pass.
-    Loaded { readback: Readback, rows: Rows },
+    Loaded {
+        readback: Readback,
+        rows: Rows,
+    },
 }
 
 pub struct PendingDraw {
@@ -70,7 +73,9 @@ impl PendingTarget {
             None => None,
             Some(PendingDepth::Clear(v)) => Some(InitialDepth::Clear(v)),
             Some(PendingDepth::Loaded { readback, rows }) => {
-                let depths = readback.read(|bytes| rows.of(bytes).flat_map(|r| r.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))).collect());
+                let depths = readback.read(|bytes| {
+                    rows.of(bytes).flat_map(|r| r.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))).collect()
+                });
                 Some(InitialDepth::Loaded(depths.or_else(|| warn_none(&self.pass, "its depth"))?))
             }
         };

@@ -67,11 +67,8 @@ fn bounds(scene: &Scene, meshes: &[Arc<MeshData>], draws: &[usize]) -> (Vec3, f3
         let (a, b) = meshes[m].bounds();
         let model = model_matrix(o);
         for i in 0..8 {
-            let corner = Vec3::new(
-                if i & 1 == 0 { a[0] } else { b[0] },
-                if i & 2 == 0 { a[1] } else { b[1] },
-                if i & 4 == 0 { a[2] } else { b[2] },
-            );
+            let corner =
+                Vec3::new(if i & 1 == 0 { a[0] } else { b[0] }, if i & 2 == 0 { a[1] } else { b[1] }, if i & 4 == 0 { a[2] } else { b[2] });
             let p = model.transform_point3(corner);
             lo = lo.min(p);
             hi = hi.max(p);
@@ -179,7 +176,15 @@ fn light_bytes(scene: &Scene) -> Vec<u8> {
                 let n = Vec3::from(direction);
                 let right = up_for(n).cross(n).normalize();
                 let up = n.cross(right);
-                (3.0, position, direction, 0.0, [size[0] * 0.5, size[1] * 0.5, if two_sided { 1.0 } else { 0.0 }, 0.0], right.into(), up.into())
+                (
+                    3.0,
+                    position,
+                    direction,
+                    0.0,
+                    [size[0] * 0.5, size[1] * 0.5, if two_sided { 1.0 } else { 0.0 }, 0.0],
+                    right.into(),
+                    up.into(),
+                )
             }
         };
         push_vec4(&mut out, [c[0], c[1], c[2], kind]);
@@ -204,7 +209,9 @@ pub fn medium_bounds(m: &Medium) -> (Vec3, Vec3) {
     for s in &m.shapes {
         let (slo, shi) = match *s {
             SdfShape::Sphere { center, radius } => (Vec3::from(center) - radius, Vec3::from(center) + radius),
-            SdfShape::Box { center, half_extents } => (Vec3::from(center) - Vec3::from(half_extents), Vec3::from(center) + Vec3::from(half_extents)),
+            SdfShape::Box { center, half_extents } => {
+                (Vec3::from(center) - Vec3::from(half_extents), Vec3::from(center) + Vec3::from(half_extents))
+            }
             SdfShape::Plane { normal, offset } => {
                 let (mut plo, mut phi) = (Vec3::splat(-PLANE_EXTENT), Vec3::splat(PLANE_EXTENT));
                 // An axis-aligned half-space bounds one side exactly.
@@ -232,7 +239,9 @@ fn medium_bytes(scene: &Scene) -> Vec<u8> {
         for s in &m.shapes {
             let (a, b) = match *s {
                 SdfShape::Sphere { center, radius } => ([0.0, center[0], center[1], center[2]], [0.0, 0.0, 0.0, radius]),
-                SdfShape::Box { center, half_extents } => ([1.0, center[0], center[1], center[2]], [half_extents[0], half_extents[1], half_extents[2], 0.0]),
+                SdfShape::Box { center, half_extents } => {
+                    ([1.0, center[0], center[1], center[2]], [half_extents[0], half_extents[1], half_extents[2], 0.0])
+                }
                 SdfShape::Plane { normal, offset } => ([2.0, normal[0], normal[1], normal[2]], [0.0, 0.0, 0.0, offset]),
             };
             shapes.push(a);
@@ -376,7 +385,11 @@ impl SceneGpu {
             if bytes.is_empty() {
                 bytes.resize(16, 0);
             }
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents: &bytes, usage: wgpu::BufferUsages::STORAGE })
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
         };
         SceneGpu {
             view: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {

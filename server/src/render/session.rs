@@ -15,12 +15,12 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
+use super::FrameOptions;
 use super::frame::{self, FrameInputs, FrameResult, PendingFrame};
 use super::graph::{Graph, PassKind};
 use super::pipelines::{self, Compiled, Installed, PipelineCache, PipelineSummary, Status};
 use super::pool::ResourcePool;
 use super::resource::{Lifetime, PipelineKey, ResourceDesc, TensorLayout};
-use super::FrameOptions;
 use super::scene_gpu::SceneGpu;
 use super::vertex_capture::VertexCapture;
 use crate::denoise::network::Network;
@@ -197,7 +197,14 @@ impl Session {
     /// the new frame no longer uses are kept (switching back costs
     /// nothing), at most `KEPT_UNUSED` of them.
     pub fn set_scene(&mut self, loaded: &Loaded) {
-        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &loaded.scene, &loaded.meshes, loaded.denoiser.as_ref(), Some(&self.scene_gpu));
+        self.scene_gpu = SceneGpu::new(
+            &self.gpu.device,
+            &self.gpu.queue,
+            &loaded.scene,
+            &loaded.meshes,
+            loaded.denoiser.as_ref(),
+            Some(&self.scene_gpu),
+        );
         self.scene = loaded.scene.clone();
         self.meshes = loaded.meshes.clone();
         self.network = loaded.denoiser.clone();
@@ -352,7 +359,8 @@ impl Session {
             // naga's compactor, writer and parser run here: a bug of theirs
             // costs this pipeline its statistics, not the render thread.
             let device = &self.gpu.device;
-            let built = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| VertexCapture::new(device, &module.module, entry, layout)));
+            let built =
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| VertexCapture::new(device, &module.module, entry, layout)));
             match built {
                 Ok(Ok(c)) => {
                     self.vertex_captures.insert(key, c);

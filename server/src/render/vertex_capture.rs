@@ -71,10 +71,16 @@ impl VertexCapture {
     /// validated module the render pipeline was built from), whose vertex
     /// buffer is laid out as `layout` (`None`: it draws without one), and
     /// creates its pipeline.
-    pub fn new(device: &wgpu::Device, module: &naga::Module, entry: &str, layout: Option<&wgpu::VertexBufferLayout<'_>>) -> Result<VertexCapture, CaptureError> {
+    pub fn new(
+        device: &wgpu::Device,
+        module: &naga::Module,
+        entry: &str,
+        layout: Option<&wgpu::VertexBufferLayout<'_>>,
+    ) -> Result<VertexCapture, CaptureError> {
         let instrumented = instrument::instrument(module, entry, layout)?;
         let group = instrumented.group;
-        let mut resources: Vec<naga::ResourceBinding> = instrumented.module.global_variables.iter().filter_map(|(_, g)| g.binding).filter(|b| b.group != group).collect();
+        let mut resources: Vec<naga::ResourceBinding> =
+            instrumented.module.global_variables.iter().filter_map(|(_, g)| g.binding).filter(|b| b.group != group).collect();
         resources.sort_unstable_by_key(|b| (b.group, b.binding));
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -130,7 +136,11 @@ impl VertexCapture {
             Vertices::Indexed { indices, first, base_vertex } => {
                 readable("index", indices)?;
                 if u64::from(first) + u64::from(draw.count) > indices.size() / 4 {
-                    return Err(CaptureError::Draw(format!("indices {first}..{} run past the index buffer's {}", u64::from(first) + u64::from(draw.count), indices.size() / 4)));
+                    return Err(CaptureError::Draw(format!(
+                        "indices {first}..{} run past the index buffer's {}",
+                        u64::from(first) + u64::from(draw.count),
+                        indices.size() / 4
+                    )));
                 }
                 (indices, first, base_vertex, 1)
             }
@@ -141,7 +151,9 @@ impl VertexCapture {
             contents: bytemuck::bytes_of(&params),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let buffer = |label, usage| device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size: bytes, usage, mapped_at_creation: false });
+        let buffer = |label, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size: bytes, usage, mapped_at_creation: false })
+        };
         let positions = buffer("vertex capture: positions", wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
         let readback = buffer("vertex capture: readback", wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
 
@@ -162,7 +174,8 @@ impl VertexCapture {
         own.push(wgpu::BindGroupEntry { binding: binding::INDICES, resource: indices.as_entire_binding() });
         own.push(wgpu::BindGroupEntry { binding: binding::POSITIONS, resource: positions.as_entire_binding() });
         if self.reads_vertices {
-            let vertices = draw.buffer.ok_or_else(|| CaptureError::Draw("the vertex stage reads a vertex buffer; the draw has none".into()))?;
+            let vertices =
+                draw.buffer.ok_or_else(|| CaptureError::Draw("the vertex stage reads a vertex buffer; the draw has none".into()))?;
             readable("vertex", vertices)?;
             own.push(wgpu::BindGroupEntry { binding: binding::VERTICES, resource: vertices.as_entire_binding() });
         }
@@ -176,7 +189,8 @@ impl VertexCapture {
             })
             .collect();
         {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("vertex capture"), timestamp_writes: None });
+            let mut pass =
+                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("vertex capture"), timestamp_writes: None });
             pass.set_pipeline(&self.pipeline);
             for (i, g) in &bind_groups {
                 pass.set_bind_group(*i, g, &[]);

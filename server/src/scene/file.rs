@@ -246,10 +246,19 @@ fn edge() -> f32 {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, tag = "type", rename_all = "lowercase")]
 pub enum SdfShape {
-    Sphere { center: Vec3, radius: f32 },
-    Box { center: Vec3, half_extents: Vec3 },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+    },
+    Box {
+        center: Vec3,
+        half_extents: Vec3,
+    },
     /// The half-space below the plane `dot(p, normal) = offset`.
-    Plane { normal: Vec3, offset: f32 },
+    Plane {
+        normal: Vec3,
+        offset: f32,
+    },
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize)]

@@ -17,8 +17,8 @@ pub use file::{Camera, Environment, Material, Noise, SdfShape, Vec3};
 pub use settings::{DebugView, DenoiserKernel, Estimator, Post, Quality, Renderer, Tonemap, VolumeResolution};
 
 use crate::denoise::Precision;
-use crate::denoise::process::Mode;
 use crate::denoise::network::Network;
+use crate::denoise::process::Mode;
 use crate::diag::{Code, Diagnostic, LineIndex, Location};
 use crate::mesh::MeshData;
 
@@ -75,7 +75,10 @@ pub enum Geometry {
     Shape(String),
     /// A glTF file as written in the scene, relative to the scene file, and
     /// where it was written (for diagnostics about the mesh).
-    Mesh { file: String, at: Location },
+    Mesh {
+        file: String,
+        at: Location,
+    },
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -89,11 +92,25 @@ pub struct Light {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LightKind {
     /// `direction` points from the light into the scene, normalized.
-    Directional { direction: Vec3 },
-    Point { position: Vec3 },
-    Spot { position: Vec3, direction: Vec3, inner_deg: f32, outer_deg: f32 },
+    Directional {
+        direction: Vec3,
+    },
+    Point {
+        position: Vec3,
+    },
+    Spot {
+        position: Vec3,
+        direction: Vec3,
+        inner_deg: f32,
+        outer_deg: f32,
+    },
     /// Emits from the side its `direction` points to (both with two_sided).
-    Rect { position: Vec3, direction: Vec3, size: [f32; 2], two_sided: bool },
+    Rect {
+        position: Vec3,
+        direction: Vec3,
+        size: [f32; 2],
+        two_sided: bool,
+    },
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -190,8 +207,11 @@ pub fn load_with(path: &Path, overrides: &overrides::Overrides) -> Result<Loaded
         files.push(mesh_path.clone());
         files.extend(crate::mesh::external_buffers(&mesh_path));
         if !mesh_path.exists() {
-            return Err(Diagnostic::error(Code::Scene, format!("mesh file `{mesh_display}` does not exist"))
-                .with_label(at.clone(), "referenced here", true));
+            return Err(Diagnostic::error(Code::Scene, format!("mesh file `{mesh_display}` does not exist")).with_label(
+                at.clone(),
+                "referenced here",
+                true,
+            ));
         }
         let mesh = crate::mesh::load_gltf(&mesh_path, &mesh_display).map_err(|d| d.with_label(at.clone(), "referenced here", false))?;
         meshes.insert(name.to_owned(), Arc::new(mesh));
@@ -211,7 +231,11 @@ fn load_weights(dir: &Path, d: &Denoiser, files: &mut Vec<PathBuf>) -> Result<Ne
     let display = crate::shader::library::display_path(&path);
     files.push(path.clone());
     if !path.is_file() {
-        return Err(Diagnostic::error(Code::Scene, format!("weights file `{display}` does not exist")).with_label(d.at.clone(), "named here", true));
+        return Err(Diagnostic::error(Code::Scene, format!("weights file `{display}` does not exist")).with_label(
+            d.at.clone(),
+            "named here",
+            true,
+        ));
     }
     let archive = crate::denoise::tza::read(&path, &display).map_err(|e| e.with_label(d.at.clone(), "named here", false))?;
     Network::from_archive(&archive).map_err(|e| e.diagnostic(&display).with_label(d.at.clone(), "named here", false))

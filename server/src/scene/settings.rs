@@ -14,8 +14,16 @@ use super::overrides::Value;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Kind {
     Toggle,
-    Int { min: i64, max: i64, step: i64 },
-    Float { min: f64, max: f64, step: f64 },
+    Int {
+        min: i64,
+        max: i64,
+        step: i64,
+    },
+    Float {
+        min: f64,
+        max: f64,
+        step: f64,
+    },
     /// The option names as written in the file.
     Choice(&'static [&'static str]),
 }
@@ -54,7 +62,11 @@ impl Setting {
         match (self.kind, v) {
             (Kind::Toggle, Value::Bool(_)) => Ok(()),
             (Kind::Int { min, max, .. }, Value::Int(i)) => {
-                if (min..=max).contains(i) { Ok(()) } else { Err(format!("must be between {min} and {max}, not {i}")) }
+                if (min..=max).contains(i) {
+                    Ok(())
+                } else {
+                    Err(format!("must be between {min} and {max}, not {i}"))
+                }
             }
             (Kind::Float { min, max, .. }, Value::Int(_) | Value::Float(_)) => {
                 let f = number(v).unwrap_or(f64::NAN);
@@ -67,7 +79,11 @@ impl Setting {
                 }
             }
             (Kind::Choice(options), Value::Text(t)) => {
-                if options.contains(&t.as_str()) { Ok(()) } else { Err(format!("must be one of {}, not {t:?}", quoted(options))) }
+                if options.contains(&t.as_str()) {
+                    Ok(())
+                } else {
+                    Err(format!("must be one of {}, not {t:?}", quoted(options)))
+                }
             }
             _ => Err(self.expected(&v.to_string())),
         }
@@ -356,7 +372,8 @@ fn auto_exposure(s: &Scene) -> bool {
 }
 
 /// Every pass that makes the HDR image, raster or path traced.
-const RENDERED: [&str; 9] = ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volume_march", "volumes", "path_trace"];
+const RENDERED: [&str; 9] =
+    ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volume_march", "volumes", "path_trace"];
 
 /// Every pass drawn as a fullscreen triangle.
 const FULLSCREEN: [&str; 7] = ["test_pattern", "lighting", "volume_march", "volumes", "exposure", "tonemap", "debug_view"];

@@ -60,10 +60,14 @@ fn nan_and_negative_values_are_located_at_the_value() {
     assert_eq!(at(&e), (11, 13));
     let e = err("[[materials]]\nname = \"m\"\nroughness = 1.5\n");
     assert_eq!(at(&e), (3, 13));
-    let e = err("[[media]]\nabsorption = [0.1, -0.1, 0.1]\nscattering = [1, 1, 1]\nshapes = [{ type = \"sphere\", center = [0, 0, 0], radius = 1 }]\n");
+    let e = err(
+        "[[media]]\nabsorption = [0.1, -0.1, 0.1]\nscattering = [1, 1, 1]\nshapes = [{ type = \"sphere\", center = [0, 0, 0], radius = 1 }]\n",
+    );
     assert!(e.message.starts_with("media[0].absorption[1]"), "{}", e.message);
     assert_eq!(at(&e), (2, 20));
-    let e = err("[[media]]\nabsorption = [0, 0, 0]\nscattering = [1, 1, 1]\nshapes = [{ type = \"sphere\", center = [0, 0, 0], radius = inf }]\n");
+    let e = err(
+        "[[media]]\nabsorption = [0, 0, 0]\nscattering = [1, 1, 1]\nshapes = [{ type = \"sphere\", center = [0, 0, 0], radius = inf }]\n",
+    );
     assert!(e.message.contains("radius"), "{}", e.message);
     assert_eq!(at(&e).0, 4);
 }
@@ -107,7 +111,11 @@ fn the_denoiser_section_reads_its_weights_precision_mode_and_input_scale() {
     assert_eq!(parse("s.toml", BASE).unwrap().denoiser, None, "no section, no denoiser");
     let s = parse("s.toml", "[denoiser]\nweights = \"w/rt_hdr.tza\"\n").unwrap();
     let d = s.denoiser.expect("a denoiser");
-    assert_eq!((d.weights.as_str(), d.precision, d.mode), ("w/rt_hdr.tza", crate::denoise::Precision::F32, crate::denoise::process::Mode::Hdr), "the defaults");
+    assert_eq!(
+        (d.weights.as_str(), d.precision, d.mode),
+        ("w/rt_hdr.tza", crate::denoise::Precision::F32, crate::denoise::process::Mode::Hdr),
+        "the defaults"
+    );
     assert_eq!((d.at.line, d.at.column), (2, 11), "where the weights are named");
     let d = parse("s.toml", "[denoiser]\nweights = \"a.tza\"\nprecision = \"f16\"\nmode = \"ldr\"\n").unwrap().denoiser.unwrap();
     assert_eq!((d.precision, d.mode, d.input_scale), (crate::denoise::Precision::F16, crate::denoise::process::Mode::Ldr, None));
@@ -158,8 +166,8 @@ fn missing_and_malformed_weights_are_diagnosed_at_the_reference() {
 
 // ---- the settings table: [post] and [quality] ----------------------------
 
-use overrides::{ControlKind, Value, controls};
 use crate::testing::line_col;
+use overrides::{ControlKind, Value, controls};
 use settings::{Kind, SETTINGS};
 
 /// A scene that writes `key = value` in its setting's table, after other
@@ -169,7 +177,8 @@ fn with_setting(path: &str, value: &str) -> String {
     format!("[output]\nwidth = 64\nheight = 32\n\n# the setting under test\n[{table}]\n{key} = {value}   # a comment\n")
 }
 
-const MEDIUM: &str = "[[media]]\nabsorption = [0, 0, 0]\nscattering = [1, 1, 1]\nshapes = [{ type = \"sphere\", center = [0, 0, 0], radius = 1 }]\n";
+const MEDIUM: &str =
+    "[[media]]\nabsorption = [0, 0, 0]\nscattering = [1, 1, 1]\nshapes = [{ type = \"sphere\", center = [0, 0, 0], radius = 1 }]\n";
 
 #[test]
 fn every_setting_round_trips() {
@@ -197,7 +206,10 @@ fn defaults_are_the_documented_ones() {
     let (p, q) = (&s.post, &s.quality);
     assert_eq!((p.exposure_ev, p.tonemap, p.two_triangles, p.debug_view), (0.0, Tonemap::Aces, false, DebugView::None));
     assert_eq!((p.auto_exposure, p.auto_exposure_speed, p.auto_exposure_min_ev, p.auto_exposure_max_ev), (false, 3.0, -8.0, 8.0));
-    assert_eq!((q.shadows, q.shadow_map_size, q.volume_steps, q.volume_shadow_steps, q.volume_estimator), (true, 1024, 48, 6, Estimator::Analytic));
+    assert_eq!(
+        (q.shadows, q.shadow_map_size, q.volume_steps, q.volume_shadow_steps, q.volume_estimator),
+        (true, 1024, 48, 6, Estimator::Analytic)
+    );
     assert_eq!((q.renderer, q.path_spp, q.path_bounces), (Renderer::Raster, 256, 4));
     assert_eq!((q.shadow_filter, q.rect_lights, q.denoise), (1, crate::scene::settings::RectLights::Ltc, true));
 }
@@ -265,7 +277,10 @@ fn settings_of_the_wrong_type_are_located_at_the_value() {
 fn a_bad_choice_lists_the_options() {
     let text = with_setting("post.debug_view", "\"normals\"");
     let e = err(&text);
-    assert_eq!(e.message, "post.debug_view: must be one of \"none\", \"normal\", \"albedo\", \"roughness\", \"metallic\", \"depth\", not \"normals\"");
+    assert_eq!(
+        e.message,
+        "post.debug_view: must be one of \"none\", \"normal\", \"albedo\", \"roughness\", \"metallic\", \"depth\", not \"normals\""
+    );
     assert_eq!(at(&e), line_col(&text, "\"normals\"", 0));
     let e = err("[quality]\nvolume_estimator = \"exact\"\n");
     assert!(e.message.contains("\"constant\", \"analytic\""), "{}", e.message);
@@ -300,7 +315,9 @@ fn controls_are_the_table_entries_the_scene_shows() {
                 (ControlKind::Slider { min, max, step }, Kind::Int { min: lo, max: hi, step: st }) => {
                     assert_eq!((*min, *max, *step), (lo as f64, hi as f64, st as f64), "{}", s.path)
                 }
-                (ControlKind::Slider { min, max, step }, Kind::Float { min: lo, max: hi, step: st }) => assert_eq!((*min, *max, *step), (lo, hi, st), "{}", s.path),
+                (ControlKind::Slider { min, max, step }, Kind::Float { min: lo, max: hi, step: st }) => {
+                    assert_eq!((*min, *max, *step), (lo, hi, st), "{}", s.path)
+                }
                 (ControlKind::Choice { options }, Kind::Choice(o)) => assert_eq!(options, o, "{}", s.path),
                 (c, k) => panic!("{}: control {c:?} for {k:?}", s.path),
             }
@@ -327,7 +344,8 @@ fn every_affected_pass_is_a_pass_of_the_frame() {
 
 #[test]
 fn control_values_read_as_written() {
-    let scene = parse("s.toml", "[post]\nexposure_ev = 0.3\n\n[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1.2\n").unwrap();
+    let scene =
+        parse("s.toml", "[post]\nexposure_ev = 0.3\n\n[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1.2\n").unwrap();
     let value = |p: &str| controls(&scene).into_iter().find(|c| c.path == p).unwrap().value;
     assert_eq!((value("post.exposure_ev"), value("lights[0].intensity")), (Value::Float(0.3), Value::Float(1.2)));
 }

@@ -219,7 +219,14 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
         };
         let Some(material) = f.materials.iter().position(|m| m.name == o.material) else {
             let known: Vec<&str> = f.materials.iter().map(|m| m.name.as_str()).collect();
-            return Err(c.error(&p("material"), format!("no material named `{}` (defined: {})", o.material, if known.is_empty() { "none".into() } else { known.join(", ") })));
+            return Err(c.error(
+                &p("material"),
+                format!(
+                    "no material named `{}` (defined: {})",
+                    o.material,
+                    if known.is_empty() { "none".into() } else { known.join(", ") }
+                ),
+            ));
         };
         let scale = match o.scale {
             Scale::Uniform(s) => [s; 3],
@@ -255,7 +262,8 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
         c.non_negative3(&p("color"), l.color)?;
         c.non_negative(&p("intensity"), l.intensity)?;
         let position = |c: &Checker| -> Checked<Vec3> { c.vec3(&p("position"), c.required(&p("position"), l.position, &kind_name)?) };
-        let direction = |c: &Checker| -> Checked<Vec3> { c.direction(&p("direction"), c.required(&p("direction"), l.direction, &kind_name)?) };
+        let direction =
+            |c: &Checker| -> Checked<Vec3> { c.direction(&p("direction"), c.required(&p("direction"), l.direction, &kind_name)?) };
         if l.kind != LightType::Spot {
             not_for("inner_deg", l.inner_deg.is_some())?;
             not_for("outer_deg", l.outer_deg.is_some())?;

@@ -15,13 +15,16 @@ use super::event::{CompileResult, Event, FileBatch, FileChange, SceneCommand};
 use super::inbox::Inbox;
 use super::shared::{self, FrameImages, Shared};
 use crate::diag::{Code, Diagnostic, Location, Severity};
-use crate::gpu::{self, Gpu};
-use crate::protocol::{self, ControlsReport, NanCount, NanReport, PassInfo, PassQuadReport, PassStatus, PassTiming, QUAD_STATISTICS, QuadReport, ReloadTimings, ServerEvent, Status};
 use crate::gpu::pipeline::PipelineSpec;
-use crate::render::frame::{FrameResult, PendingFrame};
+use crate::gpu::{self, Gpu};
+use crate::protocol::{
+    self, ControlsReport, NanCount, NanReport, PassInfo, PassQuadReport, PassStatus, PassTiming, QUAD_STATISTICS, QuadReport,
+    ReloadTimings, ServerEvent, Status,
+};
 use crate::render::FrameOptions;
-use crate::render::passes::nan_watch;
+use crate::render::frame::{FrameResult, PendingFrame};
 use crate::render::passes;
+use crate::render::passes::nan_watch;
 use crate::render::pipelines::Installed;
 use crate::render::resource::PipelineKey;
 use crate::render::session::{PassState, Session};
@@ -160,7 +163,10 @@ impl Daemon {
             Ok(l) => (l, None),
             Err(d) => {
                 let empty = scene::parse("", "").expect("the empty scene is valid");
-                (scene::Loaded { scene: empty, meshes: Default::default(), denoiser: None, files: vec![config.scene_path.clone()] }, Some(d))
+                (
+                    scene::Loaded { scene: empty, meshes: Default::default(), denoiser: None, files: vec![config.scene_path.clone()] },
+                    Some(d),
+                )
             }
         };
         let workers = rayon::ThreadPoolBuilder::new()
@@ -172,7 +178,8 @@ impl Daemon {
         let timing = if gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) { "gpu" } else { "cpu" };
         config.watch_files.set(&loaded.files);
         Daemon {
-            session: Session::new(gpu, &config.shader_root, lib, &loaded).with_options(FrameOptions { nan_watch: true, ..FrameOptions::default() }),
+            session: Session::new(gpu, &config.shader_root, lib, &loaded)
+                .with_options(FrameOptions { nan_watch: true, ..FrameOptions::default() }),
             config,
             file_errors: BTreeMap::new(),
             scene_files: loaded.files,
@@ -328,17 +335,15 @@ impl Daemon {
                     self.file_errors.remove(&display);
                     lib.remove(&display);
                 }
-                FileChange::Written { content, .. } => {
-                    match SourceFile::from_bytes(path, display.clone(), content.to_vec()) {
-                        Ok(f) => {
-                            self.file_errors.remove(&display);
-                            lib.upsert(f);
-                        }
-                        Err(d) => {
-                            self.file_errors.insert(display.clone(), d);
-                        }
+                FileChange::Written { content, .. } => match SourceFile::from_bytes(path, display.clone(), content.to_vec()) {
+                    Ok(f) => {
+                        self.file_errors.remove(&display);
+                        lib.upsert(f);
                     }
-                }
+                    Err(d) => {
+                        self.file_errors.insert(display.clone(), d);
+                    }
+                },
             }
         }
         self.session.apply_sources(lib);
@@ -444,9 +449,16 @@ impl Daemon {
             let tx = self.events.clone();
             // A file that failed to load fails every pipeline built from it,
             // even while its last good content is still in the library.
-            let file_error = self.file_errors.values().find(|d| {
-                d.file().is_some_and(|f| f == display || lib.get(&display).is_some_and(|s| lib.dependencies(s).is_ok_and(|deps| deps.iter().any(|x| x.display == f))))
-            }).cloned();
+            let file_error = self
+                .file_errors
+                .values()
+                .find(|d| {
+                    d.file().is_some_and(|f| {
+                        f == display
+                            || lib.get(&display).is_some_and(|s| lib.dependencies(s).is_ok_and(|deps| deps.iter().any(|x| x.display == f)))
+                    })
+                })
+                .cloned();
             let compose = self.session.compose_job(&key);
             self.workers.spawn(move || {
                 let start = Instant::now();
@@ -653,7 +665,9 @@ impl Daemon {
         for f in &mut self.in_flight {
             if matches!(&f.results, Results::Gpu(p) if p.ready()) {
                 let (tx, rx) = mpsc::sync_channel(1);
-                let Results::Gpu(pending) = std::mem::replace(&mut f.results, Results::Converting(rx)) else { unreachable!("matched above") };
+                let Results::Gpu(pending) = std::mem::replace(&mut f.results, Results::Converting(rx)) else {
+                    unreachable!("matched above")
+                };
                 self.converter.spawn(move || {
                     let _ = tx.send(pending.finish());
                 });
@@ -748,7 +762,9 @@ impl Daemon {
             .passes()
             .into_iter()
             .map(|p| {
-                let time_ms = (p.status != PassState::Culled).then(|| self.last_timings.iter().find(|(n, _)| *n == p.name).map(|(_, t)| *t)).flatten();
+                let time_ms = (p.status != PassState::Culled)
+                    .then(|| self.last_timings.iter().find(|(n, _)| *n == p.name).map(|(_, t)| *t))
+                    .flatten();
                 PassInfo::new(p, time_ms, &self.last_timing)
             })
             .collect();
@@ -848,7 +864,9 @@ impl Daemon {
                 self.publish_state();
                 self.shared.publish(ServerEvent::DeviceLost { message: reason, recovered: problems.is_empty() });
             }
-            Err(e) => self.shared.publish(ServerEvent::DeviceLost { message: format!("{reason}; reopening failed: {e}"), recovered: false }),
+            Err(e) => {
+                self.shared.publish(ServerEvent::DeviceLost { message: format!("{reason}; reopening failed: {e}"), recovered: false })
+            }
         }
     }
 }

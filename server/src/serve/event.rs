@@ -7,8 +7,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::diag::Diagnostic;
-use crate::render::resource::PipelineKey;
 use crate::render::pipelines::Compiled;
+use crate::render::resource::PipelineKey;
 
 pub enum Event {
     /// Debounced, content-checked changes from the watcher.

@@ -77,7 +77,6 @@ pub fn run(opts: ServeOptions) -> Result<(), ServeError> {
         .map_err(|e| ServeError::Other(format!("cannot start the render thread: {e}")))?;
     ready_rx.recv().map_err(|_| ServeError::Other("the render thread died while starting".into()))??;
 
-
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()

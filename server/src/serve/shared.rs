@@ -75,13 +75,7 @@ impl FrameImages {
     /// take milliseconds: call it off the async reactor).
     pub fn encoded(&self, key: &str, encoding: Encoding) -> Option<Arc<[u8]>> {
         let image = self.captures.get(key)?;
-        let cell = self
-            .encoded
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .entry((key.to_owned(), encoding))
-            .or_default()
-            .clone();
+        let cell = self.encoded.lock().unwrap_or_else(|e| e.into_inner()).entry((key.to_owned(), encoding)).or_default().clone();
         Some(
             cell.get_or_init(|| match encoding {
                 Encoding::Png => image.to_png().into(),

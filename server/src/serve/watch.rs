@@ -125,11 +125,7 @@ pub struct NotifyWatcher {
 
 impl Default for NotifyWatcher {
     fn default() -> Self {
-        NotifyWatcher {
-            quiet: Duration::from_millis(25),
-            max_delay: Duration::from_millis(250),
-            missing_retry: Duration::from_millis(60),
-        }
+        NotifyWatcher { quiet: Duration::from_millis(25), max_delay: Duration::from_millis(250), missing_retry: Duration::from_millis(60) }
     }
 }
 
@@ -145,9 +141,7 @@ pub fn is_source_file(path: &Path) -> bool {
         return false;
     }
     match Path::new(name).extension().and_then(|e| e.to_str()) {
-        Some(ext) => ["wgsl", "toml", "gltf", "glb", "bin"]
-            .iter()
-            .any(|want| ext.eq_ignore_ascii_case(want)),
+        Some(ext) => ["wgsl", "toml", "gltf", "glb", "bin"].iter().any(|want| ext.eq_ignore_ascii_case(want)),
         None => false,
     }
 }
@@ -196,9 +190,7 @@ impl NotifyWatcher {
         // Watch first, then record the initial state: a change racing with
         // start-up is then either in the recorded hash or reported later.
         for root in roots {
-            watcher
-                .watch(root, RecursiveMode::Recursive)
-                .map_err(|err| format!("watch {}: {err}", root.display()))?;
+            watcher.watch(root, RecursiveMode::Recursive).map_err(|err| format!("watch {}: {err}", root.display()))?;
         }
         let mut known = HashMap::new();
         for root in roots {
@@ -272,9 +264,7 @@ fn progress(kind: &EventKind, index: usize) -> Option<Progress> {
         EventKind::Modify(ModifyKind::Metadata(_)) => None,
         // A finished file arrived at the path (`Both` names from, then to).
         EventKind::Modify(ModifyKind::Name(RenameMode::To)) => Some(Progress::Complete),
-        EventKind::Modify(ModifyKind::Name(RenameMode::Both)) if index > 0 => {
-            Some(Progress::Complete)
-        }
+        EventKind::Modify(ModifyKind::Name(RenameMode::Both)) if index > 0 => Some(Progress::Complete),
         _ => Some(Progress::Unsettled),
     }
 }
@@ -298,9 +288,7 @@ impl Pending {
     }
 
     fn complete(&self) -> bool {
-        !self.rescan
-            && self.dirs.is_empty()
-            && self.files.values().all(|p| *p == Progress::Complete)
+        !self.rescan && self.dirs.is_empty() && self.files.values().all(|p| *p == Progress::Complete)
     }
 }
 
@@ -349,11 +337,7 @@ impl Debouncer {
                     Some(pending) => {
                         let deadline = self.deadline(pending);
                         let now = Instant::now();
-                        let result = if now >= deadline {
-                            Err(RecvTimeoutError::Timeout)
-                        } else {
-                            raw.recv_timeout(deadline - now)
-                        };
+                        let result = if now >= deadline { Err(RecvTimeoutError::Timeout) } else { raw.recv_timeout(deadline - now) };
                         match result {
                             Ok(msg) => msg,
                             Err(RecvTimeoutError::Timeout) => {
@@ -383,14 +367,8 @@ impl Debouncer {
             // Until the writer closes the file (it is then complete).
             return latest;
         }
-        let burst = self
-            .previous_last
-            .is_some_and(|last| pending.first.saturating_duration_since(last) < self.quiet);
-        let settled = if pending.complete() && !burst {
-            pending.last
-        } else {
-            pending.last + self.quiet
-        };
+        let burst = self.previous_last.is_some_and(|last| pending.first.saturating_duration_since(last) < self.quiet);
+        let settled = if pending.complete() && !burst { pending.last } else { pending.last + self.quiet };
         settled.min(latest)
     }
 
@@ -410,14 +388,10 @@ impl Debouncer {
             }
             EventKind::Create(CreateKind::File)
             | EventKind::Remove(RemoveKind::File)
-            | EventKind::Modify(
-                ModifyKind::Data(_) | ModifyKind::Metadata(_) | ModifyKind::Any | ModifyKind::Other,
-            ) => false,
-            EventKind::Create(_)
-            | EventKind::Remove(_)
-            | EventKind::Modify(ModifyKind::Name(_))
-            | EventKind::Any
-            | EventKind::Other => true,
+            | EventKind::Modify(ModifyKind::Data(_) | ModifyKind::Metadata(_) | ModifyKind::Any | ModifyKind::Other) => false,
+            EventKind::Create(_) | EventKind::Remove(_) | EventKind::Modify(ModifyKind::Name(_)) | EventKind::Any | EventKind::Other => {
+                true
+            }
         };
 
         let mut files = Vec::new();
@@ -435,12 +409,7 @@ impl Debouncer {
             }
             if is_source_file(&path) {
                 files.push((path, progress(&event.kind, i)));
-            } else if maybe_dir
-                && path
-                    .file_name()
-                    .and_then(|n| n.to_str())
-                    .is_some_and(|n| !is_ignored_name(n))
-            {
+            } else if maybe_dir && path.file_name().and_then(|n| n.to_str()).is_some_and(|n| !is_ignored_name(n)) {
                 dirs.push(path);
             }
         }
@@ -472,7 +441,8 @@ impl Debouncer {
     /// reported against.
     fn watch_single(&mut self, files: Vec<PathBuf>) {
         let outside: BTreeSet<PathBuf> = files.iter().map(|f| absolute(f)).filter(|f| !self.under_root(f)).collect();
-        let dirs = |files: &BTreeSet<PathBuf>| -> BTreeSet<PathBuf> { files.iter().filter_map(|f| f.parent().map(Path::to_path_buf)).collect() };
+        let dirs =
+            |files: &BTreeSet<PathBuf>| -> BTreeSet<PathBuf> { files.iter().filter_map(|f| f.parent().map(Path::to_path_buf)).collect() };
         let (before, after) = (dirs(&self.single), dirs(&outside));
         for dir in before.difference(&after) {
             let _ = self.watcher.unwatch(dir);
@@ -498,27 +468,20 @@ impl Debouncer {
 
     /// Whether `file` (absolute) lies under a root, through links too.
     fn under_root(&self, file: &Path) -> bool {
-        file.parent().and_then(|dir| fs::canonicalize(dir).ok()).is_some_and(|dir| self.canonical_roots.iter().any(|root| dir.starts_with(root)))
+        file.parent()
+            .and_then(|dir| fs::canonicalize(dir).ok())
+            .is_some_and(|dir| self.canonical_roots.iter().any(|root| dir.starts_with(root)))
     }
 
     /// Whether `path` lies below a hidden directory of its root (`.git/…`).
     fn in_hidden_dir(&self, path: &Path) -> bool {
-        let Some(rel) = self
-            .roots
-            .iter()
-            .find_map(|root| path.strip_prefix(root).ok())
-        else {
+        let Some(rel) = self.roots.iter().find_map(|root| path.strip_prefix(root).ok()) else {
             return false;
         };
         let mut components = rel.components().peekable();
         while let Some(component) = components.next() {
             let is_last = components.peek().is_none();
-            if !is_last
-                && component
-                    .as_os_str()
-                    .to_str()
-                    .is_some_and(|name| name.starts_with('.') && name != "." && name != "..")
-            {
+            if !is_last && component.as_os_str().to_str().is_some_and(|name| name.starts_with('.') && name != "." && name != "..") {
                 return true;
             }
         }
@@ -578,11 +541,7 @@ impl Debouncer {
             return true;
         }
         changes.sort_by(|a, b| a.path().cmp(b.path()));
-        let batch = FileBatch {
-            changes,
-            first_event: pending.first,
-            ready: Instant::now(),
-        };
+        let batch = FileBatch { changes, first_event: pending.first, ready: Instant::now() };
         self.events.send(Event::FilesChanged(batch)).is_ok()
     }
 
@@ -605,10 +564,7 @@ impl Debouncer {
                     return Check::Unchanged;
                 }
                 self.known.insert(path.to_path_buf(), hash);
-                Check::Changed(FileChange::Written {
-                    path: path.to_path_buf(),
-                    content: Arc::from(bytes),
-                })
+                Check::Changed(FileChange::Written { path: path.to_path_buf(), content: Arc::from(bytes) })
             }
             Err(err) if is_missing(&err) => Check::Missing,
             Err(err) => {
@@ -626,10 +582,7 @@ fn absolute(path: &Path) -> PathBuf {
 }
 
 fn is_missing(err: &io::Error) -> bool {
-    matches!(
-        err.kind(),
-        io::ErrorKind::NotFound | io::ErrorKind::NotADirectory
-    )
+    matches!(err.kind(), io::ErrorKind::NotFound | io::ErrorKind::NotADirectory)
 }
 
 fn hash_file(path: &Path) -> io::Result<blake3::Hash> {
@@ -643,10 +596,7 @@ fn hash_file(path: &Path) -> io::Result<blake3::Hash> {
 /// directories) to `out`. Unreadable directories are logged and skipped.
 fn walk_sources(dir: &Path, depth: usize, out: &mut BTreeSet<PathBuf>) {
     if depth > MAX_WALK_DEPTH {
-        log::warn!(
-            "watch: {} is nested too deep; not looking further",
-            dir.display()
-        );
+        log::warn!("watch: {} is nested too deep; not looking further", dir.display());
         return;
     }
     let entries = match fs::read_dir(dir) {
@@ -670,10 +620,7 @@ fn walk_sources(dir: &Path, depth: usize, out: &mut BTreeSet<PathBuf>) {
             }
         }
         if file_type.is_dir() {
-            let hidden = entry
-                .file_name()
-                .to_str()
-                .is_none_or(|n| n.starts_with('.'));
+            let hidden = entry.file_name().to_str().is_none_or(|n| n.starts_with('.'));
             if !hidden {
                 walk_sources(&path, depth + 1, out);
             }
@@ -701,8 +648,7 @@ mod tests {
         fn new(name: &str) -> Self {
             static COUNTER: AtomicUsize = AtomicUsize::new(0);
             let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-            let dir =
-                std::env::temp_dir().join(format!("loupe-watch-{name}-{}-{n}", std::process::id()));
+            let dir = std::env::temp_dir().join(format!("loupe-watch-{name}-{}-{n}", std::process::id()));
             let _ = fs::remove_dir_all(&dir);
             fs::create_dir_all(&dir).expect("create temp dir");
             TempDir(dir)
@@ -735,16 +681,8 @@ mod tests {
 
     fn start_with(dir: &TempDir, watcher: NotifyWatcher) -> Session {
         let (tx, rx) = mpsc::channel();
-        let guard = watcher
-            .start(std::slice::from_ref(&dir.0), tx)
-            .expect("start watcher");
-        Session {
-            rx,
-            guard: Some(guard),
-            batches: 0,
-            state: BTreeMap::new(),
-            log: Vec::new(),
-        }
+        let guard = watcher.start(std::slice::from_ref(&dir.0), tx).expect("start watcher");
+        Session { rx, guard: Some(guard), batches: 0, state: BTreeMap::new(), log: Vec::new() }
     }
 
     impl Session {
@@ -771,32 +709,20 @@ mod tests {
         }
 
         /// Receives batches until `done` holds for the accumulated state.
-        fn until(
-            &mut self,
-            what: &str,
-            done: impl Fn(&BTreeMap<PathBuf, Option<Vec<u8>>>) -> bool,
-        ) {
+        fn until(&mut self, what: &str, done: impl Fn(&BTreeMap<PathBuf, Option<Vec<u8>>>) -> bool) {
             let deadline = Instant::now() + WAIT;
             while !done(&self.state) {
                 let left = deadline.saturating_duration_since(Instant::now());
                 if self.next(left).is_none() {
-                    panic!(
-                        "timed out waiting for {what}; got {:?}",
-                        self.state_summary()
-                    );
+                    panic!("timed out waiting for {what}; got {:?}", self.state_summary());
                 }
             }
         }
 
         fn until_content(&mut self, path: &Path, content: &[u8]) {
-            self.until(
-                &format!(
-                    "{} = {:?}",
-                    path.display(),
-                    String::from_utf8_lossy(content)
-                ),
-                |s| s.get(path).is_some_and(|c| c.as_deref() == Some(content)),
-            );
+            self.until(&format!("{} = {:?}", path.display(), String::from_utf8_lossy(content)), |s| {
+                s.get(path).is_some_and(|c| c.as_deref() == Some(content))
+            });
         }
 
         /// Asserts that nothing arrives for a while.
@@ -807,35 +733,17 @@ mod tests {
         }
 
         fn removed_ever(&self, path: &Path) -> bool {
-            self.log
-                .iter()
-                .any(|c| matches!(c, FileChange::Removed { path: p } if p == path))
+            self.log.iter().any(|c| matches!(c, FileChange::Removed { path: p } if p == path))
         }
 
         fn state_summary(&self) -> Vec<(String, Option<String>)> {
-            self.state
-                .iter()
-                .map(|(p, c)| {
-                    (
-                        p.display().to_string(),
-                        c.as_ref().map(|c| String::from_utf8_lossy(c).into_owned()),
-                    )
-                })
-                .collect()
+            self.state.iter().map(|(p, c)| (p.display().to_string(), c.as_ref().map(|c| String::from_utf8_lossy(c).into_owned()))).collect()
         }
     }
 
     #[test]
     fn source_file_names() {
-        for yes in [
-            "a.wgsl",
-            "dir/b.WGSL",
-            "scene.toml",
-            "m.gltf",
-            "m.glb",
-            "m.bin",
-            "x.y.wgsl",
-        ] {
+        for yes in ["a.wgsl", "dir/b.WGSL", "scene.toml", "m.gltf", "m.glb", "m.bin", "x.y.wgsl"] {
             assert!(is_source_file(Path::new(yes)), "{yes}");
         }
         for no in [
@@ -868,13 +776,7 @@ mod tests {
         fs::write(&a, "v2").unwrap();
         s.until_content(&a, b"v2");
         s.expect_silence();
-        assert!(
-            s.log
-                .iter()
-                .all(|c| matches!(c, FileChange::Written { path, .. } if path == &a)),
-            "{:?}",
-            s.log
-        );
+        assert!(s.log.iter().all(|c| matches!(c, FileChange::Written { path, .. } if path == &a)), "{:?}", s.log);
     }
 
     /// A scene outside the roots: its own files are reported, by rename save
@@ -926,16 +828,8 @@ mod tests {
         s.until_content(&x, b"v3");
 
         s.expect_silence();
-        assert!(
-            !s.removed_ever(&x),
-            "a rename save is not a removal: {:?}",
-            s.log
-        );
-        assert!(
-            s.state.keys().all(|p| p == &x),
-            "only x.wgsl: {:?}",
-            s.state_summary()
-        );
+        assert!(!s.removed_ever(&x), "a rename save is not a removal: {:?}", s.log);
+        assert!(s.state.keys().all(|p| p == &x), "only x.wgsl: {:?}", s.state_summary());
     }
 
     #[test]
@@ -1006,16 +900,10 @@ mod tests {
             s.until_content(&x, full.as_bytes());
             s.expect_silence();
             let partial = s.log.iter().find(|c| match c {
-                FileChange::Written { content, .. } => {
-                    !written.iter().any(|w| w.as_bytes() == &content[..])
-                }
+                FileChange::Written { content, .. } => !written.iter().any(|w| w.as_bytes() == &content[..]),
                 FileChange::Removed { .. } => true,
             });
-            assert!(
-                partial.is_none(),
-                "a half-written file was reported ({pause} ms pause): {:?}",
-                s.log
-            );
+            assert!(partial.is_none(), "a half-written file was reported ({pause} ms pause): {:?}", s.log);
         }
     }
 
@@ -1040,13 +928,7 @@ mod tests {
         // A long retry window so the gap below is well inside it even on a
         // loaded machine; the gap is longer than `quiet`, so the batch is
         // flushed while the file is gone.
-        let mut s = start_with(
-            &dir,
-            NotifyWatcher {
-                missing_retry: Duration::from_millis(800),
-                ..NotifyWatcher::default()
-            },
-        );
+        let mut s = start_with(&dir, NotifyWatcher { missing_retry: Duration::from_millis(800), ..NotifyWatcher::default() });
         fs::remove_file(&x).unwrap();
         std::thread::sleep(Duration::from_millis(100));
         fs::write(&x, "v2 longer").unwrap();
@@ -1054,17 +936,8 @@ mod tests {
         s.expect_silence();
         // On a loaded machine the gap can outlast the retry window; then a
         // Removed may come first, but the file must end up Written.
-        let last = s
-            .log
-            .iter()
-            .rev()
-            .find(|c| c.path() == x)
-            .expect("a change for x");
-        assert!(
-            matches!(last, FileChange::Written { content, .. } if &content[..] == b"v2 longer"),
-            "{:?}",
-            s.log
-        );
+        let last = s.log.iter().rev().find(|c| c.path() == x).expect("a change for x");
+        assert!(matches!(last, FileChange::Written { content, .. } if &content[..] == b"v2 longer"), "{:?}", s.log);
     }
 
     #[test]
@@ -1092,17 +965,13 @@ mod tests {
         fs::write(&b, "b").unwrap();
         let mut s = start(&dir);
         fs::remove_dir_all(dir.path("sub")).unwrap();
-        s.until("both removed", |st| {
-            st.get(&a) == Some(&None) && st.get(&b) == Some(&None)
-        });
+        s.until("both removed", |st| st.get(&a) == Some(&None) && st.get(&b) == Some(&None));
     }
 
     #[test]
     fn many_files_at_once() {
         let dir = TempDir::new("many");
-        let paths: Vec<PathBuf> = (0..20)
-            .map(|i| dir.path(&format!("m{i:02}.wgsl")))
-            .collect();
+        let paths: Vec<PathBuf> = (0..20).map(|i| dir.path(&format!("m{i:02}.wgsl"))).collect();
         // Half exist before (modified, like a checkout), half are new.
         for p in &paths[..10] {
             fs::write(p, "old").unwrap();
@@ -1112,10 +981,7 @@ mod tests {
             fs::write(p, format!("new {i}")).unwrap();
         }
         s.until("all 20 files", |st| {
-            paths.iter().enumerate().all(|(i, p)| {
-                st.get(p)
-                    .is_some_and(|c| c.as_deref() == Some(format!("new {i}").as_bytes()))
-            })
+            paths.iter().enumerate().all(|(i, p)| st.get(p).is_some_and(|c| c.as_deref() == Some(format!("new {i}").as_bytes())))
         });
         assert!(s.batches <= 2, "20 quick writes took {} batches", s.batches);
         s.expect_silence();
@@ -1135,10 +1001,7 @@ mod tests {
         let last = format!("save {}", saves - 1);
         s.until_content(&x, last.as_bytes());
         s.expect_silence();
-        assert_eq!(
-            s.state.get(&x).cloned().flatten().as_deref(),
-            Some(last.as_bytes())
-        );
+        assert_eq!(s.state.get(&x).cloned().flatten().as_deref(), Some(last.as_bytes()));
         assert!(s.batches < saves, "{} batches for {saves} saves", s.batches);
     }
 
@@ -1180,8 +1043,7 @@ mod tests {
         let mut s = start(&dir);
         // touch: a new mtime, same bytes.
         let file = fs::OpenOptions::new().write(true).open(&x).unwrap();
-        file.set_modified(std::time::SystemTime::now() + Duration::from_secs(10))
-            .unwrap();
+        file.set_modified(std::time::SystemTime::now() + Duration::from_secs(10)).unwrap();
         drop(file);
         // An identical save, in place and by rename.
         fs::write(&x, "same").unwrap();
@@ -1195,15 +1057,7 @@ mod tests {
     fn temp_and_swap_files_alone_are_silent() {
         let dir = TempDir::new("swap");
         let mut s = start(&dir);
-        let names = [
-            ".x.wgsl.swp",
-            ".x.wgsl.swx",
-            "x.wgsl~",
-            "4913",
-            ".#x.wgsl",
-            "x.wgsl.tmp",
-            ".hidden.wgsl",
-        ];
+        let names = [".x.wgsl.swp", ".x.wgsl.swx", "x.wgsl~", "4913", ".#x.wgsl", "x.wgsl.tmp", ".hidden.wgsl"];
         for name in names {
             fs::write(dir.path(name), "junk").unwrap();
         }
@@ -1236,9 +1090,7 @@ mod tests {
     fn missing_root_is_an_error() {
         let dir = TempDir::new("missing");
         let (tx, _rx) = mpsc::channel();
-        let err = NotifyWatcher::default()
-            .start(&[dir.path("nope")], tx)
-            .expect_err("a missing root");
+        let err = NotifyWatcher::default().start(&[dir.path("nope")], tx).expect_err("a missing root");
         assert!(err.contains("nope"), "{err}");
     }
 }

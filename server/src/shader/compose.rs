@@ -10,10 +10,7 @@ use std::ops::Range;
 use std::sync::{Arc, Mutex};
 
 use naga::valid::{Capabilities, ValidationFlags, Validator};
-use naga_oil::compose::{
-    ComposableModuleDescriptor, Composer, ComposerError, ComposerErrorInner, NagaModuleDescriptor,
-    ShaderDefValue,
-};
+use naga_oil::compose::{ComposableModuleDescriptor, Composer, ComposerError, ComposerErrorInner, NagaModuleDescriptor, ShaderDefValue};
 
 use super::library::{Library, SourceFile};
 use crate::diag::{Code, Diagnostic, LineIndex, Location};
@@ -36,13 +33,7 @@ pub struct Composed {
 }
 
 pub trait Compose: Send + Sync {
-    fn compose(
-        &self,
-        lib: &Library,
-        entry: &SourceFile,
-        defs: &ShaderDefs,
-        caps: Capabilities,
-    ) -> Result<Composed, Vec<Diagnostic>>;
+    fn compose(&self, lib: &Library, entry: &SourceFile, defs: &ShaderDefs, caps: Capabilities) -> Result<Composed, Vec<Diagnostic>>;
 }
 
 /// The naga_oil composer. Plain files (no preprocessor lines, no imports)
@@ -52,13 +43,7 @@ pub trait Compose: Send + Sync {
 pub struct NagaOil;
 
 impl Compose for NagaOil {
-    fn compose(
-        &self,
-        lib: &Library,
-        entry: &SourceFile,
-        defs: &ShaderDefs,
-        caps: Capabilities,
-    ) -> Result<Composed, Vec<Diagnostic>> {
+    fn compose(&self, lib: &Library, entry: &SourceFile, defs: &ShaderDefs, caps: Capabilities) -> Result<Composed, Vec<Diagnostic>> {
         compose_and_validate(lib, entry, caps, |deps| compose_with_naga_oil(deps, entry, defs, caps))
     }
 }
@@ -103,12 +88,7 @@ impl Warm {
 
     /// Adds the modules of `deps` it does not hold yet, then composes
     /// `entry`.
-    fn compose(
-        &mut self,
-        deps: &[Arc<SourceFile>],
-        entry: &SourceFile,
-        defs: &ShaderDefs,
-    ) -> Result<naga::Module, ComposerError> {
+    fn compose(&mut self, deps: &[Arc<SourceFile>], entry: &SourceFile, defs: &ShaderDefs) -> Result<naga::Module, ComposerError> {
         for dep in deps {
             let name = dep.import_path.as_ref().map(|(name, _)| name);
             if name.is_some_and(|name| self.modules.contains_key(name)) {
@@ -155,13 +135,7 @@ impl ComposeCache {
 }
 
 impl Compose for ComposeCache {
-    fn compose(
-        &self,
-        lib: &Library,
-        entry: &SourceFile,
-        defs: &ShaderDefs,
-        caps: Capabilities,
-    ) -> Result<Composed, Vec<Diagnostic>> {
+    fn compose(&self, lib: &Library, entry: &SourceFile, defs: &ShaderDefs, caps: Capabilities) -> Result<Composed, Vec<Diagnostic>> {
         compose_and_validate(lib, entry, caps, |deps| {
             let mut warm = self.take(caps, deps);
             match warm.compose(deps, entry, defs) {
@@ -223,12 +197,7 @@ fn compose_with_naga_oil(
 /// Checks a library module on its own: parsed and validated as a shader
 /// that imports the whole module and nothing else, so errors in functions
 /// no entry point uses yet are found too.
-pub fn check_library(
-    lib: &Library,
-    file: &Arc<SourceFile>,
-    defs: &ShaderDefs,
-    caps: Capabilities,
-) -> Result<(), Vec<Diagnostic>> {
+pub fn check_library(lib: &Library, file: &Arc<SourceFile>, defs: &ShaderDefs, caps: Capabilities) -> Result<(), Vec<Diagnostic>> {
     let Some((path, _)) = &file.import_path else { return Ok(()) };
     let mut deps = lib.dependencies(file)?;
     deps.push(file.clone());
@@ -255,11 +224,9 @@ fn from_composer(composer: &Composer, err: ComposerError, deps: &[Arc<SourceFile
     };
     let point = |p: usize| vec![(p..p, String::new())];
     let (code, labels, notes): (Code, Labels, Vec<String>) = match &err.inner {
-        ComposerErrorInner::WgslParseError(e) => (
-            Code::Parse,
-            e.labels().map(|(s, m)| (map(s.to_range().unwrap_or(0..0)), m.to_owned())).collect(),
-            Vec::new(),
-        ),
+        ComposerErrorInner::WgslParseError(e) => {
+            (Code::Parse, e.labels().map(|(s, m)| (map(s.to_range().unwrap_or(0..0)), m.to_owned())).collect(), Vec::new())
+        }
         ComposerErrorInner::ShaderValidationError(v) | ComposerErrorInner::HeaderValidationError(v) => {
             let (_, notes) = root_cause(v.as_inner());
             let labels = validation_labels(v.spans().map(|(s, m)| (map(s.to_range().unwrap_or(0..0)), m.clone())));
@@ -285,9 +252,7 @@ fn from_composer(composer: &Composer, err: ComposerError, deps: &[Arc<SourceFile
     };
     let message = match &err.inner {
         ComposerErrorInner::WgslParseError(e) => e.message().to_owned(),
-        ComposerErrorInner::ShaderValidationError(v) | ComposerErrorInner::HeaderValidationError(v) => {
-            root_cause(v.as_inner()).0
-        }
+        ComposerErrorInner::ShaderValidationError(v) | ComposerErrorInner::HeaderValidationError(v) => root_cause(v.as_inner()).0,
         other => other.to_string(),
     };
     // Prefer the original file's text for line/column: same lines as
@@ -364,12 +329,7 @@ fn located(code: Code, message: String, labels: Vec<(Range<usize>, String)>, not
     if d.location.is_none() { d.at(Location::file_start(&file.display)) } else { d }
 }
 
-fn build(
-    code: Code,
-    message: String,
-    labels: impl Iterator<Item = (Location, String)>,
-    notes: impl Iterator<Item = String>,
-) -> Diagnostic {
+fn build(code: Code, message: String, labels: impl Iterator<Item = (Location, String)>, notes: impl Iterator<Item = String>) -> Diagnostic {
     let mut d = Diagnostic::error(code, message);
     for (i, (loc, msg)) in labels.enumerate() {
         d = d.with_label(loc, msg, i == 0);
@@ -452,7 +412,11 @@ mod tests {
         match (&fresh, &warm) {
             (Ok(a), Ok(b)) => assert_eq!(wgsl(a), wgsl(b), "{entry} {defs:?}"),
             (Err(a), Err(b)) => assert_eq!(a, b, "{entry} {defs:?}"),
-            _ => panic!("the cache disagrees on {entry} {defs:?}: fresh {:?}, cached {:?}", fresh.as_ref().map(wgsl), warm.as_ref().map(wgsl)),
+            _ => panic!(
+                "the cache disagrees on {entry} {defs:?}: fresh {:?}, cached {:?}",
+                fresh.as_ref().map(wgsl),
+                warm.as_ref().map(wgsl)
+            ),
         }
         fresh
     }

@@ -67,7 +67,9 @@ pub enum InstrumentError {
     NotVertex { entry: String, stage: naga::ShaderStage },
     #[error("the module does not validate: {0}")]
     Invalid(String),
-    #[error("vertex input `{input}` of type {ty} cannot be read from a buffer (32-bit scalars and vectors, vertex_index and instance_index can)")]
+    #[error(
+        "vertex input `{input}` of type {ty} cannot be read from a buffer (32-bit scalars and vectors, vertex_index and instance_index can)"
+    )]
     UnsupportedInput { input: String, ty: String },
     #[error("vertex input @location({0}) has no attribute in the vertex layout")]
     MissingAttribute(u32),
@@ -100,7 +102,11 @@ pub struct Instrumented {
 /// passes draw); each `@location` input is read from it as the pipeline
 /// reads it, missing components filled with (0, 0, 0, 1) as WebGPU fills
 /// them.
-pub fn instrument(module: &naga::Module, entry: &str, layout: Option<&wgpu::VertexBufferLayout<'_>>) -> Result<Instrumented, InstrumentError> {
+pub fn instrument(
+    module: &naga::Module,
+    entry: &str,
+    layout: Option<&wgpu::VertexBufferLayout<'_>>,
+) -> Result<Instrumented, InstrumentError> {
     let index = vertex_entry(module, entry)?;
     validate(module).map_err(InstrumentError::Invalid)?;
     if let Some(l) = layout {
@@ -224,11 +230,15 @@ impl Kind {
 
     /// WebGPU's value for a component the format lacks: 1 for w, else 0.
     fn missing(self, component: u32) -> String {
-        format!("{}{}", u32::from(component == 3), match self {
-            Kind::F32 => ".0",
-            Kind::U32 => "u",
-            Kind::I32 => "i",
-        })
+        format!(
+            "{}{}",
+            u32::from(component == 3),
+            match self {
+                Kind::F32 => ".0",
+                Kind::U32 => "u",
+                Kind::I32 => "i",
+            }
+        )
     }
 }
 
@@ -240,12 +250,23 @@ enum Input {
     InstanceIndex,
     /// Components read from the vertex buffer: the input has `components`
     /// of `kind`; the format supplies `supplied`, from `word` on.
-    Attribute { kind: Kind, components: u32, supplied: u32, word: u32 },
+    Attribute {
+        kind: Kind,
+        components: u32,
+        supplied: u32,
+        word: u32,
+    },
     Struct(Vec<Input>),
 }
 
 impl Input {
-    fn of(module: &naga::Module, layout: Option<&wgpu::VertexBufferLayout<'_>>, name: &str, ty: naga::Handle<naga::Type>, binding: Option<&Binding>) -> Result<Input, InstrumentError> {
+    fn of(
+        module: &naga::Module,
+        layout: Option<&wgpu::VertexBufferLayout<'_>>,
+        name: &str,
+        ty: naga::Handle<naga::Type>,
+        binding: Option<&Binding>,
+    ) -> Result<Input, InstrumentError> {
         let unsupported = || InstrumentError::UnsupportedInput { input: name.to_owned(), ty: module.to_ctx().type_to_string(ty) };
         let inner = &module.types[ty].inner;
         match binding {
@@ -336,7 +357,8 @@ fn printed_member(module: &naga::Module, function: &naga::Function, member: Opti
         TypeInner::Struct { members, .. } => members.get(k)?.name.as_deref(),
         _ => None,
     });
-    name.map(|n| format!(".{n}")).ok_or_else(|| InstrumentError::Internal(format!("the printed vertex function's result has no member {k}")))
+    name.map(|n| format!(".{n}"))
+        .ok_or_else(|| InstrumentError::Internal(format!("the printed vertex function's result has no member {k}")))
 }
 
 /// `loupe_`, or `loupe_1_`, `loupe_2_`, …: a prefix no name in the module
@@ -376,7 +398,8 @@ fn demote(module: &naga::Module, index: usize, function: &str) -> Result<(String
     // module, and in the way of the kernel's group.
     cut.entry_points = vec![vertex];
     naga::compact::compact(&mut cut, naga::compact::KeepUnused::No);
-    let mut demoted = cut.entry_points.pop().map(|e| e.function).ok_or_else(|| InstrumentError::Internal("compaction dropped the entry point".into()))?;
+    let mut demoted =
+        cut.entry_points.pop().map(|e| e.function).ok_or_else(|| InstrumentError::Internal("compaction dropped the entry point".into()))?;
     demoted.name = Some(function.to_owned());
     // Argument and result bindings are only allowed on entry points.
     for a in &mut demoted.arguments {
@@ -388,7 +411,8 @@ fn demote(module: &naga::Module, index: usize, function: &str) -> Result<(String
     cut.functions.append(demoted, naga::Span::UNDEFINED);
     let group = cut.global_variables.iter().filter_map(|(_, g)| g.binding.as_ref()).map(|b| b.group + 1).max().unwrap_or(0);
     let info = validate(&cut).map_err(InstrumentError::Internal)?;
-    let printed = naga::back::wgsl::write_string(&cut, &info, naga::back::wgsl::WriterFlags::empty()).map_err(|e| InstrumentError::Internal(e.to_string()))?;
+    let printed = naga::back::wgsl::write_string(&cut, &info, naga::back::wgsl::WriterFlags::empty())
+        .map_err(|e| InstrumentError::Internal(e.to_string()))?;
     Ok((printed, group))
 }
 
@@ -549,7 +573,8 @@ fn fs() -> @location(0) vec4<f32> { return tint; }
         );
         let out = instrument(&m, "vs", None).unwrap();
         assert_eq!((out.group, out.reads_vertices), (1, false));
-        let mut bound: Vec<(u32, u32)> = out.module.global_variables.iter().filter_map(|(_, g)| g.binding.as_ref()).map(|b| (b.group, b.binding)).collect();
+        let mut bound: Vec<(u32, u32)> =
+            out.module.global_variables.iter().filter_map(|(_, g)| g.binding.as_ref()).map(|b| (b.group, b.binding)).collect();
         bound.sort_unstable();
         let own = [binding::DRAW, binding::INDICES, binding::POSITIONS].map(|b| (1, b));
         assert_eq!(bound, [&[(0, 3)], &own[..]].concat());

@@ -56,13 +56,11 @@ impl SourceFile {
     /// Reads a file, turning every way it can be unusable into a diagnostic.
     pub fn read(path: &Path, display: String) -> Result<Self, Diagnostic> {
         let here = Location::file_start(&display);
-        let meta = std::fs::metadata(path)
-            .map_err(|e| Diagnostic::error(Code::Io, format!("cannot read file: {e}")).at(here.clone()))?;
+        let meta = std::fs::metadata(path).map_err(|e| Diagnostic::error(Code::Io, format!("cannot read file: {e}")).at(here.clone()))?;
         if meta.len() > MAX_FILE_BYTES {
             return Err(too_large(meta.len(), here));
         }
-        let bytes = std::fs::read(path)
-            .map_err(|e| Diagnostic::error(Code::Io, format!("cannot read file: {e}")).at(here))?;
+        let bytes = std::fs::read(path).map_err(|e| Diagnostic::error(Code::Io, format!("cannot read file: {e}")).at(here))?;
         Self::from_bytes(path, display, bytes)
     }
 
@@ -80,8 +78,11 @@ impl SourceFile {
             let prefix = std::str::from_utf8(&e.as_bytes()[..valid]).unwrap_or_default();
             let (line, column) = LineIndex::new(prefix).line_col(prefix, valid);
             let loc = Location { file: display.clone(), line, column, end_line: line, end_column: column + 1 };
-            Diagnostic::error(Code::Encoding, format!("file is not valid UTF-8 (invalid byte at offset {valid})"))
-                .with_label(loc, "invalid UTF-8 here", true)
+            Diagnostic::error(Code::Encoding, format!("file is not valid UTF-8 (invalid byte at offset {valid})")).with_label(
+                loc,
+                "invalid UTF-8 here",
+                true,
+            )
         })?;
         Ok(SourceFile::from_text(display, path.to_owned(), text.into()))
     }
@@ -343,20 +344,14 @@ impl Library {
 
 fn import_range_of(file: &SourceFile, dep: &SourceFile) -> Option<Range<usize>> {
     let (dep_path, _) = dep.import_path.as_ref()?;
-    file.imports
-        .iter()
-        .find(|(i, _)| i == dep_path || i.starts_with(&format!("{dep_path}::")))
-        .map(|(_, r)| r.clone())
+    file.imports.iter().find(|(i, _)| i == dep_path || i.starts_with(&format!("{dep_path}::"))).map(|(_, r)| r.clone())
 }
 
 /// The path diagnostics show for `path`: relative to the working directory
 /// when it lies under it, with forward slashes.
 pub fn display_path(path: &Path) -> String {
     let cwd = std::env::current_dir().ok();
-    let shown = cwd
-        .as_deref()
-        .and_then(|c| path.strip_prefix(c).ok())
-        .unwrap_or(path);
+    let shown = cwd.as_deref().and_then(|c| path.strip_prefix(c).ok()).unwrap_or(path);
     // `./shaders/x.wgsl` and `shaders/x.wgsl` are one file: drop `.` parts.
     let parts: Vec<_> = shown.components().filter(|c| !matches!(c, std::path::Component::CurDir)).collect();
     let shown: PathBuf = parts.iter().collect();

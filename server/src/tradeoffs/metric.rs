@@ -41,7 +41,9 @@ pub fn psnr(a: &Rgba, reference: &Rgba) -> f64 {
 /// Mean SSIM of the display images' luminance: 1 when equal.
 pub fn ssim(a: &Rgba, reference: &Rgba) -> f64 {
     let (w, h) = (a.width, a.height);
-    let luma = |img: &Rgba| -> Vec<f64> { img.data.chunks_exact(4).map(|p| 0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])).collect() };
+    let luma = |img: &Rgba| -> Vec<f64> {
+        img.data.chunks_exact(4).map(|p| 0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])).collect()
+    };
     let (x, y) = (luma(a), luma(reference));
     let product = |p: &[f64], q: &[f64]| -> Vec<f64> { p.iter().zip(q).map(|(a, b)| a * b).collect() };
     let (mx, my) = (blur(&x, w, h), blur(&y, w, h));
@@ -69,7 +71,8 @@ fn blur(v: &[f64], w: usize, h: usize) -> Vec<f64> {
                 (-RADIUS..=RADIUS)
                     .zip(&weights)
                     .map(|(d, k)| {
-                        let (sx, sy) = if horizontal { ((x + d).clamp(0, w as isize - 1), y) } else { (x, (y + d).clamp(0, h as isize - 1)) };
+                        let (sx, sy) =
+                            if horizontal { ((x + d).clamp(0, w as isize - 1), y) } else { (x, (y + d).clamp(0, h as isize - 1)) };
                         k * src[sy as usize * w + sx as usize]
                     })
                     .sum::<f64>()
@@ -85,11 +88,12 @@ mod tests {
     use super::*;
 
     fn image(w: usize, h: usize, f: impl Fn(usize, usize) -> f32) -> Vec<f32> {
-        (0..w * h).flat_map(|i| {
-            let v = f(i % w, i / w);
-            [v, v, v, 1.0]
-        })
-        .collect()
+        (0..w * h)
+            .flat_map(|i| {
+                let v = f(i % w, i / w);
+                [v, v, v, 1.0]
+            })
+            .collect()
     }
 
     #[test]

@@ -16,8 +16,8 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::offline::{OfflineError, frame, frames_to_finish};
-use crate::render::frame::FrameResult;
 use crate::render::capture::CapturedImage;
+use crate::render::frame::FrameResult;
 use crate::render::resource::ResourceDesc;
 use crate::render::session::Session;
 use crate::scene::overrides::{Overrides, Value};
@@ -93,7 +93,12 @@ struct Images {
 
 /// Sweeps every series of the scene; `out` receives each point's image.
 pub fn run(job: &Job, out: &Path) -> Result<Report, OfflineError> {
-    let base = crate::offline::Job { scene: job.scene.clone(), shader_root: job.shader_root.clone(), size: Some(job.size), overrides: job.overrides.clone() };
+    let base = crate::offline::Job {
+        scene: job.scene.clone(),
+        shader_root: job.shader_root.clone(),
+        size: Some(job.size),
+        overrides: job.overrides.clone(),
+    };
     let mut session = crate::offline::prepare(&base)?;
     let serial = session.gpu().is_cpu();
     let text = std::fs::read(&job.scene).map_err(|e| OfflineError::Io(format!("cannot read {}: {e}", job.scene.display())))?;
@@ -128,10 +133,19 @@ pub fn run(job: &Job, out: &Path) -> Result<Report, OfflineError> {
             p.time_ratio = if top > 0.0 { p.time_ms / top } else { 0.0 };
         }
         let reference = match &series.reference {
-            Reference::Highest(o) => format!("the same passes with {}", o.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", ")),
+            Reference::Highest(o) => {
+                format!("the same passes with {}", o.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", "))
+            }
             Reference::PathTraced(spp) => format!("the path tracer at {spp} samples per pixel"),
         };
-        reports.push(SeriesReport { name: series.name.clone(), setting: series.setting.to_owned(), with: series.with.clone(), reference, passes, points });
+        reports.push(SeriesReport {
+            name: series.name.clone(),
+            setting: series.setting.to_owned(),
+            with: series.with.clone(),
+            reference,
+            passes,
+            points,
+        });
     }
     Ok(Report {
         scene: crate::shader::library::display_path(&job.scene),
@@ -169,7 +183,8 @@ fn merged(job: &Job, point: &Overrides) -> Overrides {
 fn image_names(session: &Session) -> BTreeSet<String> {
     let graph = session.graph();
     let reader = ["exposure", "tonemap"].into_iter().find_map(|name| graph.passes.iter().find(|p| p.name == name));
-    let hdr = reader.and_then(|p| p.reads().map(|h| graph.resource(h)).find(|r| matches!(r.desc, ResourceDesc::Texture(_))).map(|r| r.name.clone()));
+    let hdr = reader
+        .and_then(|p| p.reads().map(|h| graph.resource(h)).find(|r| matches!(r.desc, ResourceDesc::Texture(_))).map(|r| r.name.clone()));
     hdr.into_iter().chain(graph.final_name()).collect()
 }
 
@@ -234,7 +249,8 @@ fn measure(session: &mut Session, job: &Job, series: &Series, value: &Value, ser
     let affects = settings::find(series.setting).map_or(&[][..], |s| s.affects);
     let live: Vec<String> = session.graph().passes.iter().map(|p| p.name.clone()).collect();
     // The denoiser's passes are part of what a denoised sample costs.
-    let passes: Vec<String> = live.iter().filter(|p| affects.contains(&p.as_str()) || (series.accumulates() && p.starts_with("denoise"))).cloned().collect();
+    let passes: Vec<String> =
+        live.iter().filter(|p| affects.contains(&p.as_str()) || (series.accumulates() && p.starts_with("denoise"))).cloned().collect();
     let names = image_names(session);
     let none = BTreeSet::new();
     let time = |r: &FrameResult| r.timings.iter().filter(|(n, _)| passes.contains(n)).map(|(_, t)| t).sum::<f64>();

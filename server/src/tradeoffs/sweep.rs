@@ -3,9 +3,9 @@
 //! they affect, when they apply) are the settings table's
 //! (`scene::settings`); this only says how to sweep them.
 
+use crate::scene::Scene;
 use crate::scene::overrides::{Overrides, Value};
 use crate::scene::settings;
-use crate::scene::Scene;
 
 /// What a series' images are compared with.
 #[derive(Debug, Clone, PartialEq)]
@@ -90,25 +90,44 @@ pub fn series(scene: &Scene, reference_spp: u32) -> Vec<Series> {
     let best = |setting: &str, v: Value| Reference::Highest(overrides(&[raster.clone(), (setting, v)]));
     if !scene.media.is_empty() {
         // Both estimators against one reference, so their errors compare.
-        let reference = Reference::Highest(overrides(&[raster.clone(), ("quality.volume_steps", Value::Int(1024)), ("quality.volume_estimator", text("analytic"))]));
+        let reference = Reference::Highest(overrides(&[
+            raster.clone(),
+            ("quality.volume_steps", Value::Int(1024)),
+            ("quality.volume_estimator", text("analytic")),
+        ]));
         for estimator in settings::Estimator::NAMES {
             let with = [raster.clone(), ("quality.volume_estimator", text(estimator))];
             add("quality.volume_steps", doublings(4, 512), &with, reference.clone());
         }
-        add("quality.volume_shadow_steps", doublings(1, 32), std::slice::from_ref(&raster), best("quality.volume_shadow_steps", Value::Int(64)));
+        add(
+            "quality.volume_shadow_steps",
+            doublings(1, 32),
+            std::slice::from_ref(&raster),
+            best("quality.volume_shadow_steps", Value::Int(64)),
+        );
         add("quality.volume_grid", doublings(8, 128), std::slice::from_ref(&raster), best("quality.volume_grid", Value::Int(256)));
         let resolutions = settings::VolumeResolution::NAMES.iter().rev().map(|r| text(r)).collect();
         add("quality.volume_resolution", resolutions, std::slice::from_ref(&raster), best("quality.volume_resolution", text("full")));
     }
     if !scene.objects.is_empty() {
         if !scene.lights.is_empty() {
-            add("quality.shadow_map_size", doublings(128, 2048), std::slice::from_ref(&raster), best("quality.shadow_map_size", Value::Int(4096)));
+            add(
+                "quality.shadow_map_size",
+                doublings(128, 2048),
+                std::slice::from_ref(&raster),
+                best("quality.shadow_map_size", Value::Int(4096)),
+            );
             let radii = (0..=3).map(Value::Int).collect();
             add("quality.shadow_filter", radii, std::slice::from_ref(&raster), best("quality.shadow_filter", Value::Int(4)));
         }
         if scene.has_rect_lights() {
             // LTC's closed form against the area sampled through the BRDF.
-            add("quality.rect_lights", vec![text("ltc"), text("sampled")], std::slice::from_ref(&raster), best("quality.rect_lights", text("sampled")));
+            add(
+                "quality.rect_lights",
+                vec![text("ltc"), text("sampled")],
+                std::slice::from_ref(&raster),
+                best("quality.rect_lights", text("sampled")),
+            );
         }
         let path = [("quality.renderer", text("path"))];
         if scene.denoiser.is_none() {
@@ -125,7 +144,12 @@ pub fn series(scene: &Scene, reference_spp: u32) -> Vec<Series> {
         }
     }
     // The same image either way: its cost, beside its quads.
-    add("post.two_triangles", vec![Value::Bool(true), Value::Bool(false)], &[], Reference::Highest(overrides(&[("post.two_triangles", Value::Bool(false))])));
+    add(
+        "post.two_triangles",
+        vec![Value::Bool(true), Value::Bool(false)],
+        &[],
+        Reference::Highest(overrides(&[("post.two_triangles", Value::Bool(false))])),
+    );
     out
 }
 
@@ -161,7 +185,10 @@ mod tests {
         let mut denoised = scene("minimal.toml");
         denoised.denoiser = crate::scene::parse("d.toml", "[denoiser]\nweights = \"w.tza\"\n").unwrap().denoiser;
         let paths: Vec<_> = series(&denoised, 256).into_iter().filter(|s| s.setting == "quality.path_spp").map(|s| s.name).collect();
-        assert_eq!(paths, ["path_spp, denoise=false", "path_spp, precision=\"f32\", denoise=true", "path_spp, precision=\"f16\", denoise=true"]);
+        assert_eq!(
+            paths,
+            ["path_spp, denoise=false", "path_spp, precision=\"f32\", denoise=true", "path_spp, precision=\"f16\", denoise=true"]
+        );
         let path = minimal.iter().find(|s| s.setting == "quality.path_spp").unwrap();
         assert!(path.accumulates());
         assert_eq!(path.reference_overrides()["quality.path_spp"], Value::Int(256));

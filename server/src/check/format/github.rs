@@ -28,21 +28,14 @@ pub fn write(report: &CheckReport, out: &mut dyn io::Write) -> io::Result<()> {
             message.push('\n');
             message.push_str(note);
         }
-        writeln!(
-            out,
-            "::{command} {}::{}",
-            properties.join(","),
-            data(&message)
-        )?;
+        writeln!(out, "::{command} {}::{}", properties.join(","), data(&message))?;
     }
     Ok(())
 }
 
 /// The runner's escaping for a command's message.
 fn data(s: &str) -> String {
-    s.replace('%', "%25")
-        .replace('\r', "%0D")
-        .replace('\n', "%0A")
+    s.replace('%', "%25").replace('\r', "%0D").replace('\n', "%0A")
 }
 
 /// Property values additionally must not contain the `:` and `,` that
@@ -76,17 +69,10 @@ mod tests {
 
     #[test]
     fn escaping_and_no_location() {
-        let mut d =
-            Diagnostic::error(Code::DeviceMissing, "100% gone\r\nreally").with_note("a:b,c");
+        let mut d = Diagnostic::error(Code::DeviceMissing, "100% gone\r\nreally").with_note("a:b,c");
         d.severity = Severity::Note;
-        let report = CheckReport {
-            general: vec![d],
-            ..CheckReport::default()
-        };
-        assert_eq!(
-            render(&report),
-            "::notice title=device-missing::100%25 gone%0D%0Areally%0Aa:b,c\n"
-        );
+        let report = CheckReport { general: vec![d], ..CheckReport::default() };
+        assert_eq!(render(&report), "::notice title=device-missing::100%25 gone%0D%0Areally%0Aa:b,c\n");
         assert_eq!(property("C:\\a,b%"), "C%3A\\a%2Cb%25");
     }
 }

@@ -14,17 +14,8 @@ use super::super::report::CheckReport;
 use super::Options;
 use crate::diag::{Diagnostic, Location, Severity, SourceFiles};
 
-pub fn write(
-    report: &CheckReport,
-    files: &SourceFiles,
-    opts: &Options,
-    out: &mut dyn io::Write,
-) -> io::Result<()> {
-    if opts.color {
-        render(report, files, opts, &mut Ansi::new(out))
-    } else {
-        render(report, files, opts, &mut NoColor::new(out))
-    }
+pub fn write(report: &CheckReport, files: &SourceFiles, opts: &Options, out: &mut dyn io::Write) -> io::Result<()> {
+    if opts.color { render(report, files, opts, &mut Ansi::new(out)) } else { render(report, files, opts, &mut NoColor::new(out)) }
 }
 
 /// Diagnostics outside a check report (from `loupe render`), with excerpts
@@ -61,12 +52,7 @@ fn emit<W: WriteStyle>(diags: &[Diagnostic], files: &SourceFiles, w: &mut W) -> 
     Ok(())
 }
 
-fn render<W: WriteStyle>(
-    report: &CheckReport,
-    files: &SourceFiles,
-    opts: &Options,
-    w: &mut W,
-) -> io::Result<()> {
+fn render<W: WriteStyle>(report: &CheckReport, files: &SourceFiles, opts: &Options, w: &mut W) -> io::Result<()> {
     let diags: Vec<Diagnostic> = report.diagnostics().cloned().collect();
     emit(&diags, files, w)?;
     writeln!(w, "{}", summary(report, opts.timings))
@@ -83,10 +69,7 @@ impl<'a> Database<'a> {
     /// `None` when the file has no text to excerpt.
     fn label(&mut self, style: LabelStyle, location: &'a Location) -> Option<cs::Label<usize>> {
         let text = self.files.get(&location.file)?;
-        let id = *self
-            .ids
-            .entry(&location.file)
-            .or_insert_with(|| self.db.add(&location.file, text));
+        let id = *self.ids.entry(&location.file).or_insert_with(|| self.db.add(&location.file, text));
         Some(cs::Label::new(style, id, byte_range(text, location)))
     }
 }
@@ -100,11 +83,7 @@ fn to_codespan<'a>(d: &'a Diagnostic, db: &mut Database<'a>) -> Option<cs::Diagn
     // becomes a note rather than vanishing.
     let mut notes = Vec::new();
     for label in &d.labels {
-        let style = if label.primary {
-            LabelStyle::Primary
-        } else {
-            LabelStyle::Secondary
-        };
+        let style = if label.primary { LabelStyle::Primary } else { LabelStyle::Secondary };
         match db.label(style, &label.location) {
             Some(l) => labels.push(l.with_message(&label.message)),
             None => notes.push(format!("{}: {}", label.location, label.message)),
@@ -117,11 +96,7 @@ fn to_codespan<'a>(d: &'a Diagnostic, db: &mut Database<'a>) -> Option<cs::Diagn
     }
     notes.extend(d.notes.iter().cloned());
     Some(
-        cs::Diagnostic::new(severity(d.severity))
-            .with_code(d.code.as_str())
-            .with_message(&d.message)
-            .with_labels(labels)
-            .with_notes(notes),
+        cs::Diagnostic::new(severity(d.severity)).with_code(d.code.as_str()).with_message(&d.message).with_labels(labels).with_notes(notes),
     )
 }
 
@@ -152,11 +127,7 @@ fn severity(severity: Severity) -> cs::Severity {
 }
 
 fn summary(report: &CheckReport, timings: bool) -> String {
-    let mut s = format!(
-        "checked {} ({}",
-        count(report.modules.len(), "file"),
-        count(report.pipelines(), "pipeline")
-    );
+    let mut s = format!("checked {} ({}", count(report.modules.len(), "file"), count(report.pipelines(), "pipeline"));
     if let Some(adapter) = &report.adapter {
         let _ = write!(s, " on {adapter}");
     }
@@ -164,21 +135,12 @@ fn summary(report: &CheckReport, timings: bool) -> String {
     if timings {
         let _ = write!(s, " in {} ms", report.duration.as_millis());
     }
-    let _ = write!(
-        s,
-        ": {}, {}",
-        count(report.count(Severity::Error), "error"),
-        count(report.count(Severity::Warning), "warning")
-    );
+    let _ = write!(s, ": {}, {}", count(report.count(Severity::Error), "error"), count(report.count(Severity::Warning), "warning"));
     s
 }
 
 fn count(n: usize, noun: &str) -> String {
-    if n == 1 {
-        format!("1 {noun}")
-    } else {
-        format!("{n} {noun}s")
-    }
+    if n == 1 { format!("1 {noun}") } else { format!("{n} {noun}s") }
 }
 
 /// The byte range a location covers in `text`; see `offset`.
@@ -202,10 +164,7 @@ fn offset(text: &str, line: u32, column: u32) -> usize {
     };
     let rest = &text[start..];
     let line_text = &rest[..rest.find('\n').unwrap_or(rest.len())];
-    let in_line = line_text
-        .char_indices()
-        .nth(column.saturating_sub(1) as usize)
-        .map_or(line_text.len(), |(i, _)| i);
+    let in_line = line_text.char_indices().nth(column.saturating_sub(1) as usize).map_or(line_text.len(), |(i, _)| i);
     start + in_line
 }
 
@@ -231,42 +190,21 @@ mod tests {
     #[test]
     fn excerpts_imported_file_and_summarises() {
         let out = render(&fixture::report(), &fixture::files(), Options::default());
-        assert!(
-            out.contains("error[validation]: cannot add \"f32\" & \"vec3<f32>\""),
-            "{out}"
-        );
+        assert!(out.contains("error[validation]: cannot add \"f32\" & \"vec3<f32>\""), "{out}");
         assert!(out.contains("┌─ shaders/lib/util.wgsl:5:7"), "{out}");
         assert!(out.contains("  let bad = 1.0 + v;"), "{out}");
         assert!(out.contains("#import lib::util"), "{out}");
-        assert!(
-            out.contains("= both operands must have the same type"),
-            "{out}"
-        );
+        assert!(out.contains("= both operands must have the same type"), "{out}");
         assert!(out.contains("┌─ shaders/main.wgsl:3:1"), "{out}");
         assert!(!out.contains('\x1b'), "no colour unless asked");
-        assert!(
-            out.ends_with("\nchecked 2 files (2 pipelines on llvmpipe): 1 error, 1 warning\n"),
-            "{out}"
-        );
+        assert!(out.ends_with("\nchecked 2 files (2 pipelines on llvmpipe): 1 error, 1 warning\n"), "{out}");
     }
 
     #[test]
     fn timings_and_colour_only_when_asked() {
-        let out = render(
-            &fixture::report(),
-            &fixture::files(),
-            Options {
-                color: true,
-                timings: true,
-            },
-        );
+        let out = render(&fixture::report(), &fixture::files(), Options { color: true, timings: true });
         assert!(out.contains('\x1b'));
-        assert!(
-            out.ends_with(
-                "checked 2 files (2 pipelines on llvmpipe) in 40 ms: 1 error, 1 warning\n"
-            ),
-            "{out}"
-        );
+        assert!(out.ends_with("checked 2 files (2 pipelines on llvmpipe) in 40 ms: 1 error, 1 warning\n"), "{out}");
     }
 
     #[test]
@@ -274,47 +212,29 @@ mod tests {
         let mut report = fixture::report();
         report.modules.truncate(1);
         report.adapter = None;
-        report
-            .general
-            .push(Diagnostic::error(Code::DeviceMissing, "no adapter"));
-        assert_eq!(
-            summary(&report, false),
-            "checked 1 file (1 pipeline): 1 error, 0 warnings"
-        );
+        report.general.push(Diagnostic::error(Code::DeviceMissing, "no adapter"));
+        assert_eq!(summary(&report, false), "checked 1 file (1 pipeline): 1 error, 0 warnings");
     }
 
     #[test]
     fn missing_text_falls_back_to_one_liner() {
         let mut report = fixture::report();
-        report.general.push(
-            Diagnostic::error(Code::DeviceMissing, "no GPU adapter").with_note("use --no-device"),
-        );
+        report.general.push(Diagnostic::error(Code::DeviceMissing, "no GPU adapter").with_note("use --no-device"));
         let out = render(&report, &SourceFiles::default(), Options::default());
         assert!(
-            out.contains(
-                "shaders/lib/util.wgsl:5:7: error[validation]: cannot add \"f32\" & \"vec3<f32>\"\n  = both operands"
-            ),
+            out.contains("shaders/lib/util.wgsl:5:7: error[validation]: cannot add \"f32\" & \"vec3<f32>\"\n  = both operands"),
             "{out}"
         );
-        assert!(
-            out.contains("\nerror[device-missing]: no GPU adapter\n  = use --no-device\n"),
-            "{out}"
-        );
+        assert!(out.contains("\nerror[device-missing]: no GPU adapter\n  = use --no-device\n"), "{out}");
     }
 
     #[test]
     fn secondary_label_without_text_becomes_note() {
         let mut files = SourceFiles::default();
-        files.insert(
-            fixture::UTIL,
-            fixture::files().get(fixture::UTIL).unwrap().into(),
-        );
+        files.insert(fixture::UTIL, fixture::files().get(fixture::UTIL).unwrap().into());
         let out = render(&fixture::report(), &files, Options::default());
         assert!(out.contains("┌─ shaders/lib/util.wgsl:5:7"), "{out}");
-        assert!(
-            out.contains("= shaders/main.wgsl:1:1: imported here"),
-            "{out}"
-        );
+        assert!(out.contains("= shaders/main.wgsl:1:1: imported here"), "{out}");
     }
 
     #[test]
@@ -322,18 +242,13 @@ mod tests {
         let text = "x\nlet é = fooo;\n";
         let start = text.find("fooo").unwrap();
         let location = LineIndex::new(text).location("m.wgsl", text, start..start + 4);
-        assert_eq!(
-            (location.line, location.column, location.end_column),
-            (2, 9, 13)
-        );
+        assert_eq!((location.line, location.column, location.end_column), (2, 9, 13));
         assert_eq!(byte_range(text, &location), start..start + 4);
 
         let mut files = SourceFiles::default();
         files.insert("m.wgsl", text.into());
         let report = CheckReport {
-            general: vec![
-                Diagnostic::error(Code::Parse, "unknown").with_label(location, "here", true),
-            ],
+            general: vec![Diagnostic::error(Code::Parse, "unknown").with_label(location, "here", true)],
             ..CheckReport::default()
         };
         let out = render(&report, &files, Options::default());

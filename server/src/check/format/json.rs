@@ -60,11 +60,7 @@ mod tests {
     fn lines(report: &CheckReport) -> Vec<Value> {
         let mut out = Vec::new();
         write(report, &mut out).unwrap();
-        String::from_utf8(out)
-            .unwrap()
-            .lines()
-            .map(|l| serde_json::from_str(l).unwrap())
-            .collect()
+        String::from_utf8(out).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect()
     }
 
     #[test]
@@ -92,10 +88,7 @@ mod tests {
 
     #[test]
     fn no_location_is_null() {
-        let report = CheckReport {
-            general: vec![Diagnostic::error(Code::DeviceMissing, "no GPU")],
-            ..CheckReport::default()
-        };
+        let report = CheckReport { general: vec![Diagnostic::error(Code::DeviceMissing, "no GPU")], ..CheckReport::default() };
         let line = &lines(&report)[0];
         for field in ["file", "line", "column", "end_line", "end_column"] {
             assert_eq!(line[field], Value::Null, "{field}");

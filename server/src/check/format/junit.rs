@@ -10,47 +10,24 @@ use super::Options;
 use crate::diag::{Diagnostic, Severity};
 
 pub fn write(report: &CheckReport, opts: &Options, out: &mut dyn io::Write) -> io::Result<()> {
-    let mut cases: Vec<(&str, Duration, &[Diagnostic])> = report
-        .modules
-        .iter()
-        .map(|m| (m.file.as_str(), m.duration, &m.diagnostics[..]))
-        .collect();
+    let mut cases: Vec<(&str, Duration, &[Diagnostic])> =
+        report.modules.iter().map(|m| (m.file.as_str(), m.duration, &m.diagnostics[..])).collect();
     // Problems with no file (no device) still have to fail the build visibly.
     if !report.general.is_empty() {
         cases.push(("(general)", Duration::ZERO, &report.general));
     }
-    let failures = cases
-        .iter()
-        .filter(|(_, _, ds)| ds.iter().any(is_error))
-        .count();
+    let failures = cases.iter().filter(|(_, _, ds)| ds.iter().any(is_error)).count();
     let time = |d: Duration| {
-        if opts.timings {
-            format!("{:.3}", d.as_secs_f64())
-        } else {
-            "0.000".to_owned()
-        }
+        if opts.timings { format!("{:.3}", d.as_secs_f64()) } else { "0.000".to_owned() }
     };
-    let counts = format!(
-        r#"tests="{}" failures="{failures}" errors="0""#,
-        cases.len()
-    );
+    let counts = format!(r#"tests="{}" failures="{failures}" errors="0""#, cases.len());
     let total = time(report.duration);
 
     writeln!(out, r#"<?xml version="1.0" encoding="UTF-8"?>"#)?;
-    writeln!(
-        out,
-        r#"<testsuites name="loupe check" {counts} time="{total}">"#
-    )?;
-    writeln!(
-        out,
-        r#"  <testsuite name="loupe check" {counts} skipped="0" time="{total}">"#
-    )?;
+    writeln!(out, r#"<testsuites name="loupe check" {counts} time="{total}">"#)?;
+    writeln!(out, r#"  <testsuite name="loupe check" {counts} skipped="0" time="{total}">"#)?;
     for (name, duration, diagnostics) in cases {
-        let open = format!(
-            r#"    <testcase classname="loupe.check" name="{}" time="{}""#,
-            escape(name, true),
-            time(duration)
-        );
+        let open = format!(r#"    <testcase classname="loupe.check" name="{}" time="{}""#, escape(name, true), time(duration));
         if diagnostics.is_empty() {
             writeln!(out, "{open}/>")?;
             continue;
@@ -120,15 +97,7 @@ mod tests {
 
     fn render(report: &CheckReport, timings: bool) -> String {
         let mut out = Vec::new();
-        write(
-            report,
-            &Options {
-                color: false,
-                timings,
-            },
-            &mut out,
-        )
-        .unwrap();
+        write(report, &Options { color: false, timings }, &mut out).unwrap();
         String::from_utf8(out).unwrap()
     }
 
@@ -136,9 +105,7 @@ mod tests {
     /// values are quoted and hold no raw markup, and text has no raw `<`
     /// or stray `&`.
     fn assert_well_formed(xml: &str) {
-        let body = xml
-            .strip_prefix("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n")
-            .expect("declaration");
+        let body = xml.strip_prefix("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n").expect("declaration");
         let mut stack = Vec::new();
         let mut rest = body;
         while let Some(lt) = rest.find('<') {
@@ -154,10 +121,7 @@ mod tests {
                 for attribute in attributes.split("\" ").filter(|a| !a.is_empty()) {
                     let (_, value) = attribute.split_once("=\"").expect("quoted attribute");
                     let value = value.trim_end_matches('"');
-                    assert!(
-                        !value.contains(['"', '<', '\n']),
-                        "raw markup in attribute {value:?}"
-                    );
+                    assert!(!value.contains(['"', '<', '\n']), "raw markup in attribute {value:?}");
                     assert_text(value);
                 }
                 if !self_closing {
@@ -174,18 +138,9 @@ mod tests {
         assert!(!text.contains(['<', '>']), "raw markup in {text:?}");
         for (i, _) in text.match_indices('&') {
             let entity = &text[i..i + text[i..].find(';').expect("unterminated entity") + 1];
-            assert!(
-                [
-                    "&amp;", "&lt;", "&gt;", "&quot;", "&apos;", "&#13;", "&#10;", "&#9;"
-                ]
-                .contains(&entity),
-                "bad entity {entity}"
-            );
+            assert!(["&amp;", "&lt;", "&gt;", "&quot;", "&apos;", "&#13;", "&#10;", "&#9;"].contains(&entity), "bad entity {entity}");
         }
-        assert!(
-            !text.chars().any(|c| c < ' ' && !"\t\n\r".contains(c)),
-            "control char in {text:?}"
-        );
+        assert!(!text.chars().any(|c| c < ' ' && !"\t\n\r".contains(c)), "control char in {text:?}");
     }
 
     #[test]
@@ -193,18 +148,8 @@ mod tests {
         let xml = render(&fixture::report(), false);
         assert_well_formed(&xml);
         assert_eq!(xml.matches("<testcase ").count(), 2);
-        assert!(
-            xml.contains(
-                r#"<testsuites name="loupe check" tests="2" failures="1" errors="0" time="0.000">"#
-            ),
-            "{xml}"
-        );
-        assert!(
-            xml.contains(
-                r#"<testcase classname="loupe.check" name="shaders/clean.wgsl" time="0.000"/>"#
-            ),
-            "{xml}"
-        );
+        assert!(xml.contains(r#"<testsuites name="loupe check" tests="2" failures="1" errors="0" time="0.000">"#), "{xml}");
+        assert!(xml.contains(r#"<testcase classname="loupe.check" name="shaders/clean.wgsl" time="0.000"/>"#), "{xml}");
         assert!(
             xml.contains(
                 r#"<failure message="cannot add &quot;f32&quot; &amp; &quot;vec3&lt;f32&gt;&quot;" type="validation">shaders/lib/util.wgsl:5:7: error[validation]: cannot add &quot;f32&quot; &amp; &quot;vec3&lt;f32&gt;&quot;
@@ -222,29 +167,18 @@ shaders/main.wgsl:3:1: warning[binding-mismatch]: binding 0 is never used
     fn warnings_pass_general_and_timings() {
         let mut report = fixture::report();
         report.modules[1].diagnostics.remove(0);
-        report.general.push(Diagnostic::error(
-            Code::DeviceMissing,
-            "no\tGPU\r\n\x07<here>",
-        ));
+        report.general.push(Diagnostic::error(Code::DeviceMissing, "no\tGPU\r\n\x07<here>"));
         let xml = render(&report, true);
         assert_well_formed(&xml);
         assert_eq!(xml.matches("<testcase ").count(), 3);
         assert!(xml.contains(r#"time="0.040">"#), "{xml}");
-        assert!(
-            xml.contains(r#"name="shaders/main.wgsl" time="0.012">"#),
-            "{xml}"
-        );
+        assert!(xml.contains(r#"name="shaders/main.wgsl" time="0.012">"#), "{xml}");
         assert!(
             xml.contains("<system-out>shaders/main.wgsl:3:1: warning[binding-mismatch]: binding 0 is never used\n</system-out>"),
             "{xml}"
         );
         assert!(xml.contains(r#"name="(general)" time="0.000">"#), "{xml}");
-        assert!(
-            xml.contains(
-                r#"<failure message="no&#9;GPU&#13;&#10;&lt;here&gt;" type="device-missing">"#
-            ),
-            "{xml}"
-        );
+        assert!(xml.contains(r#"<failure message="no&#9;GPU&#13;&#10;&lt;here&gt;" type="device-missing">"#), "{xml}");
         assert!(xml.contains(r#"failures="1""#), "{xml}");
     }
 }

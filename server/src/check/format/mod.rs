@@ -36,13 +36,7 @@ pub struct Options {
     pub timings: bool,
 }
 
-pub fn write(
-    format: Format,
-    report: &CheckReport,
-    files: &SourceFiles,
-    opts: &Options,
-    out: &mut dyn io::Write,
-) -> io::Result<()> {
+pub fn write(format: Format, report: &CheckReport, files: &SourceFiles, opts: &Options, out: &mut dyn io::Write) -> io::Result<()> {
     match format {
         Format::Human => human::write(report, files, opts, out),
         Format::Json => json::write(report, out),
@@ -67,23 +61,17 @@ mod fixture {
     pub const ERROR_MESSAGE: &str = "cannot add \"f32\" & \"vec3<f32>\"";
 
     pub fn loc(file: &str, line: u32, column: u32, end_line: u32, end_column: u32) -> Location {
-        Location {
-            file: file.to_owned(),
-            line,
-            column,
-            end_line,
-            end_column,
-        }
+        Location { file: file.to_owned(), line, column, end_line, end_column }
     }
 
     pub fn files() -> SourceFiles {
         let mut files = SourceFiles::default();
-        files.insert(
-            MAIN,
-            "#import lib::util\n\n@group(0) @binding(0) var<uniform> u: f32;\n".into(),
-        );
+        files.insert(MAIN, "#import lib::util\n\n@group(0) @binding(0) var<uniform> u: f32;\n".into());
         files.insert("shaders/clean.wgsl", "fn ok() {}\n".into());
-        files.insert(UTIL, "#define_import_path lib::util\n\nfn g() -> f32 {\n  let v = vec3(1.0);\n  let bad = 1.0 + v;\n  return bad;\n}\n".into());
+        files.insert(
+            UTIL,
+            "#define_import_path lib::util\n\nfn g() -> f32 {\n  let v = vec3(1.0);\n  let bad = 1.0 + v;\n  return bad;\n}\n".into(),
+        );
         files
     }
 
@@ -92,8 +80,8 @@ mod fixture {
             .with_label(loc(UTIL, 5, 7, 5, 10), "this expression", true)
             .with_label(loc(MAIN, 1, 1, 1, 18), "imported here", false)
             .with_note("both operands must have the same type");
-        let warning = Diagnostic::warning(Code::BindingMismatch, "binding 0 is never used")
-            .with_label(loc(MAIN, 3, 1, 3, 22), "declared here", true);
+        let warning =
+            Diagnostic::warning(Code::BindingMismatch, "binding 0 is never used").with_label(loc(MAIN, 3, 1, 3, 22), "declared here", true);
         let module = |file: &str, diagnostics| ModuleResult {
             file: file.to_owned(),
             kind: ModuleKind::Entry,
@@ -103,10 +91,7 @@ mod fixture {
             duration: Duration::from_millis(12),
         };
         CheckReport {
-            modules: vec![
-                module("shaders/clean.wgsl", vec![]),
-                module(MAIN, vec![error, warning]),
-            ],
+            modules: vec![module("shaders/clean.wgsl", vec![]), module(MAIN, vec![error, warning])],
             general: vec![],
             adapter: Some("llvmpipe".to_owned()),
             duration: Duration::from_millis(40),

@@ -10,10 +10,8 @@ use super::super::report::CheckReport;
 use crate::diag::{Code, Diagnostic, Location, Severity};
 
 pub fn write(report: &CheckReport, out: &mut dyn io::Write) -> io::Result<()> {
-    let rules: Vec<Value> = Code::ALL
-        .iter()
-        .map(|code| json!({ "id": code.as_str(), "shortDescription": { "text": code.description() } }))
-        .collect();
+    let rules: Vec<Value> =
+        Code::ALL.iter().map(|code| json!({ "id": code.as_str(), "shortDescription": { "text": code.description() } })).collect();
     let log = json!({
         "$schema": "https://json.schemastore.org/sarif-2.1.0.json",
         "version": "2.1.0",
@@ -49,10 +47,7 @@ fn result(d: &Diagnostic) -> Value {
     };
     // The label at the diagnostic's own location lends it its message; every
     // other label is related information.
-    let primary = d
-        .labels
-        .iter()
-        .position(|l| l.primary && l.location == *location);
+    let primary = d.labels.iter().position(|l| l.primary && l.location == *location);
     let mut main = physical(location);
     if let Some(label) = primary.map(|i| &d.labels[i]) {
         main["message"] = json!({ "text": label.message });
@@ -120,10 +115,7 @@ mod tests {
     fn log_shape() {
         let log = log(&fixture::report());
         assert_eq!(log["version"], "2.1.0");
-        assert_eq!(
-            log["$schema"],
-            "https://json.schemastore.org/sarif-2.1.0.json"
-        );
+        assert_eq!(log["$schema"], "https://json.schemastore.org/sarif-2.1.0.json");
         let run = &log["runs"][0];
         assert_eq!(run["columnKind"], "unicodeCodePoints");
         assert_eq!(run["tool"]["driver"]["name"], "loupe");
@@ -138,49 +130,28 @@ mod tests {
         assert_eq!(results.len(), 2);
         let error = &results[0];
         assert_eq!(error["ruleId"], "validation");
-        assert_eq!(
-            rules[error["ruleIndex"].as_u64().unwrap() as usize]["id"],
-            "validation"
-        );
+        assert_eq!(rules[error["ruleIndex"].as_u64().unwrap() as usize]["id"], "validation");
         assert_eq!(error["level"], "error");
-        assert_eq!(
-            error["message"]["text"],
-            format!(
-                "{}\nboth operands must have the same type",
-                fixture::ERROR_MESSAGE
-            )
-        );
+        assert_eq!(error["message"]["text"], format!("{}\nboth operands must have the same type", fixture::ERROR_MESSAGE));
         let location = &error["locations"][0];
         assert_eq!(location["message"]["text"], "this expression");
         let physical = &location["physicalLocation"];
         assert_eq!(physical["artifactLocation"]["uri"], fixture::UTIL);
-        assert_eq!(
-            physical["region"],
-            json!({"startLine": 5, "startColumn": 7, "endLine": 5, "endColumn": 10})
-        );
+        assert_eq!(physical["region"], json!({"startLine": 5, "startColumn": 7, "endLine": 5, "endColumn": 10}));
         let related = error["relatedLocations"].as_array().unwrap();
         assert_eq!(related.len(), 1);
         assert_eq!(related[0]["message"]["text"], "imported here");
-        assert_eq!(
-            related[0]["physicalLocation"]["artifactLocation"]["uri"],
-            fixture::MAIN
-        );
+        assert_eq!(related[0]["physicalLocation"]["artifactLocation"]["uri"], fixture::MAIN);
         assert_eq!(results[1]["level"], "warning");
         assert!(results[1].get("relatedLocations").is_none());
     }
 
     #[test]
     fn no_location_and_uris() {
-        let report = CheckReport {
-            general: vec![Diagnostic::error(Code::DeviceMissing, "no GPU")],
-            ..CheckReport::default()
-        };
+        let report = CheckReport { general: vec![Diagnostic::error(Code::DeviceMissing, "no GPU")], ..CheckReport::default() };
         let result = &log(&report)["runs"][0]["results"][0];
         assert_eq!(result["ruleId"], "device-missing");
         assert!(result.get("locations").is_none());
-        assert_eq!(
-            uri("shaders\\my lib:x/é.wgsl"),
-            "shaders/my%20lib%3Ax/%C3%A9.wgsl"
-        );
+        assert_eq!(uri("shaders\\my lib:x/é.wgsl"), "shaders/my%20lib%3Ax/%C3%A9.wgsl");
     }
 }

@@ -52,7 +52,12 @@ pub fn parse(bytes: &[u8]) -> Result<Image, PfmError> {
     let (start, text) = token(bytes, &mut at, "the scale")?;
     let scale = match text.parse::<f32>() {
         Ok(s) if s.is_finite() && s != 0.0 => s,
-        _ => return error(start, format!("expected the scale, a non-zero number (negative: little-endian), found `{}`", text.escape_default())),
+        _ => {
+            return error(
+                start,
+                format!("expected the scale, a non-zero number (negative: little-endian), found `{}`", text.escape_default()),
+            );
+        }
     };
     if !bytes.get(at).is_some_and(u8::is_ascii_whitespace) {
         return error(at, "expected one whitespace character after the scale, then the pixels");

@@ -16,10 +16,35 @@ fn set(layers: &mut [Layer], name: &str, out: u32, inp: u32) {
 }
 
 const BASE_TENSORS: [&str; 29] = [
-    "input", "enc_conv0", "enc_conv1", "pool1", "enc_conv2", "pool2", "enc_conv3", "pool3", "enc_conv4", "pool4",
-    "enc_conv5a", "enc_conv5b", "upsample4", "concat4", "dec_conv4a", "dec_conv4b", "upsample3", "concat3",
-    "dec_conv3a", "dec_conv3b", "upsample2", "concat2", "dec_conv2a", "dec_conv2b", "upsample1", "concat1",
-    "dec_conv1a", "dec_conv1b", "dec_conv0",
+    "input",
+    "enc_conv0",
+    "enc_conv1",
+    "pool1",
+    "enc_conv2",
+    "pool2",
+    "enc_conv3",
+    "pool3",
+    "enc_conv4",
+    "pool4",
+    "enc_conv5a",
+    "enc_conv5b",
+    "upsample4",
+    "concat4",
+    "dec_conv4a",
+    "dec_conv4b",
+    "upsample3",
+    "concat3",
+    "dec_conv3a",
+    "dec_conv3b",
+    "upsample2",
+    "concat2",
+    "dec_conv2a",
+    "dec_conv2b",
+    "upsample1",
+    "concat1",
+    "dec_conv1a",
+    "dec_conv1b",
+    "dec_conv0",
 ];
 
 #[test]
@@ -101,10 +126,7 @@ fn shapes_that_do_not_chain_name_the_tensor() {
     let a = Archive::parse(bytes).unwrap();
     let e = Network::from_archive(&a).unwrap_err();
     assert_eq!(e.at, a.get("dec_conv4a.weight").unwrap().entry_at);
-    assert_eq!(
-        e.message,
-        "`dec_conv4a.weight` takes 13 input channels, but `concat4` before it has 14 (upsample4: 8 + pool3: 6)"
-    );
+    assert_eq!(e.message, "`dec_conv4a.weight` takes 13 input channels, but `concat4` before it has 14 (upsample4: 8 + pool3: 6)");
     let d = e.diagnostic("w.tza");
     assert_eq!(d.code, crate::diag::Code::Weights);
     assert!(d.message.starts_with(&format!("at byte {}: `dec_conv4a.weight`", e.at)), "{}", d.message);

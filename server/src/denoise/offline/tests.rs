@@ -38,7 +38,9 @@ fn psnr(a: &Image, reference: &Image) -> f64 {
 fn matches_oidn_ldr() {
     let dir = tempfile::tempdir().unwrap();
     for ((weights_file, aux, reference), device) in
-        [("rt_ldr_alb_nrm.tza", true, "oidn_ldr_alb_nrm.pfm"), ("rt_ldr.tza", false, "oidn_ldr.pfm")].into_iter().flat_map(|c| [(c, Device::Gpu), (c, Device::Cpu)])
+        [("rt_ldr_alb_nrm.tza", true, "oidn_ldr_alb_nrm.pfm"), ("rt_ldr.tza", false, "oidn_ldr.pfm")]
+            .into_iter()
+            .flat_map(|c| [(c, Device::Gpu), (c, Device::Cpu)])
     {
         let out = dir.path().join("out.pfm");
         let mut j = job(weights_file, aux, Mode::Ldr, out.clone());
@@ -175,7 +177,10 @@ fn inputs_must_fit_the_weights_and_each_other() {
     let mut j = job("rt_ldr.tza", false, Mode::Ldr, out);
     j.weights = bad;
     let d = run(&j).unwrap_err();
-    assert_eq!((d.code, d.message.as_str()), (Code::Weights, "at byte 4: expected the tensor table offset (8 bytes), but the file ends at byte 4"));
+    assert_eq!(
+        (d.code, d.message.as_str()),
+        (Code::Weights, "at byte 4: expected the tensor table offset (8 bytes), but the file ends at byte 4")
+    );
 }
 
 /// A fixture of the hard cases (`fixtures/hard/`, made by its `make.py`).
@@ -199,7 +204,15 @@ fn hard(name: &str) -> PathBuf {
 #[test]
 fn hard_cases_match_oidn() {
     let dir = tempfile::tempdir().unwrap();
-    let cases = [("zero", Mode::Ldr), ("one_pixel", Mode::Ldr), ("noisy", Mode::Ldr), ("noisy", Mode::Hdr), ("bright", Mode::Hdr), ("bad", Mode::Ldr), ("bad", Mode::Hdr)];
+    let cases = [
+        ("zero", Mode::Ldr),
+        ("one_pixel", Mode::Ldr),
+        ("noisy", Mode::Ldr),
+        ("noisy", Mode::Hdr),
+        ("bright", Mode::Hdr),
+        ("bad", Mode::Ldr),
+        ("bad", Mode::Hdr),
+    ];
     for ((name, mode), device) in cases.into_iter().flat_map(|c| [(c, Device::Gpu), (c, Device::Cpu)]) {
         let out = dir.path().join("out.pfm");
         let mut j = job("rt_ldr.tza", false, mode, out.clone());
@@ -277,10 +290,15 @@ fn nan_and_inf_stay_within_the_receptive_field() {
                     farthest = farthest.max(distance);
                 }
                 non_finite += pb.iter().filter(|v| !v.is_finite()).count();
-                assert!(distance <= radius || pa == pb, "{mode:?}: ({x}, {y}), {distance} pixels from the bad one, changed: {pa:?} against {pb:?}");
+                assert!(
+                    distance <= radius || pa == pb,
+                    "{mode:?}: ({x}, {y}), {distance} pixels from the bad one, changed: {pa:?} against {pb:?}"
+                );
             }
         }
-        eprintln!("{mode:?}: {changed} pixels changed, {non_finite} values not finite, the farthest {farthest} pixels away (radius {radius})");
+        eprintln!(
+            "{mode:?}: {changed} pixels changed, {non_finite} values not finite, the farthest {farthest} pixels away (radius {radius})"
+        );
         assert!(changed > 0, "{mode:?}: the bad pixel changes its neighbourhood");
         if mode == Mode::Ldr {
             assert_eq!(non_finite, 0, "LDR sanitises NaN and Inf");
@@ -322,6 +340,10 @@ fn tiles_leave_no_seams() {
     (j.color, j.tile) = (color, Some(192));
     let d = run(&j).unwrap_err();
     assert_eq!(d.code, Code::Weights);
-    assert!(d.message.contains("a tile of 192 pixels is too small for these weights: they see 96 pixels around each pixel"), "{}", d.message);
+    assert!(
+        d.message.contains("a tile of 192 pixels is too small for these weights: they see 96 pixels around each pixel"),
+        "{}",
+        d.message
+    );
     assert!(d.file().is_some_and(|f| f.ends_with("rt_ldr.tza")), "{d:?}");
 }

@@ -113,10 +113,7 @@ fn refuses_sizes_that_overflow_or_exceed_the_file() {
         bytes[at + 4 * i..at + 4 * i + 4].copy_from_slice(&d.to_le_bytes());
     }
     let e = err(bytes);
-    assert!(
-        matches!(e.kind, TzaErrorKind::DataPastEnd { size: 10_000_000_000, .. }),
-        "{e}"
-    );
+    assert!(matches!(e.kind, TzaErrorKind::DataPastEnd { size: 10_000_000_000, .. }), "{e}");
     assert!(e.to_string().contains("claims 10000000000 bytes"), "{e}");
     // Dimensions whose product overflows 64 bits.
     let mut bytes = good();

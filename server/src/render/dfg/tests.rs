@@ -137,7 +137,8 @@ fn the_shader_matches_the_gradient_its_irradiance_and_the_table() {
     // Between texels: roughness and n·v off the grid.
     let roughness = [0.05, 0.33, 0.5, 0.71, 0.9, 1.0];
     let f4 = |v: [f64; 3], w: f64| [v[0] as f32, v[1] as f32, v[2] as f32, w as f32];
-    let cases: Vec<Case> = dirs.iter().zip(roughness).map(|(d, r)| Case { top: f4(top, 0.0), bottom: f4(bottom, 0.0), d: f4(*d, r) }).collect();
+    let cases: Vec<Case> =
+        dirs.iter().zip(roughness).map(|(d, r)| Case { top: f4(top, 0.0), bottom: f4(bottom, 0.0), d: f4(*d, r) }).collect();
     let view = create_texture(&gpu.device, &gpu.queue).create_view(&Default::default());
     let out: Vec<[[f32; 4]; 3]> = Kernel::new(&gpu, KERNEL, "main").unwrap().run(&gpu, &cases, cases.len(), &[&view]).unwrap();
     for ((d, r), [rad, irr, t]) in dirs.iter().zip(roughness).zip(out) {
@@ -154,6 +155,9 @@ fn the_shader_matches_the_gradient_its_irradiance_and_the_table() {
         let [scale, bias] = dfg(n_v.max(1e-3), r);
         let k = prefilter_k(r);
         let got = t.map(f64::from);
-        assert!((got[0] - scale).abs() < 5e-3 && (got[1] - bias).abs() < 5e-3 && (got[2] - k).abs() < 5e-3, "dfg at n·v {n_v}, roughness {r}: {got:?} vs ({scale}, {bias}, {k})");
+        assert!(
+            (got[0] - scale).abs() < 5e-3 && (got[1] - bias).abs() < 5e-3 && (got[2] - k).abs() < 5e-3,
+            "dfg at n·v {n_v}, roughness {r}: {got:?} vs ({scale}, {bias}, {k})"
+        );
     }
 }

@@ -57,10 +57,7 @@ fn ltc_tables_are_the_published_fit() {
         // shader tells a light's front from its back.
         assert!(r * w - g * b > 0.0, "texel {k}: inverse LTC matrix is not orientation-preserving");
         let [mag, fres, zero, sphere] = a[4 * k..][..4] else { unreachable!() };
-        assert!(
-            mag > 0.0 && mag <= 1.0 && (0.0..=mag).contains(&fres),
-            "texel {k}: magnitude {mag}, fresnel {fres}"
-        );
+        assert!(mag > 0.0 && mag <= 1.0 && (0.0..=mag).contains(&fres), "texel {k}: magnitude {mag}, fresnel {fres}");
         assert!(zero == 0.0 && (0.0..=1.0).contains(&sphere), "texel {k}: {zero}, {sphere}");
     }
 }
@@ -212,8 +209,7 @@ impl Case {
         let amp = bilinear(amplitude, at);
         let local = self.local_corners();
         let above = if clip.surface { clip_z(&local) } else { local.to_vec() };
-        let warped: Vec<V3> =
-            above.iter().map(|q| [m[0] * q[0] + m[2] * q[2], q[1], m[1] * q[0] + m[3] * q[2]]).collect();
+        let warped: Vec<V3> = above.iter().map(|q| [m[0] * q[0] + m[2] * q[2], q[1], m[1] * q[0] + m[3] * q[2]]).collect();
         let diffuse = sided(lambert_signed(&above, false), self.two_sided);
         let spec = sided(lambert_signed(&warped, clip.cosine), self.two_sided);
         [diffuse, spec * (amp[0] - amp[1]), spec * amp[1]]
@@ -290,10 +286,8 @@ pub(crate) fn hemisphere_integral<const N: usize>(cos_v: f64, f: impl Fn(V3, V3)
 }
 
 /// Four-point Gauss-Legendre nodes and weights on [-1, 1].
-const GL_X: [f64; 4] =
-    [-0.861_136_311_594_052_6, -0.339_981_043_584_856_3, 0.339_981_043_584_856_3, 0.861_136_311_594_052_6];
-const GL_W: [f64; 4] =
-    [0.347_854_845_137_453_9, 0.652_145_154_862_546_1, 0.652_145_154_862_546_1, 0.347_854_845_137_453_9];
+const GL_X: [f64; 4] = [-0.861_136_311_594_052_6, -0.339_981_043_584_856_3, 0.339_981_043_584_856_3, 0.861_136_311_594_052_6];
+const GL_W: [f64; 4] = [0.347_854_845_137_453_9, 0.652_145_154_862_546_1, 0.652_145_154_862_546_1, 0.347_854_845_137_453_9];
 
 /// The true GGX figures for one case.
 struct Reference {
@@ -436,12 +430,7 @@ fn cases() -> Vec<Case> {
     out.push(Case { name: "back face, single-sided".into(), corners: reversed, ..base.clone() });
     out.push(Case { name: "back face, two-sided".into(), corners: reversed, two_sided: true, ..base.clone() });
     let below = rect([0.0, 0.0, -2.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
-    out.push(Case {
-        name: "below the horizon".into(),
-        corners: below.map(|c| add(world(c), offset)),
-        two_sided: true,
-        ..base
-    });
+    out.push(Case { name: "below the horizon".into(), corners: below.map(|c| add(world(c), offset)), two_sided: true, ..base });
     out
 }
 
@@ -521,9 +510,7 @@ fn ltc_table_amplitudes_are_the_ggx_integrals() {
             assert!(em < 0.02 && ef < 2e-3, "texel ({i}, {j}): table {t:?}, GGX {mag} {fres}");
         }
     }
-    eprintln!(
-        "magnitude: worst relative error {worst_mag:.2e}; Fresnel term: worst error {worst_fres:.2e} of the magnitude"
-    );
+    eprintln!("magnitude: worst relative error {worst_mag:.2e}; Fresnel term: worst error {worst_fres:.2e} of the magnitude");
 }
 
 // ---- the device -----------------------------------------------------
@@ -655,8 +642,7 @@ fn ltc_textures_hold_the_tables() {
     let mut encoder = device.create_command_encoder(&Default::default());
     for (k, t) in textures.iter().enumerate() {
         assert_eq!((t.width(), t.height(), t.format()), (SIZE, SIZE, FORMAT));
-        let usage =
-            wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC;
+        let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::COPY_SRC;
         assert_eq!(t.usage(), usage);
         encoder.copy_texture_to_buffer(
             t.as_image_copy(),
@@ -724,13 +710,7 @@ fn ltc_degenerate_inputs_stay_finite() {
     for (g, c) in got.iter().zip(&odd) {
         assert!(g.iter().all(|x| x.is_finite() && *x >= 0.0), "{}: {g:?}", c.name);
         if !c.name.starts_with("on a corner") {
-            assert!(
-                (g[0] - c.diffuse()).abs() < DIFFUSE_TOLERANCE,
-                "{}: diffuse {} vs {}",
-                c.name,
-                g[0],
-                c.diffuse()
-            );
+            assert!((g[0] - c.diffuse()).abs() < DIFFUSE_TOLERANCE, "{}: diffuse {} vs {}", c.name, g[0], c.diffuse());
         }
     }
 }
@@ -816,9 +796,7 @@ fn ltc_tests_catch_corrupted_tables_and_missing_clips() {
     let cases = cases();
     let (m, a) = (matrix_table(), amplitude_table());
     let refs = references(&cases);
-    let transpose = |t: &[f32]| -> Vec<f32> {
-        (0..TEXELS).flat_map(|k| t[4 * ((k % 64) * 64 + k / 64)..][..4].to_vec()).collect()
-    };
+    let transpose = |t: &[f32]| -> Vec<f32> { (0..TEXELS).flat_map(|k| t[4 * ((k % 64) * 64 + k / 64)..][..4].to_vec()).collect() };
     let swap = |t: &[f32], i: usize, j: usize| -> Vec<f32> {
         t.chunks_exact(4)
             .flat_map(|c| {
@@ -858,9 +836,7 @@ fn ltc_tests_catch_corrupted_tables_and_missing_clips() {
             spec = spec.max(rel(x[1], y[1], CPU_FLOOR).max(rel(x[2], y[2], CPU_FLOOR)) / CPU_TOLERANCE);
             vs_ggx = vs_ggx.max(spec_error(&x, r, 1.0) / spec_tolerance(c.view_deg));
         }
-        eprintln!(
-            "{what}: diffuse {diffuse:.0}x its tolerance, specular {spec:.0}x the shader-vs-CPU tolerance, {vs_ggx:.1}x the GGX one"
-        );
+        eprintln!("{what}: diffuse {diffuse:.0}x its tolerance, specular {spec:.0}x the shader-vs-CPU tolerance, {vs_ggx:.1}x the GGX one");
         assert!(diffuse.max(spec) > 10.0, "{what} would pass");
     }
 }

@@ -3,7 +3,7 @@
 //! function taking the graph builder and input handles and returning
 //! output handles. `render::build_graph` assembles them into a frame.
 
-use crate::gpu::pipeline::{Binding, Group, PipelineSpec, storage, uniform, ALL, COMPUTE, FRAG, sizes};
+use crate::gpu::pipeline::{ALL, Binding, COMPUTE, FRAG, Group, PipelineSpec, sizes, storage, uniform};
 use crate::scene::Scene;
 
 use super::resource::PipelineKey;
@@ -56,11 +56,8 @@ pub const VIEW: Binding = uniform("view", 0, ALL, sizes::VIEW);
 /// and compute passes (the path tracer).
 pub const LIGHTS: Binding = storage("lights", 1, FRAG.union(COMPUTE));
 /// Shadow maps and their views (`lib/shadows.wgsl`), with SHADOWS on.
-pub const SHADOW_GROUP: Group = Group::when(
-    1,
-    SHADOWS,
-    &[crate::gpu::pipeline::depth_array("shadow_maps", 0), storage("shadow_views", 1, FRAG)],
-);
+pub const SHADOW_GROUP: Group =
+    Group::when(1, SHADOWS, &[crate::gpu::pipeline::depth_array("shadow_maps", 0), storage("shadow_views", 1, FRAG)]);
 /// The participating media (`lib/media.wgsl`), for raster and compute passes.
 pub const MEDIA: &[Binding] = &[storage("media", 0, FRAG.union(COMPUTE))];
 
@@ -114,7 +111,11 @@ mod tests {
                     for nan_watch in [false, true] {
                         let options = crate::render::FrameOptions { nan_watch, ..Default::default() };
                         for k in crate::render::build_graph(&loaded.scene, loaded.denoiser.as_deref(), options).pipelines() {
-                            assert!(specs().any(|s| std::ptr::eq(s, k.spec)), "{} is built by a frame but not listed for loupe check", k.label());
+                            assert!(
+                                specs().any(|s| std::ptr::eq(s, k.spec)),
+                                "{} is built by a frame but not listed for loupe check",
+                                k.label()
+                            );
                             used.insert(k.spec.name);
                         }
                     }

@@ -60,7 +60,6 @@ struct Out {
     ids: [u32; 4],
 }
 
-
 /// The torus knot, placed as `scenes/minimal.toml` places it, but rotated
 /// and scaled off the axes.
 fn knot() -> Vec<([Vec3; 3], [u32; 2])> {
@@ -115,7 +114,8 @@ fn the_gpu_traversal_hits_what_the_cpu_traversal_hits() {
     }
     let input: Vec<Ray> = rays.iter().map(|(o, d, t0, t1)| Ray { origin: [o.x, o.y, o.z, *t0], dir: [d.x, d.y, d.z, *t1] }).collect();
     let kernel = Kernel::new(&gpu, KERNEL, "main").unwrap_or_else(|e| panic!("{e}"));
-    let out: Vec<Out> = kernel.run_bound(&gpu, &input, input.len(), &[], &[geometry.nodes(), geometry.triangles()]).unwrap_or_else(|e| panic!("{e}"));
+    let out: Vec<Out> =
+        kernel.run_bound(&gpu, &input, input.len(), &[], &[geometry.nodes(), geometry.triangles()]).unwrap_or_else(|e| panic!("{e}"));
     // Allowance: a ray through (within rounding of) an edge or a vertex
     // may find either triangle there or slip between them (Möller–Trumbore
     // is not watertight), and a GPU that fuses multiply-adds rounds the
@@ -151,7 +151,13 @@ fn the_gpu_traversal_hits_what_the_cpu_traversal_hits() {
             ambiguous.push(format!("{case}: occlusion"));
         }
     }
-    eprintln!("{} rays: {hits} hit the same triangle (t within {worst_t:e} relative), {} by an edge disagree; {} occluded, {} not", rays.len(), ambiguous.len(), shadowed[1], shadowed[0]);
+    eprintln!(
+        "{} rays: {hits} hit the same triangle (t within {worst_t:e} relative), {} by an edge disagree; {} occluded, {} not",
+        rays.len(),
+        ambiguous.len(),
+        shadowed[1],
+        shadowed[0]
+    );
     assert!(ambiguous.len() * 1000 <= rays.len(), "{} rays by an edge disagree:\n{}", ambiguous.len(), ambiguous.join("\n"));
     assert!(hits * 2 > rays.len() && shadowed[0] * 5 > rays.len(), "the rays both hit and miss: {hits} hits of {}", rays.len());
 }

@@ -57,7 +57,13 @@ pub fn pearson(observed: &[f64], expected: &[f64]) -> Fit {
     if pooled > 0 {
         // A pool expected to hold nothing but holding samples is a certain
         // failure; one holding nothing adds nothing.
-        statistic += if pool_expected > 0.0 { (pool_observed - pool_expected).powi(2) / pool_expected } else if pool_observed > 0.0 { f64::INFINITY } else { 0.0 };
+        statistic += if pool_expected > 0.0 {
+            (pool_observed - pool_expected).powi(2) / pool_expected
+        } else if pool_observed > 0.0 {
+            f64::INFINITY
+        } else {
+            0.0
+        };
         cells += 1;
     }
     let dof = cells.saturating_sub(1).max(1);
@@ -182,7 +188,12 @@ mod tests {
     #[test]
     fn the_p_value_is_the_chi_square_tail() {
         // Tabulated quantiles: P(X > x) for X ~ chi-square(k).
-        for (k, x, p) in [(1usize, 3.841_458_820_694_124, 0.05), (10, 23.209_251_158_954_36, 0.01), (1000, 1_106.969_074_962_087, 0.01), (4, 0.710_723_021_397_325_1, 0.95)] {
+        for (k, x, p) in [
+            (1usize, 3.841_458_820_694_124, 0.05),
+            (10, 23.209_251_158_954_36, 0.01),
+            (1000, 1_106.969_074_962_087, 0.01),
+            (4, 0.710_723_021_397_325_1, 0.95),
+        ] {
             let q = upper_gamma(k as f64 / 2.0, x / 2.0);
             assert!((q - p).abs() < 1e-7, "chi-square({k}) beyond {x}: {q}, not {p}");
         }

@@ -139,7 +139,7 @@ pub fn run(gpu: &crate::gpu::Gpu) -> Errors {
     for (o, q) in out.iter().zip(&queries) {
         let f64s = |v: [f32; 4]| [v[0], v[1], v[2]].map(f64::from);
         let (n, h) = (f64s(q.n), f64s(q.h));
-        let operands = exact(q.n.map(f16)[..3].try_into().unwrap(), q.h.map(f16)[..3].try_into().unwrap(), f16(q.n[3]) );
+        let operands = exact(q.n.map(f16)[..3].try_into().unwrap(), q.h.map(f16)[..3].try_into().unwrap(), f16(q.n[3]));
         let want = [exact(n, h, f64::from(q.n[3])); 2].into_iter().chain([operands.min(65504.0); 2]);
         for (k, want) in want.enumerate() {
             let got = f64::from(o[k]);

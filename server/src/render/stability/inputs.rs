@@ -137,7 +137,10 @@ fn check(q: &Query, o: &[[f32; 4]; 6], degenerate: bool) -> Vec<String> {
     if degenerate {
         let reflected = o[3].iter().any(|x| *x != 0.0) || o[4][3] != 0.0 || o[5].iter().any(|x| *x != 0.0);
         if reflected {
-            failures.push(format!("{what}: a degenerate normal reflects light: brdf_cos, pdf {:?}, sample {:?}, weight {:?}", o[3], o[4], o[5]));
+            failures.push(format!(
+                "{what}: a degenerate normal reflects light: brdf_cos, pdf {:?}, sample {:?}, weight {:?}",
+                o[3], o[4], o[5]
+            ));
         }
         return failures;
     }

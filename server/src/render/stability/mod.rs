@@ -102,10 +102,15 @@ fn brdf_sample_draws_from_brdf_pdf() {
         failures.extend(at_most(&format!("{case}: relative weight error"), error, 1e-3).err());
         failures.extend(at_most(&format!("{case}: largest weight"), largest, MAX_WEIGHT).err());
         let sigma = (kept * (1.0 - kept) / drawn.len() as f64).sqrt();
-        failures.extend(at_most(&format!("{case}: kept share {kept} against ∫pdf {integral}"), (kept - integral).abs(), GRAZING + 4.0 * sigma).err());
+        failures.extend(
+            at_most(&format!("{case}: kept share {kept} against ∫pdf {integral}"), (kept - integral).abs(), GRAZING + 4.0 * sigma).err(),
+        );
         for (c, (a, (m, se))) in density.albedo.into_iter().zip(mean).enumerate() {
             failures.extend(at_most(&format!("{case}, channel {c}: albedo"), a, 1.0 + ALBEDO_SLACK).err());
-            failures.extend(at_most(&format!("{case}, channel {c}: sampled albedo {m} against quadrature {a}"), (m - a).abs(), 4.0 * se + GRAZING).err());
+            failures.extend(
+                at_most(&format!("{case}, channel {c}: sampled albedo {m} against quadrature {a}"), (m - a).abs(), 4.0 * se + GRAZING)
+                    .err(),
+            );
             max_albedo = max_albedo.max(a);
         }
         worst_p = worst_p.min(fit.p_value);
@@ -127,7 +132,9 @@ fn brdf_cos_is_reciprocal() {
     let mut worst = 0.0f64;
     for case in sampling::cases().iter().filter(|c| c.cos_v == 1.0) {
         let (error, _) = sampling::reciprocity(&gpu, &kernels, case, 1 << 16);
-        failures.extend(at_most(&format!("roughness {}, metallic {}: f(v, l) against f(l, v)", case.roughness, case.metallic), error, RECIPROCAL).err());
+        failures.extend(
+            at_most(&format!("roughness {}, metallic {}: f(v, l) against f(l, v)", case.roughness, case.metallic), error, RECIPROCAL).err(),
+        );
         worst = worst.max(error);
     }
     eprintln!("reciprocity: worst relative difference {worst:.1e}");
@@ -162,7 +169,14 @@ fn ggx_in_half_precision() {
     eprintln!(
         "GGX near n·h = 1, alpha 0.045² (adapter SHADER_F16: {}): worst relative error f32 {:.1e}, f16-stored normal {:.1e}, f16 module form {:.1e} (non-finite {}), f16 textbook form {:.1e} (non-finite {}); peak D f32 {:.0}, f16 {:.0}",
         gpu.device.features().contains(wgpu::Features::SHADER_F16),
-        e.worst[0], e.worst[1], e.worst[2], e.non_finite[2], e.worst[3], e.non_finite[3], e.peak[0], e.peak[1]
+        e.worst[0],
+        e.worst[1],
+        e.worst[2],
+        e.non_finite[2],
+        e.worst[3],
+        e.non_finite[3],
+        e.peak[0],
+        e.peak[1]
     );
     let mut failures = Vec::new();
     for (k, what, bound) in [(0, "in f32", 1e-4), (1, "with the G-buffer's f16 normal", 0.25), (2, "in f16 arithmetic", 0.05)] {

@@ -271,7 +271,8 @@ pub fn reciprocity(gpu: &Gpu, k: &Kernels, case: &Case, pairs: usize) -> (f64, u
         [s * p.cos(), s * p.sin(), c]
     };
     let a: Vec<[f64; 3]> = u[..pairs].iter().map(dir).collect();
-    let b: Vec<[f64; 3]> = u[pairs..].iter().zip(&a).enumerate().map(|(i, (u, a))| if i % 2 == 0 { dir(u) } else { [-a[0], -a[1], a[2]] }).collect();
+    let b: Vec<[f64; 3]> =
+        u[pairs..].iter().zip(&a).enumerate().map(|(i, (u, a))| if i % 2 == 0 { dir(u) } else { [-a[0], -a[1], a[2]] }).collect();
     let mut input = header(case).to_vec();
     input.extend(a.iter().chain(&b).map(|d| [d[0] as f32, d[1] as f32, d[2] as f32, 0.0]));
     let out: Vec<[[f32; 4]; 2]> = k.reciprocal.run(gpu, &input, pairs, &[]).unwrap();

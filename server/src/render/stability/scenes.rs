@@ -72,7 +72,8 @@ pub fn variants(base: &Scene) -> Vec<(String, Scene)> {
 /// The bundled scenes, each at 64 × 36.
 pub fn bundled() -> Vec<(String, Loaded)> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
-    let mut paths: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "toml")).collect();
+    let mut paths: Vec<_> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "toml")).collect();
     paths.sort();
     paths
         .into_iter()
@@ -112,7 +113,13 @@ pub fn scan(s: &mut Session, loaded: &Loaded, scene: &Scene) -> Vec<String> {
         let pending = s.submit(Some(&outputs), 1.0 / 30.0);
         let r = s.wait(pending);
         for c in r.captures.iter().filter(|c| c.stats.has_non_finite()) {
-            bad.push(format!("frame {frame}: {} holds {} NaN and {} Inf, the first at {:?}", c.key(), c.stats.nan, c.stats.inf, c.stats.first_nan));
+            bad.push(format!(
+                "frame {frame}: {} holds {} NaN and {} Inf, the first at {:?}",
+                c.key(),
+                c.stats.nan,
+                c.stats.inf,
+                c.stats.first_nan
+            ));
         }
         for t in r.tensors.iter().filter(|t| t.stats.has_non_finite()) {
             bad.push(format!("frame {frame}: {} holds {} NaN and {} Inf", t.key(), t.stats.nan, t.stats.inf));

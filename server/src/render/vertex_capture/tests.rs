@@ -39,7 +39,13 @@ fn gbuffer_capture(gpu: &Gpu, lib: &Library) -> (PipelineKey, VertexCapture) {
 }
 
 /// Records, submits and reads back one capture.
-fn capture(gpu: &Gpu, capture: &VertexCapture, layout: &[Option<&[Binding]>], bindings: &[(&'static str, wgpu::BindingResource<'_>)], draw: &Draw<'_>) -> Result<Vec<[f32; 4]>, CaptureError> {
+fn capture(
+    gpu: &Gpu,
+    capture: &VertexCapture,
+    layout: &[Option<&[Binding]>],
+    bindings: &[(&'static str, wgpu::BindingResource<'_>)],
+    draw: &Draw<'_>,
+) -> Result<Vec<[f32; 4]>, CaptureError> {
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     let pending = capture.record(&gpu.device, &mut encoder, layout, bindings, draw)?;
     gpu.queue.submit([encoder.finish()]);
@@ -85,18 +91,40 @@ const BASE_VERTEX: i32 = -1;
 impl Scene {
     fn new(gpu: &Gpu) -> Scene {
         let view_proj = Mat4::perspective_rh(1.1, 1.5, 0.1, 100.0) * Mat4::look_at_rh(Vec3::new(2.0, 3.0, 5.0), Vec3::ZERO, Vec3::Y);
-        let models = [Mat4::IDENTITY, Mat4::from_scale_rotation_translation(Vec3::new(1.5, 0.5, 2.0), Quat::from_axis_angle(Vec3::new(1.0, 2.0, 0.5).normalize(), 0.7), Vec3::new(0.3, -1.0, 2.0))];
-        let positions = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, -0.5, 0.25), Vec3::new(-2.0, 1.0, 0.5), Vec3::new(0.5, 2.0, -1.0), Vec3::new(-0.75, -1.25, 3.0)];
+        let models = [
+            Mat4::IDENTITY,
+            Mat4::from_scale_rotation_translation(
+                Vec3::new(1.5, 0.5, 2.0),
+                Quat::from_axis_angle(Vec3::new(1.0, 2.0, 0.5).normalize(), 0.7),
+                Vec3::new(0.3, -1.0, 2.0),
+            ),
+        ];
+        let positions = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, -0.5, 0.25),
+            Vec3::new(-2.0, 1.0, 0.5),
+            Vec3::new(0.5, 2.0, -1.0),
+            Vec3::new(-0.75, -1.25, 3.0),
+        ];
         let mut view: Vec<f32> = [view_proj, view_proj.inverse()].iter().flat_map(|m| m.to_cols_array()).collect();
         view.extend([0.0; 8]); // position, params
         view.extend([0.0f32; 4]); // counts: bit patterns of zero
         view.extend([0.0; 8]); // environment
         let objects: Vec<u8> = models
             .iter()
-            .flat_map(|m| [bytemuck::cast_slice(&m.to_cols_array()).to_vec(), bytemuck::cast_slice(&m.inverse().transpose().to_cols_array()).to_vec(), vec![0u8; 16]].concat())
+            .flat_map(|m| {
+                [
+                    bytemuck::cast_slice(&m.to_cols_array()).to_vec(),
+                    bytemuck::cast_slice(&m.inverse().transpose().to_cols_array()).to_vec(),
+                    vec![0u8; 16],
+                ]
+                .concat()
+            })
             .collect();
         let vertices: Vec<f32> = positions.iter().flat_map(|p| [p.x, p.y, p.z, 0.0, 1.0, 0.0]).collect();
-        let init = |label, contents: &[u8], usage| gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage });
+        let init = |label, contents: &[u8], usage| {
+            gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+        };
         use wgpu::BufferUsages as U;
         Scene {
             view_proj,
@@ -112,17 +140,29 @@ impl Scene {
 
     /// The bindings as the G-buffer pass names them.
     fn bindings(&self) -> [(&'static str, wgpu::BindingResource<'_>); 3] {
-        [("view", self.view.as_entire_binding()), ("objects", self.objects.as_entire_binding()), ("materials", self.materials.as_entire_binding())]
+        [
+            ("view", self.view.as_entire_binding()),
+            ("objects", self.objects.as_entire_binding()),
+            ("materials", self.materials.as_entire_binding()),
+        ]
     }
 
     /// Indices 1..5 of object 1.
     fn draw(&self) -> Draw<'_> {
-        Draw { buffer: Some(&self.vertices), vertices: Vertices::Indexed { indices: &self.indices, first: 1, base_vertex: BASE_VERTEX }, count: 4, instance: 1 }
+        Draw {
+            buffer: Some(&self.vertices),
+            vertices: Vertices::Indexed { indices: &self.indices, first: 1, base_vertex: BASE_VERTEX },
+            count: 4,
+            instance: 1,
+        }
     }
 
     /// view_proj · model · position of the vertices `draw` runs.
     fn expected(&self) -> Vec<Vec4> {
-        INDICES[1..].iter().map(|&i| self.view_proj * self.models[1] * self.positions[(i as i32 + BASE_VERTEX) as usize].extend(1.0)).collect()
+        INDICES[1..]
+            .iter()
+            .map(|&i| self.view_proj * self.models[1] * self.positions[(i as i32 + BASE_VERTEX) as usize].extend(1.0))
+            .collect()
     }
 }
 
@@ -151,7 +191,10 @@ fn an_edited_vertex_shader_is_followed() {
     let mut lib = repository_library();
     let path = shader_root().join(GBUFFER.shader);
     let original = lib.get(&library::display_path(&path)).unwrap().text.to_string();
-    let edited = original.replace("view.view_proj * world_position(v, object),", "view.view_proj * world_position(v, object) + vec4(0.25, -0.5, 0.0, 0.125),");
+    let edited = original.replace(
+        "view.view_proj * world_position(v, object),",
+        "view.view_proj * world_position(v, object) + vec4(0.25, -0.5, 0.0, 0.125),",
+    );
     assert_ne!(edited, original, "the edit applies");
     lib.upsert(SourceFile::from_text(library::display_path(&path), path, edited.into()));
     let (key, vc) = gbuffer_capture(&gpu, &lib);
@@ -219,7 +262,9 @@ fn a_draw_the_capture_cannot_read_is_an_error() {
     let (key, vc) = gbuffer_capture(&gpu, &repository_library());
     let layout = key.spec.layout(&key.defs);
     let scene = Scene::new(&gpu);
-    let err = |bindings: &[(&'static str, wgpu::BindingResource<'_>)], draw: &Draw<'_>| capture(&gpu, &vc, &layout, bindings, draw).unwrap_err().to_string();
+    let err = |bindings: &[(&'static str, wgpu::BindingResource<'_>)], draw: &Draw<'_>| {
+        capture(&gpu, &vc, &layout, bindings, draw).unwrap_err().to_string()
+    };
     let b = scene.bindings();
     assert!(err(&b[..1], &scene.draw()).contains("`objects`, which the pass did not bind"));
     assert!(err(&b, &Draw { count: 0, ..scene.draw() }).contains("no vertices"));
@@ -242,7 +287,9 @@ fn a_draw_the_capture_cannot_read_is_an_error() {
     assert!(!pending.ready());
     assert!(matches!(pending.read(), Err(CaptureError::Readback(_))));
     // Instrumenting errors come through.
-    let e = VertexCapture::new(&gpu.device, &compose(&repository_library(), &key), "fs_main", Some(&MESH_VERTICES)).err().expect("a fragment stage");
+    let e = VertexCapture::new(&gpu.device, &compose(&repository_library(), &key), "fs_main", Some(&MESH_VERTICES))
+        .err()
+        .expect("a fragment stage");
     assert!(matches!(e, CaptureError::Instrument(InstrumentError::NotVertex { .. })), "{e}");
 }
 

@@ -50,10 +50,9 @@ fn capture_set(shared: &Shared, version: Option<&str>) -> Result<Captures, Box<R
     match version {
         None | Some("current") => Ok(read(&shared.captures)),
         Some("last_good") => Ok(read(&shared.last_good)),
-        Some(other) => Err(Box::new(error(
-            StatusCode::BAD_REQUEST,
-            &format!("unknown version `{other}`: expected `current` or `last_good`"),
-        ))),
+        Some(other) => {
+            Err(Box::new(error(StatusCode::BAD_REQUEST, &format!("unknown version `{other}`: expected `current` or `last_good`"))))
+        }
     }
 }
 
@@ -107,10 +106,7 @@ pub(super) async fn capture(
         return error(StatusCode::BAD_REQUEST, "missing extension: expected .png, .f32, .f16 or .exr");
     };
     if !matches!(ext, "png" | "f32" | "f16" | "exr") {
-        return error(
-            StatusCode::BAD_REQUEST,
-            &format!("unknown extension `.{ext}`: expected .png, .f32, .f16 or .exr"),
-        );
+        return error(StatusCode::BAD_REQUEST, &format!("unknown extension `.{ext}`: expected .png, .f32, .f16 or .exr"));
     }
     let set = match capture_set(&st.shared, q.version.as_deref()) {
         Ok(set) => set,
@@ -225,8 +221,19 @@ mod tests {
         assert_eq!(v["protocol"], VERSION);
         assert_eq!(v["frame"], 42);
         for key in [
-            "version", "adapter", "cpu_adapter", "features", "degraded", "scene", "pipelines_ok", "pipelines_stale",
-            "pipelines_failed", "device_resets", "errors", "warnings", "render_mode",
+            "version",
+            "adapter",
+            "cpu_adapter",
+            "features",
+            "degraded",
+            "scene",
+            "pipelines_ok",
+            "pipelines_stale",
+            "pipelines_failed",
+            "device_resets",
+            "errors",
+            "warnings",
+            "render_mode",
         ] {
             assert!(v.get(key).is_some(), "status lacks `{key}`: {v}");
         }

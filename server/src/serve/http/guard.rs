@@ -22,8 +22,7 @@ pub(super) fn json_response<T: Serialize + ?Sized>(status: StatusCode, value: &T
     match serde_json::to_vec(value) {
         Ok(body) => (status, [(header::CONTENT_TYPE, "application/json")], body).into_response(),
         Err(e) => {
-            let body = serde_json::to_vec(&ErrorBody { error: &format!("cannot encode response: {e}") })
-                .unwrap_or_default();
+            let body = serde_json::to_vec(&ErrorBody { error: &format!("cannot encode response: {e}") }).unwrap_or_default();
             (StatusCode::INTERNAL_SERVER_ERROR, [(header::CONTENT_TYPE, "application/json")], body).into_response()
         }
     }
@@ -42,10 +41,7 @@ fn is_api(path: &str) -> bool {
 }
 
 fn is_json(headers: &HeaderMap) -> bool {
-    headers
-        .get(header::CONTENT_TYPE)
-        .and_then(|v| v.to_str().ok())
-        .is_some_and(|v| v.starts_with("application/json"))
+    headers.get(header::CONTENT_TYPE).and_then(|v| v.to_str().ok()).is_some_and(|v| v.starts_with("application/json"))
 }
 
 /// Every error becomes `{"error": "..."}` (axum's own rejections — 405,
@@ -102,10 +98,7 @@ fn origin_allowed(hosts: &[String], origin: &HeaderValue) -> bool {
 pub(super) async fn guard(State(st): State<Arc<AppState>>, req: Request, next: Next) -> Response {
     let api = is_api(req.uri().path());
     if !host_allowed(&st.hosts, &req) {
-        return finish(
-            error(StatusCode::FORBIDDEN, "host not allowed: open the UI through localhost or 127.0.0.1"),
-            api,
-        );
+        return finish(error(StatusCode::FORBIDDEN, "host not allowed: open the UI through localhost or 127.0.0.1"), api);
     }
     let state_changing = !matches!(*req.method(), Method::GET | Method::HEAD | Method::OPTIONS);
     let upgrade = req.headers().contains_key(header::UPGRADE) || req.uri().path() == "/ws";
@@ -135,8 +128,7 @@ mod tests {
     async fn wrong_host_is_refused() {
         let s = start(vec![]).await;
         let port = s.addr.port();
-        for host in [format!("127.0.0.1:{port}"), format!("localhost:{port}"), format!("LOCALHOST:{port}"), format!("[::1]:{port}")]
-        {
+        for host in [format!("127.0.0.1:{port}"), format!("localhost:{port}"), format!("LOCALHOST:{port}"), format!("[::1]:{port}")] {
             let r = raw(s.addr, &format!("GET /api/status HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n")).await;
             assert_eq!(r.status, 200, "{host}");
         }
@@ -156,18 +148,13 @@ mod tests {
         // No Host at all, and two of them.
         let r = raw(s.addr, "GET /api/status HTTP/1.0\r\n\r\n").await;
         assert_eq!(r.status, 403);
-        let r = raw(
-            s.addr,
-            &format!("GET /api/status HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nHost: evil.example\r\nConnection: close\r\n\r\n"),
-        )
-        .await;
+        let r =
+            raw(s.addr, &format!("GET /api/status HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nHost: evil.example\r\nConnection: close\r\n\r\n"))
+                .await;
         assert_eq!(r.status, 403);
         // An absolute-form target naming another authority.
-        let r = raw(
-            s.addr,
-            &format!("GET http://evil.example/api/status HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n"),
-        )
-        .await;
+        let r = raw(s.addr, &format!("GET http://evil.example/api/status HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n"))
+            .await;
         assert_eq!(r.status, 403);
     }
 

@@ -32,9 +32,9 @@ mod guard;
 mod quads;
 mod sources;
 mod tensors;
-mod tradeoffs;
 #[cfg(test)]
 mod testing;
+mod tradeoffs;
 mod ui;
 mod ws;
 
@@ -113,11 +113,8 @@ pub async fn serve(
 
 fn build(shared: Arc<Shared>, allowed_hosts: Vec<String>) -> (Router, watch::Sender<bool>) {
     let stop = watch::Sender::new(false);
-    let state = Arc::new(AppState {
-        shared,
-        hosts: allowed_hosts.into_iter().map(|h| h.to_ascii_lowercase()).collect(),
-        stop: stop.clone(),
-    });
+    let state =
+        Arc::new(AppState { shared, hosts: allowed_hosts.into_iter().map(|h| h.to_ascii_lowercase()).collect(), stop: stop.clone() });
     let mut app = Router::new();
     if state.shared.debug_api {
         app = app.route("/api/debug/lose-device", post(api::lose_device));

@@ -100,9 +100,7 @@ pub(super) async fn source(State(st): State<Arc<AppState>>, uri: Uri) -> Respons
     })
     .await;
     match found {
-        Ok(Ok(bytes)) => {
-            (StatusCode::OK, [(header::CONTENT_TYPE, "text/plain; charset=utf-8")], bytes).into_response()
-        }
+        Ok(Ok(bytes)) => (StatusCode::OK, [(header::CONTENT_TYPE, "text/plain; charset=utf-8")], bytes).into_response(),
         Ok(Err((status, message))) => error(status, &message),
         Err(e) => error(StatusCode::INTERNAL_SERVER_ERROR, &e.to_string()),
     }
@@ -190,8 +188,24 @@ mod tests {
         assert_eq!(safe_relative("shaders/a.wgsl").as_deref(), Some("shaders/a.wgsl"));
         assert_eq!(safe_relative("a%20b.wgsl").as_deref(), Some("a b.wgsl"));
         for bad in [
-            "", "..", "../x", "a/../x", "./a", "a//b", "a/", "/etc", "%2e%2e/x", "..%2fx", "%252e%252e", "a%5cb",
-            "a\\b", "c:/x", "a%00", "%zz", "%2", "..%c0%af",
+            "",
+            "..",
+            "../x",
+            "a/../x",
+            "./a",
+            "a//b",
+            "a/",
+            "/etc",
+            "%2e%2e/x",
+            "..%2fx",
+            "%252e%252e",
+            "a%5cb",
+            "a\\b",
+            "c:/x",
+            "a%00",
+            "%zz",
+            "%2",
+            "..%c0%af",
         ] {
             assert_eq!(safe_relative(bad), None, "{bad:?}");
         }

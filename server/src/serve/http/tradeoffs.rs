@@ -43,7 +43,9 @@ pub(super) async fn results(State(st): State<Arc<AppState>>) -> Response {
 
 /// A point's image: `points/<name>.png`, the name of plain characters only.
 pub(super) async fn point(State(st): State<Arc<AppState>>, Path(file): Path<String>) -> Response {
-    let plain = file.strip_suffix(".png").is_some_and(|s| !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.')) && !s.contains(".."));
+    let plain = file.strip_suffix(".png").is_some_and(|s| {
+        !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.')) && !s.contains("..")
+    });
     if !plain {
         return error(StatusCode::FORBIDDEN, "only a point's image, `<name>.png`, is served");
     }

@@ -1,4 +1,3 @@
-
 //! The browser UI: the files of the repository's `client/` directory,
 //! embedded in the binary.
 

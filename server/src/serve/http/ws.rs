@@ -94,7 +94,11 @@ fn image_message(kind: &'static str, frame: &FrameImages, key: &str, encoding: E
 /// every output this client subscribed to that the frame captured.
 /// Encoding runs off the reactor, once per frame and encoding whatever the
 /// number of clients.
-async fn send_images(socket: &mut WebSocket, frame: &Arc<FrameImages>, subscriptions: &BTreeMap<String, Encoding>) -> Result<(), axum::Error> {
+async fn send_images(
+    socket: &mut WebSocket,
+    frame: &Arc<FrameImages>,
+    subscriptions: &BTreeMap<String, Encoding>,
+) -> Result<(), axum::Error> {
     let wanted = frame
         .final_key
         .iter()
@@ -146,9 +150,7 @@ fn client_message(
         ClientMessage::Subscribe { pass, output, encoding } => {
             let key = format!("{pass}/{output}");
             if subscriptions.len() >= MAX_SUBSCRIPTIONS && !subscriptions.contains_key(&key) {
-                return Err(format!(
-                    "subscription to `{key}` refused: a connection may subscribe to at most {MAX_SUBSCRIPTIONS} outputs"
-                ));
+                return Err(format!("subscription to `{key}` refused: a connection may subscribe to at most {MAX_SUBSCRIPTIONS} outputs"));
             }
             if subscriptions.insert(key, encoding).is_none() {
                 client.subscribe(subscriptions.keys().cloned().collect());
@@ -162,7 +164,11 @@ fn client_message(
             return Ok(());
         }
         ClientMessage::QuadStatistics { on } => {
-            let changed = if on { subscriptions.insert(QUAD_STATISTICS.to_owned(), Encoding::default()).is_none() } else { subscriptions.remove(QUAD_STATISTICS).is_some() };
+            let changed = if on {
+                subscriptions.insert(QUAD_STATISTICS.to_owned(), Encoding::default()).is_none()
+            } else {
+                subscriptions.remove(QUAD_STATISTICS).is_some()
+            };
             if changed {
                 client.subscribe(subscriptions.keys().cloned().collect());
             }
@@ -331,7 +337,6 @@ mod tests {
         }
     }
 
-
     fn subscriptions(e: Option<Event>) -> (u64, Vec<String>) {
         match e {
             Some(Event::Subscriptions { client, outputs }) => (client, outputs.into_iter().collect()),
@@ -411,7 +416,6 @@ mod tests {
             other => panic!("expected binary, got {other:?}"),
         }
     }
-
 
     #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
     async fn each_client_gets_the_final_frame_and_its_own_subscriptions_newest_only() {
@@ -535,9 +539,7 @@ mod tests {
         for _ in 0..400 {
             match connect(addr, None).await {
                 Ok(ws) => return ws,
-                Err(tungstenite::Error::Http(resp)) if resp.status() == 503 => {
-                    tokio::time::sleep(Duration::from_millis(25)).await
-                }
+                Err(tungstenite::Error::Http(resp)) if resp.status() == 503 => tokio::time::sleep(Duration::from_millis(25)).await,
                 Err(e) => panic!("unexpected error {e}"),
             }
         }
