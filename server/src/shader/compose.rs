@@ -87,28 +87,29 @@ impl Warm {
     }
 
     /// Adds the modules of `deps` it does not hold yet, then composes
-    /// `entry`.
-    fn compose(&mut self, deps: &[Arc<SourceFile>], entry: &SourceFile, defs: &ShaderDefs) -> Result<naga::Module, ComposerError> {
+    /// `entry`. The error is boxed: naga_oil's is a few hundred bytes, and
+    /// this is the hot path of every reload.
+    fn compose(&mut self, deps: &[Arc<SourceFile>], entry: &SourceFile, defs: &ShaderDefs) -> Result<naga::Module, Box<ComposerError>> {
         for dep in deps {
             let name = dep.import_path.as_ref().map(|(name, _)| name);
             if name.is_some_and(|name| self.modules.contains_key(name)) {
                 continue;
             }
-            self.composer.add_composable_module(ComposableModuleDescriptor {
-                source: &dep.text,
-                file_path: &dep.display,
-                ..Default::default()
-            })?;
+            self.composer
+                .add_composable_module(ComposableModuleDescriptor { source: &dep.text, file_path: &dep.display, ..Default::default() })
+                .map_err(Box::new)?;
             if let Some(name) = name {
                 self.modules.insert(name.clone(), (dep.display.clone(), dep.hash));
             }
         }
-        self.composer.make_naga_module(NagaModuleDescriptor {
-            source: &entry.text,
-            file_path: &entry.display,
-            shader_defs: naga_oil_defs(defs),
-            ..Default::default()
-        })
+        self.composer
+            .make_naga_module(NagaModuleDescriptor {
+                source: &entry.text,
+                file_path: &entry.display,
+                shader_defs: naga_oil_defs(defs),
+                ..Default::default()
+            })
+            .map_err(Box::new)
     }
 }
 
@@ -191,7 +192,7 @@ fn compose_with_naga_oil(
     caps: Capabilities,
 ) -> Result<naga::Module, Vec<Diagnostic>> {
     let mut fresh = Warm::new(caps);
-    fresh.compose(deps, entry, defs).map_err(|e| vec![from_composer(&fresh.composer, e, deps, entry)])
+    fresh.compose(deps, entry, defs).map_err(|e| vec![from_composer(&fresh.composer, *e, deps, entry)])
 }
 
 /// Checks a library module on its own: parsed and validated as a shader
