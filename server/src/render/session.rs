@@ -24,7 +24,7 @@ use super::resource::{Lifetime, PipelineKey, ResourceDesc, TensorLayout};
 use super::scene_gpu::SceneGpu;
 use super::vertex_capture::VertexCapture;
 use crate::denoise::network::Network;
-use crate::diag::Diagnostic;
+use crate::diag::{Diagnostic, display_path};
 use crate::gpu::Gpu;
 use crate::gpu::pipeline::{MESH_VERTICES, PipelineSpec, Stages};
 use crate::mesh::MeshData;
@@ -226,7 +226,7 @@ impl Session {
 
     /// Where `spec`'s shader is, as diagnostics show it.
     pub fn shader_display(&self, spec: &PipelineSpec) -> String {
-        library::display_path(&self.shader_root.join(spec.shader))
+        display_path(&self.shader_root.join(spec.shader))
     }
 
     /// Every pipeline the frame uses.
@@ -592,7 +592,7 @@ mod tests {
         assert_eq!(reported, two, "only what the frame uses is reported");
         assert_eq!(s.pipelines().entries.len(), 4, "the one-triangle pipelines are kept for switching back");
 
-        let fullscreen = BTreeSet::from([library::display_path(&root.join("lib/fullscreen.wgsl"))]);
+        let fullscreen = BTreeSet::from([display_path(&root.join("lib/fullscreen.wgsl"))]);
         let rebuilt: BTreeSet<String> = s.built_from(&fullscreen).iter().map(PipelineKey::label).collect();
         assert_eq!(rebuilt, two, "a change rebuilds only what the frame uses");
         assert_eq!(s.pipelines().entries.len(), 2, "the unused ones built from the changed file are dropped");
