@@ -62,14 +62,8 @@ fn tokens(text: &str) -> Vec<Token> {
         } else if ch == '"' {
             i += 1;
             skip_to(&mut i, &mut line, "\"", true);
-        } else if (ch == 'r' || (ch == 'b' && next == Some('r'))) && (i == 0 || !ident(c[i - 1])) && {
-            let start = i + if ch == 'b' { 2 } else { 1 };
-            let hashes = c[start..].iter().take_while(|h| **h == '#').count();
-            c.get(start + hashes) == Some(&'"')
-        } {
-            let start = i + if ch == 'b' { 2 } else { 1 };
-            let hashes = c[start..].iter().take_while(|h| **h == '#').count();
-            i = start + hashes + 1;
+        } else if let Some((text, hashes)) = raw_string(&c, i) {
+            i = text;
             skip_to(&mut i, &mut line, &format!("\"{}", "#".repeat(hashes)), false);
         } else if ch == '\'' && (next == Some('\\') || c.get(i + 2) == Some(&'\'')) {
             // A character literal; otherwise a lifetime, whose name follows.
@@ -90,6 +84,19 @@ fn tokens(text: &str) -> Vec<Token> {
         }
     }
     out
+}
+
+/// At a raw string's `r` (or `br`): where its text starts, and its `#`s.
+fn raw_string(c: &[char], i: usize) -> Option<(usize, usize)> {
+    if i > 0 && (c[i - 1].is_alphanumeric() || c[i - 1] == '_') {
+        return None;
+    }
+    let r = if c[i] == 'b' { i + 1 } else { i };
+    if c.get(r) != Some(&'r') {
+        return None;
+    }
+    let hashes = c[r + 1..].iter().take_while(|h| **h == '#').count();
+    (c.get(r + 1 + hashes) == Some(&'"')).then_some((r + 2 + hashes, hashes))
 }
 
 fn is(t: Option<&Token>, want: &Tok) -> bool {
@@ -186,7 +193,7 @@ fn use_paths(toks: &[Tok], prefix: &[String], out: &mut Vec<Vec<String>>) {
         }
         i += 1;
     }
-    if path.len() > prefix.len() || !prefix.is_empty() {
+    if !path.is_empty() {
         out.push(path);
     }
 }
@@ -228,7 +235,8 @@ fn named_paths(toks: &[Token], at: &[String]) -> Vec<Named> {
     while i < toks.len() {
         let (t, line) = &toks[i];
         if *t == Tok::Ident("use".into()) {
-            let end = item_end(toks, i);
+            // A use tree holds no `;`: the first one ends it.
+            let end = toks[i..].iter().position(|(t, _)| *t == Tok::Punct(';')).map_or(toks.len(), |k| i + k + 1);
             let tree: Vec<Tok> = toks[i + 1..end - 1].iter().map(|(t, _)| t.clone()).collect();
             let mut paths = vec![];
             use_paths(&tree, &[], &mut paths);
@@ -367,7 +375,7 @@ fn sibling_edges(modules: &BTreeMap<ModPath, Module>, root: &Path) -> Edges {
 fn circles(edges: &Edges) -> Vec<(ModPath, BTreeSet<String>)> {
     let mut by_parent: BTreeMap<&ModPath, BTreeMap<&str, BTreeSet<&str>>> = BTreeMap::new();
     for (parent, from, to) in edges.keys() {
-        by_parent.entry(parent).or_default().entry(from).or_default().insert(to);
+        by_parent.entry(parent).or_default().entry(from.as_str()).or_default().insert(to.as_str());
     }
     let mut out = Vec::new();
     for (parent, graph) in by_parent {
@@ -377,7 +385,7 @@ fn circles(edges: &Edges) -> Vec<(ModPath, BTreeSet<String>)> {
             while let Some(m) = todo.pop() {
                 for next in graph.get(m).into_iter().flatten() {
                     if seen.insert(*next) {
-                        todo.push(next);
+                        todo.push(*next);
                     }
                 }
             }
@@ -416,6 +424,14 @@ fn report(edges: &Edges, found: &[(ModPath, BTreeSet<String>)]) -> String {
     s
 }
 
+/// Imports being removed on other branches of issue 20, left out until
+/// those land; an entry whose import is gone fails the test, to be
+/// deleted. (parent, from, to, who removes it)
+const LEAVING: &[(&str, &str, &str, &str)] = &[
+    ("", "denoise", "render", "denoise/offline.rs and on_gpu.rs move to offline/, above render: the offline/ branch"),
+    ("", "scene", "denoise", "scene stops importing denoise: the scene-denoise branch"),
+];
+
 #[test]
 fn the_crate_has_no_import_circles() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -430,6 +446,12 @@ fn the_crate_has_no_import_circles() {
     assert!(edge(&["render"], "graph", "context") && edge(&[], "render", "scene"), "the scan sees imports: {:?}", edges.keys());
     assert!(edge(&["scene"], "overrides", "settings"), "the scan sees `super::` imports: {:?}", edges.keys());
     assert!(!modules.keys().any(|m| m.last().is_some_and(|n| n == "tests" || n == "testing")), "test modules are left out");
+    let mut edges = edges;
+    for (parent, from, to, who) in LEAVING {
+        let parent: ModPath = parent.split("::").filter(|p| !p.is_empty()).map(str::to_owned).collect();
+        let key = (parent, (*from).to_owned(), (*to).to_owned());
+        assert!(edges.remove(&key).is_some(), "{from} → {to} is gone ({who}): delete its line in LEAVING");
+    }
     let found = circles(&edges);
     assert!(found.is_empty(), "import circles:{}", report(&edges, &found));
 }
@@ -450,5 +472,5 @@ fn the_scan_reads_paths_not_comments_strings_or_tests() {
     let mut attrs = vec![];
     let toks = production(tokens(text), &mut attrs);
     let named: Vec<(String, usize)> = named_paths(&toks, &["m".into(), "n".into()]).iter().map(|n| (n.target.join("::"), n.line)).collect();
-    assert_eq!(named, [("m::b".into(), 7), ("m::b::B".into(), 7), ("m::c::C".into(), 7), ("d::f".into(), 8)]);
+    assert_eq!(named, [("m::b".to_owned(), 7), ("m::b::B".to_owned(), 7), ("m::c::C".to_owned(), 7), ("d::f".to_owned(), 8)]);
 }

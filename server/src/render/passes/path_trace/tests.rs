@@ -16,7 +16,7 @@
 //! Images are small and sample counts low: the path tracer adds one sample
 //! per pixel per frame, and the tests run on two CPU cores.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -25,9 +25,8 @@ use glam::{Mat4, Vec3, Vec4};
 use super::testing::{ALBEDO, COLOR, NORMAL, accumulate, assert_finite, image, loaded, mean, session, without_guard};
 use crate::mesh::MeshData;
 use crate::render::capture::CapturedImage;
-use crate::render::frame::FrameResult;
-use crate::render::session::{PassState, Session};
-use crate::scene::{Loaded, Scene};
+use crate::render::session::PassState;
+use crate::scene::Scene;
 
 /// The unit direction from the camera through the centre of pixel (x, y),
 /// as `loupe::view::camera_ray` computes it.
