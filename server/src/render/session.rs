@@ -29,7 +29,7 @@ use crate::gpu::Gpu;
 use crate::gpu::pipeline::{MESH_VERTICES, PipelineSpec, Stages};
 use crate::mesh::MeshData;
 use crate::scene::{Loaded, Scene};
-use crate::shader::{ComposeCache, Library, library};
+use crate::shader::{ComposeCache, Library};
 
 /// How a pass stands this frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -493,6 +493,7 @@ fn output_summary(graph: &Graph, h: super::resource::Handle) -> OutputSummary {
 mod tests {
     use super::*;
     use crate::scene::overrides::{Overrides, Value};
+    use crate::shader::library;
 
     fn pattern(two_triangles: bool) -> Loaded {
         let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/pattern.toml");
