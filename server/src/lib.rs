@@ -21,6 +21,8 @@ pub mod render;
 pub mod scene;
 pub mod serve;
 pub mod shader;
+#[cfg(any(test, feature = "testing"))]
+pub mod testing;
 #[cfg(test)]
-mod testing;
+mod tests;
 pub mod tradeoffs;

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::diag::Diagnostic;
+use crate::diag::{Diagnostic, display_path};
 use crate::gpu;
 use crate::render::capture::{ImageStats, TensorStats};
 use crate::render::frame::{FrameResult, NanOrigin};
@@ -198,7 +198,7 @@ pub fn render(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
     }
     let (width, height) = (session.scene().width, session.scene().height);
     Ok(FrameReport {
-        scene: library::display_path(&job.scene),
+        scene: display_path(&job.scene),
         adapter: session.gpu().adapter_name(),
         cpu_adapter: session.gpu().is_cpu(),
         width,
@@ -296,7 +296,7 @@ pub fn bench(job: &Job, frames: u32, serial: bool) -> Result<BenchReport, Offlin
     }
     let order: Vec<String> = session.graph().passes.iter().map(|x| x.name.clone()).collect();
     Ok(BenchReport {
-        scene: library::display_path(&job.scene),
+        scene: display_path(&job.scene),
         adapter: session.gpu().adapter_name(),
         width: session.scene().width,
         height: session.scene().height,

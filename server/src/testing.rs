@@ -1,4 +1,5 @@
-//! Helpers the unit tests share.
+//! Test fixtures of the whole crate, shared by the unit tests of any
+//! module and by the integration suites (the `testing` feature).
 
 /// The 1-based line and column (in characters) of byte `k` of the first
 /// `needle` in `text`: where a diagnostic about it must point, worked out
@@ -40,4 +41,11 @@ impl Rng {
             }
         }
     }
+}
+
+/// `n` triples of uniform numbers in [0, 1), the same on every run: the
+/// random numbers the BRDF's sampler is tested with.
+pub fn uniforms(n: usize) -> Vec<[f32; 3]> {
+    let mut rng = Rng(0x853c_49e6_748f_ea9b);
+    (0..n).map(|_| [rng.f(), rng.f(), rng.f()]).collect()
 }

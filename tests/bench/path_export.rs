@@ -102,7 +102,7 @@ fn export(scene_path: &Path, out: &Path) -> Result<usize, String> {
     }
     let (c, e) = (&scene.camera, &scene.environment);
     let doc = json!({
-        "scene": loupe::shader::library::display_path(scene_path),
+        "scene": loupe::diag::display_path(scene_path),
         "width": scene.width, "height": scene.height,
         "camera": {"position": c.position, "target": c.target, "up": c.up, "fov_deg": c.fov_deg, "near": c.near, "far": c.far},
         "objects": objects,

@@ -18,7 +18,7 @@ use std::time::Instant;
 use naga::valid::Capabilities;
 use rayon::prelude::*;
 
-use crate::diag::{Code, Diagnostic, Location, Severity, SourceFiles};
+use crate::diag::{Code, Diagnostic, Location, Severity, SourceFiles, display_path};
 use crate::gpu::{
     self, Gpu,
     pipeline::{self, PipelineSpec},
@@ -78,8 +78,8 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     let pool = rayon::ThreadPoolBuilder::new().stack_size(WORKER_STACK).build().expect("a thread pool with default thread count");
     let _quiet = QuietPanics::install();
 
-    let read: Vec<(PathBuf, Result<SourceFile, Diagnostic>)> = pool
-        .install(|| all.par_iter().map(|(canon, shown)| (canon.clone(), SourceFile::read(shown, library::display_path(shown)))).collect());
+    let read: Vec<(PathBuf, Result<SourceFile, Diagnostic>)> =
+        pool.install(|| all.par_iter().map(|(canon, shown)| (canon.clone(), SourceFile::read(shown, display_path(shown)))).collect());
     let mut files = SourceFiles::default();
     let mut unreadable: BTreeMap<String, Diagnostic> = BTreeMap::new();
     let mut sources = Vec::new();
@@ -188,8 +188,7 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
         if renderer_tree && !specs_by_file.values().flatten().any(|s| s.name == spec.name) {
             let wanted = opts.shader_root.join(spec.shader);
             report.general.push(
-                pipeline::missing_shader(spec.name, &library::display_path(&wanted))
-                    .with_note("the renderer builds this pipeline from that file"),
+                pipeline::missing_shader(spec.name, &display_path(&wanted)).with_note("the renderer builds this pipeline from that file"),
             );
         }
     }
@@ -242,7 +241,7 @@ fn is_toml(path: &Path) -> bool {
 /// references.
 fn check_scene(path: &Path) -> Checked {
     let start = Instant::now();
-    let display = library::display_path(path);
+    let display = display_path(path);
     let diagnostics = guarded(&display, "the scene loader", || crate::scene::load(path).map_err(|d| vec![d])).err().unwrap_or_default();
     Checked { duration: start.elapsed(), ..Checked::uncompiled(&display, ModuleKind::Scene, diagnostics) }
 }

@@ -39,7 +39,7 @@ pub struct CheckDefaults {
 /// Reads `root/loupe.toml`; no file means no defaults.
 pub fn read(root: &Path) -> Result<CheckDefaults, Diagnostic> {
     let path = root.join(FILE);
-    let display = crate::shader::library::display_path(&path);
+    let display = crate::diag::display_path(&path);
     match std::fs::read_to_string(&path) {
         Ok(text) => parse(&display, &text, root),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(CheckDefaults::default()),

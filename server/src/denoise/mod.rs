@@ -37,4 +37,4 @@ fn weights_error(display: &str, at: u64, message: String) -> Diagnostic {
 }
 
 #[cfg(test)]
-pub(crate) mod testing;
+pub mod testing;

@@ -1,5 +1,5 @@
-//! What the denoiser's tests share: OIDN's weights beside the repository,
-//! and small U-Nets with random weights.
+//! Test fixtures of the denoiser, for its tests and the renderer's: OIDN's
+//! weights beside the repository, and small U-Nets with random weights.
 
 use std::path::PathBuf;
 

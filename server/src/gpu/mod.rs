@@ -6,7 +6,7 @@
 //! them is how loupe keeps the last good pipeline.
 
 pub mod pipeline;
-#[cfg(test)]
+#[cfg(any(test, feature = "testing"))]
 pub mod testing;
 
 use std::sync::{Arc, Mutex};

@@ -1,5 +1,7 @@
-//! Running WGSL on the device from tests: a compute shader reads an array
-//! of inputs and writes one result per invocation, read back to the CPU.
+//! Test fixtures of the GPU layer, for the tests of any module that runs
+//! WGSL and for the integration suites (the `testing` feature): the test
+//! device, and WGSL run from tests. A compute shader reads an array of
+//! inputs and writes one result per invocation, read back to the CPU.
 //! The shader may `#import` the shader library (`shaders/lib/`), composed
 //! exactly as the renderer composes it.
 //!

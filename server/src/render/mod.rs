@@ -102,48 +102,4 @@ pub fn denoise_graph(scene: &Scene, network: &Network, tile: std::sync::Arc<imag
 }
 
 #[cfg(test)]
-mod brdf_tests;
-#[cfg(test)]
-mod random_tests;
-#[cfg(test)]
-mod stability;
-#[cfg(test)]
-mod tests {
-    use std::collections::{BTreeMap, BTreeSet};
-
-    /// The render modules import each other without a cycle (tests aside),
-    /// so each can be read, and changed, below the ones that use it.
-    #[test]
-    fn render_modules_import_each_other_without_a_cycle() {
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/render");
-        let mut imports: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
-        let mut files = vec![];
-        for e in std::fs::read_dir(&dir).unwrap().chain(std::fs::read_dir(dir.join("passes")).unwrap()) {
-            files.push(e.unwrap().path());
-        }
-        let modules: BTreeSet<String> =
-            files.iter().filter_map(|p| Some(p.file_stem()?.to_str()?.to_owned())).filter(|m| m != "mod" && m != "tests").collect();
-        for path in files.iter().filter(|p| p.extension().is_some_and(|e| e == "rs")) {
-            let in_passes = path.parent().is_some_and(|d| d.ends_with("passes"));
-            let module = if in_passes { "passes".to_owned() } else { path.file_stem().unwrap().to_str().unwrap().to_owned() };
-            let text = std::fs::read_to_string(path).unwrap();
-            let code = text.split("#[cfg(test)]").next().unwrap_or_default();
-            let prefixes: &[&str] = if in_passes { &["crate::render::"] } else { &["super::", "crate::render::"] };
-            for prefix in prefixes {
-                for part in code.split(prefix).skip(1) {
-                    let name: String = part.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
-                    if modules.contains(&name) && name != module {
-                        imports.entry(module.clone()).or_default().insert(name);
-                    }
-                }
-            }
-        }
-        // Peel off modules that import nothing left; a cycle never peels.
-        let mut left = imports.clone();
-        while let Some(leaf) = left.keys().find(|m| left[*m].iter().all(|d| !left.contains_key(d))).cloned() {
-            left.remove(&leaf);
-        }
-        assert!(left.is_empty(), "render modules in an import cycle: {left:?}");
-        assert!(imports.get("graph").is_some_and(|d| d.contains("context")), "the scan sees imports: {imports:?}");
-    }
-}
+mod tests;

@@ -94,34 +94,4 @@ fn storage(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
 }
 
 #[cfg(test)]
-mod tests {
-    use crate::render::scene_gpu::SceneGpu;
-
-    const SCENE: &str = "[quality]\nrenderer = \"path\"\n[[materials]]\nname = \"m\"\n\
-        [[objects]]\nshape = \"sphere\"\nmaterial = \"m\"\nposition = [0, 0, 0]\n\
-        [[lights]]\ntype = \"point\"\nposition = [0, 2, 0]\n";
-
-    fn gpu_of(text: &str, previous: Option<&SceneGpu>, gpu: &crate::gpu::Gpu) -> SceneGpu {
-        let scene = crate::scene::parse("s.toml", text).unwrap_or_else(|d| panic!("{d}"));
-        SceneGpu::new(&gpu.device, &gpu.queue, &scene, &Default::default(), None, previous)
-    }
-
-    /// Moving a light or changing a material keeps the hierarchy; moving
-    /// an object rebuilds it; the raster builds none.
-    #[test]
-    fn the_hierarchy_is_rebuilt_only_when_the_triangles_change() {
-        let gpu = crate::gpu::open().unwrap_or_else(|e| panic!("these tests need a GPU device (lavapipe will do): {e}"));
-        let first = gpu_of(SCENE, None, &gpu);
-        let path = first.path.as_ref().expect("a path-traced scene has path geometry");
-        assert!(path.stats().triangles > 0);
-        let light_moved = gpu_of(&SCENE.replace("[0, 2, 0]", "[1, 2, 0]"), Some(&first), &gpu);
-        assert!(light_moved.path.as_ref().unwrap().same_hierarchy(path), "a light moved: the triangles are the same");
-        let object_moved = gpu_of(&SCENE.replace("position = [0, 0, 0]", "position = [0, 0.5, 0]"), Some(&first), &gpu);
-        assert!(!object_moved.path.as_ref().unwrap().same_hierarchy(path), "an object moved: rebuilt");
-        let raster = gpu_of(&SCENE.replace("\"path\"", "\"raster\""), Some(&first), &gpu);
-        assert!(raster.path.is_none(), "the raster traces nothing, so nothing is built");
-    }
-}
-
-#[cfg(test)]
-mod traversal_tests;
+mod tests;

@@ -24,12 +24,12 @@ use super::resource::{Lifetime, PipelineKey, ResourceDesc, TensorLayout};
 use super::scene_gpu::SceneGpu;
 use super::vertex_capture::VertexCapture;
 use crate::denoise::network::Network;
-use crate::diag::Diagnostic;
+use crate::diag::{Diagnostic, display_path};
 use crate::gpu::Gpu;
 use crate::gpu::pipeline::{MESH_VERTICES, PipelineSpec, Stages};
 use crate::mesh::MeshData;
 use crate::scene::{Loaded, Scene};
-use crate::shader::{ComposeCache, Library, library};
+use crate::shader::{ComposeCache, Library};
 
 /// How a pass stands this frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -226,7 +226,7 @@ impl Session {
 
     /// Where `spec`'s shader is, as diagnostics show it.
     pub fn shader_display(&self, spec: &PipelineSpec) -> String {
-        library::display_path(&self.shader_root.join(spec.shader))
+        display_path(&self.shader_root.join(spec.shader))
     }
 
     /// Every pipeline the frame uses.
@@ -493,6 +493,7 @@ fn output_summary(graph: &Graph, h: super::resource::Handle) -> OutputSummary {
 mod tests {
     use super::*;
     use crate::scene::overrides::{Overrides, Value};
+    use crate::shader::library;
 
     fn pattern(two_triangles: bool) -> Loaded {
         let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/pattern.toml");
@@ -592,7 +593,7 @@ mod tests {
         assert_eq!(reported, two, "only what the frame uses is reported");
         assert_eq!(s.pipelines().entries.len(), 4, "the one-triangle pipelines are kept for switching back");
 
-        let fullscreen = BTreeSet::from([library::display_path(&root.join("lib/fullscreen.wgsl"))]);
+        let fullscreen = BTreeSet::from([display_path(&root.join("lib/fullscreen.wgsl"))]);
         let rebuilt: BTreeSet<String> = s.built_from(&fullscreen).iter().map(PipelineKey::label).collect();
         assert_eq!(rebuilt, two, "a change rebuilds only what the frame uses");
         assert_eq!(s.pipelines().entries.len(), 2, "the unused ones built from the changed file are dropped");

@@ -190,7 +190,7 @@ pub fn load(path: &Path) -> Result<Loaded, Diagnostic> {
 
 /// `load` with live overrides applied on top of the file's text.
 pub fn load_with(path: &Path, overrides: &overrides::Overrides) -> Result<Loaded, Diagnostic> {
-    let display = crate::shader::library::display_path(path);
+    let display = crate::diag::display_path(path);
     let mut text = std::fs::read_to_string(path)
         .map_err(|e| Diagnostic::error(Code::Io, format!("cannot read scene: {e}")).at(Location::file_start(&display)))?;
     if !overrides.is_empty() {
@@ -203,7 +203,7 @@ pub fn load_with(path: &Path, overrides: &overrides::Overrides) -> Result<Loaded
     let mut files = vec![path.to_owned()];
     for (name, at) in scene.mesh_files() {
         let mesh_path = dir.join(name);
-        let mesh_display = crate::shader::library::display_path(&mesh_path);
+        let mesh_display = crate::diag::display_path(&mesh_path);
         files.push(mesh_path.clone());
         files.extend(crate::mesh::external_buffers(&mesh_path));
         if !mesh_path.exists() {
@@ -228,7 +228,7 @@ pub fn load_with(path: &Path, overrides: &overrides::Overrides) -> Result<Loaded
 /// file's own diagnostic, with `weights` as a second label.
 fn load_weights(dir: &Path, d: &Denoiser, files: &mut Vec<PathBuf>) -> Result<Network, Diagnostic> {
     let path = dir.join(&d.weights);
-    let display = crate::shader::library::display_path(&path);
+    let display = crate::diag::display_path(&path);
     files.push(path.clone());
     if !path.is_file() {
         return Err(Diagnostic::error(Code::Scene, format!("weights file `{display}` does not exist")).with_label(

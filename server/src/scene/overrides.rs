@@ -5,33 +5,14 @@
 
 use std::collections::BTreeMap;
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use toml_edit::{DocumentMut, Item, Table, Value as TomlValue};
 
 use super::settings::{self, Kind, SETTINGS};
+// An override is a path and a value of the settings table; the value type
+// is the table's, named here too for whoever holds `Overrides`.
+pub use super::settings::Value;
 use super::{LightKind, Scene};
-
-/// A value a control can set.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
-pub enum Value {
-    Bool(bool),
-    Int(i64),
-    Float(f64),
-    Text(String),
-}
-
-/// As TOML writes it (`true`, `2`, `1.5`, `"aces"`), for messages.
-impl std::fmt::Display for Value {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Value::Bool(b) => write!(f, "{b}"),
-            Value::Int(i) => write!(f, "{i}"),
-            Value::Float(x) => write!(f, "{x:?}"),
-            Value::Text(t) => write!(f, "{t:?}"),
-        }
-    }
-}
 
 /// Overrides by path, e.g. `post.exposure_ev`, `lights[1].intensity`.
 pub type Overrides = BTreeMap<String, Value>;

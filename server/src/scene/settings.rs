@@ -6,8 +6,31 @@
 //! (`super::overrides::controls`) all come from this one table, so they
 //! cannot disagree.
 
+use serde::{Deserialize, Serialize};
+
 use super::Scene;
-use super::overrides::Value;
+
+/// A value a control can set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Value {
+    Bool(bool),
+    Int(i64),
+    Float(f64),
+    Text(String),
+}
+
+/// As TOML writes it (`true`, `2`, `1.5`, `"aces"`), for messages.
+impl std::fmt::Display for Value {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Value::Bool(b) => write!(f, "{b}"),
+            Value::Int(i) => write!(f, "{i}"),
+            Value::Float(x) => write!(f, "{x:?}"),
+            Value::Text(t) => write!(f, "{t:?}"),
+        }
+    }
+}
 
 /// A setting's type and the values it accepts. Ranges are inclusive; `step`
 /// is the browser slider's.

@@ -167,8 +167,8 @@ fn missing_and_malformed_weights_are_diagnosed_at_the_reference() {
 // ---- the settings table: [post] and [quality] ----------------------------
 
 use crate::testing::line_col;
-use overrides::{ControlKind, Value, controls};
-use settings::{Kind, SETTINGS};
+use overrides::{ControlKind, controls};
+use settings::{Kind, SETTINGS, Value};
 
 /// A scene that writes `key = value` in its setting's table, after other
 /// tables, so positions are not trivially at the start.
@@ -400,9 +400,9 @@ fn the_environment_intensity_is_a_live_control() {
     let s = parse("s.toml", "[environment]\nintensity = 0.5\n").unwrap();
     let c = overrides::controls(&s);
     let env = c.iter().find(|c| c.path == "environment.intensity").expect("a control");
-    assert_eq!(env.value, overrides::Value::Float(0.5));
+    assert_eq!(env.value, Value::Float(0.5));
     let mut o = overrides::Overrides::new();
-    o.insert("environment.intensity".into(), overrides::Value::Float(3.0));
+    o.insert("environment.intensity".into(), Value::Float(3.0));
     let text = overrides::apply("# no environment\n", &o).unwrap();
     assert_eq!(parse("s.toml", &text).unwrap().environment.intensity, 3.0);
 }

@@ -6,7 +6,7 @@
 use std::collections::BTreeSet;
 
 use super::file::{self, LightType, Scale, Vec3};
-use super::overrides::Value;
+use super::settings::Value;
 use super::settings::{self, SETTINGS};
 use super::*;
 

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 use super::event::{CompileResult, Event, FileBatch, FileChange, SceneCommand};
 use super::inbox::Inbox;
 use super::shared::{self, FrameImages, Shared};
-use crate::diag::{Code, Diagnostic, Location, Severity};
+use crate::diag::{Code, Diagnostic, Location, Severity, display_path};
 use crate::gpu::pipeline::PipelineSpec;
 use crate::gpu::{self, Gpu};
 use crate::protocol::{
@@ -320,7 +320,7 @@ impl Daemon {
         let mut scene_changed = false;
         for change in &batch.changes {
             let path = change.path();
-            let display = library::display_path(path);
+            let display = display_path(path);
             if self.scene_files.iter().any(|f| same_file(path, f)) {
                 scene_changed = true;
                 touched.insert(display);
@@ -380,7 +380,7 @@ impl Daemon {
     /// Live overrides: a value that makes the scene invalid is refused with
     /// the scene's diagnostic and the previous overrides stay.
     fn scene_command(&mut self, cmd: SceneCommand) {
-        let display = library::display_path(&self.config.scene_path);
+        let display = display_path(&self.config.scene_path);
         let overrides = match cmd {
             SceneCommand::Set { path, value } => {
                 let mut o = self.overrides.clone();
@@ -418,7 +418,7 @@ impl Daemon {
 
     fn publish_controls(&self) {
         let report = ControlsReport {
-            scene: library::display_path(&self.config.scene_path),
+            scene: display_path(&self.config.scene_path),
             controls: scene::overrides::controls(self.session.scene()),
             overrides: self.overrides.clone(),
         };
@@ -798,7 +798,7 @@ impl Daemon {
             cpu_adapter: gpu.is_cpu(),
             features: gpu.feature_names(),
             degraded: gpu.degraded.clone(),
-            scene: library::display_path(&self.config.scene_path),
+            scene: display_path(&self.config.scene_path),
             frame: shared::read(&self.shared.status).frame,
             pipelines_ok: count(PassStatus::Ok),
             pipelines_stale: count(PassStatus::Stale),

@@ -8,7 +8,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use crate::diag::{Code, Diagnostic, LineIndex, Location};
+use crate::diag::{Code, Diagnostic, LineIndex, Location, display_path};
 
 /// Files above this are refused: real shaders are a few hundred kilobytes at
 /// most, and naga's parser holds the whole text and its IR in memory.
@@ -345,17 +345,6 @@ impl Library {
 fn import_range_of(file: &SourceFile, dep: &SourceFile) -> Option<Range<usize>> {
     let (dep_path, _) = dep.import_path.as_ref()?;
     file.imports.iter().find(|(i, _)| i == dep_path || i.starts_with(&format!("{dep_path}::"))).map(|(_, r)| r.clone())
-}
-
-/// The path diagnostics show for `path`: relative to the working directory
-/// when it lies under it, with forward slashes.
-pub fn display_path(path: &Path) -> String {
-    let cwd = std::env::current_dir().ok();
-    let shown = cwd.as_deref().and_then(|c| path.strip_prefix(c).ok()).unwrap_or(path);
-    // `./shaders/x.wgsl` and `shaders/x.wgsl` are one file: drop `.` parts.
-    let parts: Vec<_> = shown.components().filter(|c| !matches!(c, std::path::Component::CurDir)).collect();
-    let shown: PathBuf = parts.iter().collect();
-    shown.to_string_lossy().replace('\\', "/")
 }
 
 /// The readable `*.wgsl` files under `root`, as a library. Unreadable ones

@@ -148,7 +148,7 @@ pub fn run(job: &Job, out: &Path) -> Result<Report, OfflineError> {
         });
     }
     Ok(Report {
-        scene: crate::shader::library::display_path(&job.scene),
+        scene: crate::diag::display_path(&job.scene),
         adapter: session.gpu().adapter_name(),
         cpu_adapter: serial,
         timing: if serial { "serial" } else { "gpu" }.into(),

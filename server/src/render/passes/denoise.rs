@@ -389,8 +389,7 @@ fn autoexposure(g: &mut GraphBuilder, color: Handle, w: u32, h: u32, schedule: S
 }
 
 #[cfg(test)]
-#[path = "denoise/frame_tests.rs"]
-mod frame_tests;
+mod tests;
 
 /// A convolution whose weights the scene's GPU data lacks (the graph and
 /// the data were built from different scenes): it draws nothing.

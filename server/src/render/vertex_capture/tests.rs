@@ -8,6 +8,7 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
 use super::*;
+use crate::diag::display_path;
 use crate::gpu::Gpu;
 use crate::gpu::pipeline::{MESH_VERTICES, Stages, TWO_TRIANGLES, VERT, uniform};
 use crate::gpu::testing;
@@ -22,7 +23,7 @@ fn shader_root() -> PathBuf {
 
 /// `key`'s module as the renderer composes it, from `lib`.
 fn compose(lib: &Library, key: &PipelineKey) -> naga::Module {
-    let display = library::display_path(&shader_root().join(key.spec.shader));
+    let display = display_path(&shader_root().join(key.spec.shader));
     pipelines::compose(&NagaOil, lib, key, &display).unwrap_or_else(|e| panic!("{e:?}")).composed.module
 }
 
@@ -190,13 +191,13 @@ fn an_edited_vertex_shader_is_followed() {
     let gpu = testing::device();
     let mut lib = repository_library();
     let path = shader_root().join(GBUFFER.shader);
-    let original = lib.get(&library::display_path(&path)).unwrap().text.to_string();
+    let original = lib.get(&display_path(&path)).unwrap().text.to_string();
     let edited = original.replace(
         "view.view_proj * world_position(v, object),",
         "view.view_proj * world_position(v, object) + vec4(0.25, -0.5, 0.0, 0.125),",
     );
     assert_ne!(edited, original, "the edit applies");
-    lib.upsert(SourceFile::from_text(library::display_path(&path), path, edited.into()));
+    lib.upsert(SourceFile::from_text(display_path(&path), path, edited.into()));
     let (key, vc) = gbuffer_capture(&gpu, &lib);
     let scene = Scene::new(&gpu);
     let got = capture(&gpu, &vc, &key.spec.layout(&key.defs), &scene.bindings(), &scene.draw()).unwrap();

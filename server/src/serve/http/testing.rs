@@ -1,4 +1,4 @@
-//! What the http tests share: a server on a free port, a raw HTTP/1.1
+//! Test fixtures of the http layer, for its tests: a server on a free port, a raw HTTP/1.1
 //! client (requests go out byte for byte, as no client library would send
 //! them), temporary directories and a WebSocket client.
 

@@ -138,5 +138,4 @@ pub struct ConcatUniform {
 }
 
 #[cfg(test)]
-#[path = "tests.rs"]
 mod tests;

@@ -12,9 +12,9 @@
 //! - a zero or NaN normal reflects nothing: brdf_cos 0, brdf_pdf 0, and
 //!   the sample has pdf 0 (no direction);
 //! - a sample with pdf > 0 has a unit direction (within 1e-5) above the
-//!   surface, and a weight in [0, `super::MAX_WEIGHT`].
+//!   surface, and a weight in [0, `crate::MAX_WEIGHT`].
 
-use crate::gpu::testing::Kernel;
+use loupe::gpu::testing::Kernel;
 
 /// Invocation i: `basis` of n (three columns), brdf_cos of (n, v, l) with
 /// brdf_pdf in w, and a sample with u: (l, pdf), (weight, 0).
@@ -152,26 +152,26 @@ fn check(q: &Query, o: &[[f32; 4]; 6], degenerate: bool) -> Vec<String> {
             frame_error = frame_error.max((dot(columns[i], columns[j]) - if i == j { 1.0 } else { 0.0 }).abs());
         }
     }
-    failures.extend(super::at_most(&format!("{what}: basis off orthonormal"), frame_error, FRAME).err());
+    failures.extend(crate::at_most(&format!("{what}: basis off orthonormal"), frame_error, FRAME).err());
     let (l, pdf, weight) = (g(o[4]), f64::from(o[4][3]), g(o[5]));
     if pdf < 0.0 || o[3][3] < 0.0 {
         failures.push(format!("{what}: a negative pdf: {pdf}, {}", o[3][3]));
     }
     if pdf > 0.0 {
-        failures.extend(super::at_most(&format!("{what}: |l| - 1"), (dot(l, l).sqrt() - 1.0).abs(), 1e-5).err());
+        failures.extend(crate::at_most(&format!("{what}: |l| - 1"), (dot(l, l).sqrt() - 1.0).abs(), 1e-5).err());
         if dot(l, n) <= 0.0 {
             failures.push(format!("{what}: a sample below the surface, n·l = {}", dot(l, n)));
         }
         for w in weight {
-            failures.extend(super::at_most(&format!("{what}: weight"), w, super::MAX_WEIGHT).err());
-            failures.extend(super::at_most(&format!("{what}: negative weight"), -w, 0.0).err());
+            failures.extend(crate::at_most(&format!("{what}: weight"), w, crate::MAX_WEIGHT).err());
+            failures.extend(crate::at_most(&format!("{what}: negative weight"), -w, 0.0).err());
         }
     }
     failures
 }
 
 /// Runs every query and returns the failures and how many ran.
-pub fn run(gpu: &crate::gpu::Gpu) -> (Vec<String>, usize) {
+pub fn run(gpu: &loupe::gpu::Gpu) -> (Vec<String>, usize) {
     let kernel = Kernel::new(gpu, SHADER, "main").unwrap_or_else(|e| panic!("{e}"));
     let normals: Vec<V3> = unit_normals();
     let unit_f32: Vec<[f32; 3]> = normals.iter().map(|n| n.map(|x| x as f32)).collect();

@@ -15,7 +15,7 @@
 //! 3. the textbook form, d = (n·h)² (alpha² − 1) + 1, D = alpha² / (π d²),
 //!    in f16 arithmetic.
 
-use crate::gpu::testing::Kernel;
+use loupe::gpu::testing::Kernel;
 
 const SHADER: &str = r#"
 #import loupe::brdf::{d_ggx, PI}
@@ -112,7 +112,7 @@ pub struct Errors {
     pub peak: [f64; 2],
 }
 
-pub fn run(gpu: &crate::gpu::Gpu) -> Errors {
+pub fn run(gpu: &loupe::gpu::Gpu) -> Errors {
     let kernel = Kernel::new(gpu, SHADER, "main").unwrap_or_else(|e| panic!("{e}"));
     let a = 0.045f64 * 0.045;
     let n = [0.3f64, 0.5, 0.8];

@@ -1,8 +1,9 @@
-//! The WGSL traversal (`shaders/lib/bvh.wgsl`'s `trace` and `occluded`),
-//! run on the device over the hierarchy as `PathGeometry` uploads it,
-//! against the CPU traversal (`crate::bvh`) over the same build: random
-//! rays through the bundled torus knot hit the same triangle at the same
-//! distance.
+//! The path tracer's geometry on the device: the WGSL traversal
+//! (`shaders/lib/bvh.wgsl`'s `trace` and `occluded`), run over the
+//! hierarchy as `PathGeometry` uploads it, against the CPU traversal
+//! (`crate::bvh`) over the same build: random rays through the bundled
+//! torus knot hit the same triangle at the same distance; and the
+//! hierarchy kept across scene edits that leave the triangles alone.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -12,6 +13,7 @@ use glam::Vec3;
 use super::PathGeometry;
 use crate::bvh::Bvh;
 use crate::gpu::testing::Kernel;
+use crate::render::scene_gpu::SceneGpu;
 use crate::testing::Rng;
 
 const KERNEL: &str = r"
@@ -160,4 +162,31 @@ fn the_gpu_traversal_hits_what_the_cpu_traversal_hits() {
     );
     assert!(ambiguous.len() * 1000 <= rays.len(), "{} rays by an edge disagree:\n{}", ambiguous.len(), ambiguous.join("\n"));
     assert!(hits * 2 > rays.len() && shadowed[0] * 5 > rays.len(), "the rays both hit and miss: {hits} hits of {}", rays.len());
+}
+
+// ---- the hierarchy across scene edits ----------------------------------
+
+const SCENE: &str = "[quality]\nrenderer = \"path\"\n[[materials]]\nname = \"m\"\n\
+    [[objects]]\nshape = \"sphere\"\nmaterial = \"m\"\nposition = [0, 0, 0]\n\
+    [[lights]]\ntype = \"point\"\nposition = [0, 2, 0]\n";
+
+fn gpu_of(text: &str, previous: Option<&SceneGpu>, gpu: &crate::gpu::Gpu) -> SceneGpu {
+    let scene = crate::scene::parse("s.toml", text).unwrap_or_else(|d| panic!("{d}"));
+    SceneGpu::new(&gpu.device, &gpu.queue, &scene, &Default::default(), None, previous)
+}
+
+/// Moving a light or changing a material keeps the hierarchy; moving
+/// an object rebuilds it; the raster builds none.
+#[test]
+fn the_hierarchy_is_rebuilt_only_when_the_triangles_change() {
+    let gpu = crate::gpu::open().unwrap_or_else(|e| panic!("these tests need a GPU device (lavapipe will do): {e}"));
+    let first = gpu_of(SCENE, None, &gpu);
+    let path = first.path.as_ref().expect("a path-traced scene has path geometry");
+    assert!(path.stats().triangles > 0);
+    let light_moved = gpu_of(&SCENE.replace("[0, 2, 0]", "[1, 2, 0]"), Some(&first), &gpu);
+    assert!(light_moved.path.as_ref().unwrap().same_hierarchy(path), "a light moved: the triangles are the same");
+    let object_moved = gpu_of(&SCENE.replace("position = [0, 0, 0]", "position = [0, 0.5, 0]"), Some(&first), &gpu);
+    assert!(!object_moved.path.as_ref().unwrap().same_hierarchy(path), "an object moved: rebuilt");
+    let raster = gpu_of(&SCENE.replace("\"path\"", "\"raster\""), Some(&first), &gpu);
+    assert!(raster.path.is_none(), "the raster traces nothing, so nothing is built");
 }

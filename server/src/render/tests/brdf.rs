@@ -10,6 +10,7 @@
 use std::f64::consts::PI;
 
 use crate::gpu::testing::Kernel;
+use crate::testing::uniforms;
 
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -105,17 +106,6 @@ fn query(theta: f64, roughness: f32, metallic: f32, base: [f32; 3], l: [f32; 3],
         base: [base[0], base[1], base[2], 1.0],
         u: [u[0], u[1], u[2], 0.0],
     }
-}
-
-/// A small PCG: the same uniform numbers every run.
-pub(super) fn uniforms(n: usize) -> Vec<[f32; 3]> {
-    let mut state = 0x853c_49e6_748f_ea9b_u64;
-    let mut next = || {
-        state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-        let x = (((state >> 18) ^ state) >> 27) as u32;
-        (x.rotate_right((state >> 59) as u32) >> 8) as f32 / (1u32 << 24) as f32
-    };
-    (0..n).map(|_| [next(), next(), next()]).collect()
 }
 
 #[test]

@@ -1,37 +1,13 @@
 //! The numerical stability suite: hard cases of sampling and shading, run
 //! through the real WGSL modules on the device (lavapipe without a GPU),
 //! each failing on a NaN or Inf or on leaving its stated bound. The cases
-//! and their bounds, listed here and in the README:
+//! and their bounds are in docs/stability.md; each test below names its
+//! module. `the_suite_fails_when_it_should` shows the checks failing on
+//! purpose.
 //!
-//! - `brdf_sample_draws_from_brdf_pdf` (`sampling`): over n·v ∈ {1, 0.5,
-//!   0.1, 0.001}, roughness ∈ {0.001 (clamped to 0.045), 0.05, 0.5, 1},
-//!   metallic ∈ {0, 1}, white base: the chi-square test of 2^20 samples
-//!   against the pdf passes at 0.01 with Šidák's correction over the
-//!   cases; every sample's weight is brdf_cos / brdf_pdf within 1e-3
-//!   relative and at most `MAX_WEIGHT`; the directional albedo is at most
-//!   1 (+ `ALBEDO_SLACK` of quadrature error) and the mean weight equals
-//!   it within 4 standard errors + `GRAZING`; the share of samples that
-//!   stay above the surface is the pdf's integral within `GRAZING` + 4
-//!   standard errors.
-//! - `brdf_cos_is_reciprocal` (`sampling`): f(v, l) = f(l, v) within
-//!   `RECIPROCAL` wherever n·v, n·l ≥ 1e-4. It is not reciprocal below:
-//!   n·v is clamped at 1e-4 (a back-facing view still sees light) where
-//!   n·l ≤ 0 gives 0.
-//! - `degenerate_inputs_stay_finite_and_bounded` (`inputs`): zero, NaN,
-//!   back-facing and helper-axis normals, random numbers 0 and 1 − 2⁻²⁴,
-//!   through `basis`, `brdf_cos`, `brdf_pdf` and `brdf_sample`.
-//! - `a_camera_inside_a_closed_mesh_sees_no_nan` (`inputs`): the path
-//!   tracer from inside a closed sphere, its NaN guard taken out.
-//! - `ggx_in_half_precision` (`half`): the GGX term near n·h = 1 at the
-//!   smallest roughness: finite everywhere; within 1e-4 relative in f32;
-//!   within 0.25 with the normal as the G-buffer stores it (f16: up to
-//!   ~3e-4 rad off, a sixth of the lobe's width); within 0.05 of the f16
-//!   operands' D in f16 arithmetic (emulated), saturated at 65504, f16's
-//!   largest value, which the peak (77,625) exceeds.
-//! - `every_pass_at_every_quality_extreme_is_finite` (`scenes`): every
-//!   bundled scene, every quality extreme, through the NaN scan.
-//!
-//! `the_suite_fails_when_it_should` shows the checks failing on purpose.
+//! It drives the WGSL through `loupe::gpu::testing::Kernel` and the path
+//! tracer through `loupe::render::passes::path_trace::testing`: test
+//! fixtures the library makes public under its `testing` feature.
 
 mod chi2;
 mod half;
@@ -39,7 +15,7 @@ mod inputs;
 mod sampling;
 mod scenes;
 
-use crate::gpu::testing;
+use loupe::gpu::testing;
 
 /// A bound: `value` must be a number no larger than `bound` (NaN fails).
 fn at_most(what: &str, value: f64, bound: f64) -> Result<(), String> {
@@ -79,7 +55,7 @@ fn brdf_sample_draws_from_brdf_pdf() {
     let kernels = sampling::Kernels::new(&gpu);
     let cases = sampling::cases();
     let threshold = chi2::sidak(SIGNIFICANCE, cases.len());
-    let u = super::brdf_tests::uniforms(sampling::SAMPLES);
+    let u = loupe::testing::uniforms(sampling::SAMPLES);
     let mut failures = Vec::new();
     let (mut worst_p, mut worst_weight, mut largest_weight, mut max_albedo) = (1.0f64, 0.0f64, 0.0f64, 0.0f64);
     for case in &cases {
@@ -153,7 +129,7 @@ fn degenerate_inputs_stay_finite_and_bounded() {
 /// walls lit (mean colour above 0.01).
 #[test]
 fn a_camera_inside_a_closed_mesh_sees_no_nan() {
-    use crate::render::passes::path_trace::tests as path;
+    use loupe::render::passes::path_trace::testing as path;
     let mut s = path::session(&path::loaded(inputs::INSIDE, Default::default()));
     path::without_guard(&mut s);
     let color = path::assert_finite(&mut s, "inside a closed sphere", &[1, 2, 8]);
@@ -188,7 +164,7 @@ fn ggx_in_half_precision() {
 
 #[test]
 fn every_pass_at_every_quality_extreme_is_finite() {
-    use crate::render::passes::path_trace::tests as path;
+    use loupe::render::passes::path_trace::testing as path;
     let mut all = scenes::bundled();
     all.push(("bright light on a mirror".into(), path::loaded(scenes::BRIGHT, Default::default())));
     let mut failures = Vec::new();
@@ -213,7 +189,7 @@ fn the_suite_fails_when_it_should() {
     let kernels = sampling::Kernels::new(&gpu);
     let threshold = chi2::sidak(SIGNIFICANCE, sampling::cases().len());
     let case = sampling::Case { cos_v: 0.5, roughness: 0.5, metallic: 0.0 };
-    let drawn = sampling::draw(&gpu, &kernels, &case, &super::brdf_tests::uniforms(sampling::SAMPLES));
+    let drawn = sampling::draw(&gpu, &kernels, &case, &loupe::testing::uniforms(sampling::SAMPLES));
     let mut density = sampling::density(&gpu, &kernels, &case);
     let right = sampling::fit(&case, &drawn, &density);
     assert!(right.p_value >= threshold, "the right pdf: {right:?}");

@@ -11,9 +11,9 @@
 
 use std::f64::consts::PI;
 
-use super::chi2::{self, Axis, Fit, GAUSS};
-use crate::gpu::Gpu;
-use crate::gpu::testing::Kernel;
+use crate::chi2::{self, Axis, Fit, GAUSS};
+use loupe::gpu::Gpu;
+use loupe::gpu::testing::Kernel;
 
 /// What every kernel here reads: `input[0]` is the view (local frame,
 /// n = +z) and roughness, `input[1]` the base colour and metallic, and
@@ -263,7 +263,7 @@ pub fn reciprocity(gpu: &Gpu, k: &Kernels, case: &Case, pairs: usize) -> (f64, u
     // Directions uniform in cos θ from 1e-4 and in φ; half the pairs made
     // mirror images of each other (b = a reflected about n), where the
     // specular lobe is at its peak.
-    let u = super::super::brdf_tests::uniforms(2 * pairs);
+    let u = loupe::testing::uniforms(2 * pairs);
     let dir = |u: &[f32; 3]| {
         let c = 1e-4 + (1.0 - 1e-4) * f64::from(u[0]);
         let s = (1.0 - c * c).sqrt();

@@ -1,0 +1,5 @@
+//! The shader library's modules the renderer's passes share, tested on
+//! the device: the BRDF's sampling and random numbers.
+
+mod brdf;
+mod random;
