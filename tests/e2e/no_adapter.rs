@@ -14,11 +14,13 @@ fn without_adapter(dir: &Path, args: &[&str]) -> Run {
     loupe_with_env(dir, args, &[("VK_ICD_FILENAMES", "/nonexistent.json"), ("VK_DRIVER_FILES", "/nonexistent.json")])
 }
 
-/// The `--flags` words of `text` (a trailing `=value` or punctuation cut).
+/// The `--flags` words of `text`, cut where the name ends (`=value`,
+/// `[=<BOOL>]`, punctuation).
 fn flags(text: &str) -> impl Iterator<Item = &str> {
-    text.split(|c: char| c.is_whitespace() || c == '(' || c == ',')
-        .filter(|w| w.starts_with("--"))
-        .map(|w| w.trim_end_matches(|c: char| !c.is_ascii_alphanumeric()).split('=').next().unwrap_or(w))
+    text.split(|c: char| c.is_whitespace() || c == '(' || c == ',').filter(|w| w.starts_with("--") && w.len() > 2).map(|w| {
+        let end = w[2..].find(|c: char| !(c.is_ascii_alphanumeric() || c == '-')).map_or(w.len(), |i| i + 2);
+        &w[..end]
+    })
 }
 
 /// The flags `loupe <command> --help` lists as options.
