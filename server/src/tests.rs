@@ -427,10 +427,7 @@ fn report(edges: &Edges, found: &[(ModPath, BTreeSet<String>)]) -> String {
 /// Imports being removed on other branches of issue 20, left out until
 /// those land; an entry whose import is gone fails the test, to be
 /// deleted. (parent, from, to, who removes it)
-const LEAVING: &[(&str, &str, &str, &str)] = &[
-    ("", "denoise", "render", "denoise/offline.rs and on_gpu.rs move to offline/, above render: the offline/ branch"),
-    ("", "scene", "denoise", "scene stops importing denoise: the scene-denoise branch"),
-];
+const LEAVING: &[(&str, &str, &str, &str)] = &[("", "scene", "denoise", "scene stops importing denoise: the scene-denoise branch")];
 
 #[test]
 fn the_crate_has_no_import_circles() {

@@ -3,12 +3,12 @@
 
 use loupe_tests::{Project, repo};
 
-fn fixture(name: &str) -> String {
+pub(crate) fn fixture(name: &str) -> String {
     repo().join("server/src/denoise/fixtures").join(name).display().to_string()
 }
 
 /// OIDN's weights beside the repository (CI has them: missing fails).
-fn weights(name: &str) -> String {
+pub(crate) fn weights(name: &str) -> String {
     let p = repo().join("../shared/weights/oidn").join(name);
     assert!(p.is_file(), "OIDN's weights file {} is missing", p.display());
     p.display().to_string()

@@ -81,9 +81,21 @@ impl Run {
 
 /// Runs `loupe args...` in `dir` to completion.
 pub fn loupe(dir: &Path, args: &[&str]) -> Run {
-    let out = Command::new(loupe_bin()).args(args).current_dir(dir).env("NO_COLOR", "1").output().expect("the loupe binary starts");
+    loupe_with_env(dir, args, &[])
+}
+
+/// Runs `loupe args...` in `dir` to completion with `env` set besides.
+pub fn loupe_with_env(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Run {
+    let out = Command::new(loupe_bin())
+        .args(args)
+        .current_dir(dir)
+        .env("NO_COLOR", "1")
+        .envs(env.iter().copied())
+        .output()
+        .expect("the loupe binary starts");
+    let env: Vec<String> = env.iter().map(|(k, v)| format!("{k}={v} ")).collect();
     Run {
-        cmd: format!("(cd {} && loupe {})", dir.display(), args.join(" ")),
+        cmd: format!("(cd {} && {}loupe {})", dir.display(), env.concat(), args.join(" ")),
         code: out.status.code().unwrap_or(-1),
         stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
         stderr: String::from_utf8_lossy(&out.stderr).into_owned(),

@@ -6,15 +6,14 @@
 //! that a backend walks; `cpu` is the plain f32 reference of that walk;
 //! `process` is OIDN's pre- and post-processing around it (transfer
 //! functions, autoexposure, padding); `image` reads and writes the files
-//! `loupe denoise` takes; `offline` is that command, which runs the network
-//! on the GPU (`on_gpu`: the frame's own denoiser passes, in tiles `tiles`
-//! cuts when the image is too large for the device) or on `cpu`.
+//! `loupe denoise` takes; `tiles` cuts an image too large for the device
+//! into overlapping windows. This is the CPU model: it imports nothing from
+//! the renderer. `loupe denoise` itself, on the GPU or on `cpu`, is
+//! `crate::offline::denoise`.
 
 pub mod cpu;
 pub mod image;
 pub mod network;
-pub mod offline;
-pub mod on_gpu;
 pub mod process;
 pub mod tiles;
 pub mod tza;

@@ -24,9 +24,12 @@ pub const OPTIONAL_FEATURES: &[(wgpu::Features, &str)] = &[
     (wgpu::Features::FLOAT32_FILTERABLE, "filtered sampling of f32 textures"),
 ];
 
-/// What to tell a user with no adapter at all.
+/// What to tell a user with no adapter at all, whichever command failed:
+/// what to install, and the one command that works without a device (only
+/// `loupe check` takes --no-device).
 pub const NO_ADAPTER_HINT: &str = "no GPU adapter found: install a Vulkan driver \
-(on Debian/Ubuntu without a GPU: `apt-get install mesa-vulkan-drivers libvulkan1` for lavapipe), or pass --no-device";
+(on Debian/Ubuntu without a GPU: `apt-get install mesa-vulkan-drivers libvulkan1` for lavapipe); \
+without one, `loupe check --no-device` still checks shaders and scenes";
 
 #[derive(Debug, thiserror::Error)]
 pub enum OpenError {

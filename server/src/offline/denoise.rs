@@ -8,16 +8,17 @@
 //! always decoded; normals are read as stored.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
-use std::sync::Arc;
-
-use super::image::{self, Format, Image};
-use super::network::{Inputs, Network};
-use super::process::{self, Mode, Transfer};
-use super::{Precision, cpu, on_gpu, tza};
+use crate::denoise::image::{self, Format, Image};
+use crate::denoise::network::{Inputs, Network};
+use crate::denoise::process::{self, Mode, Transfer};
+use crate::denoise::{Precision, cpu, tza};
 use crate::diag::{Code, Diagnostic, Location};
 use crate::render::passes::images::TileImages;
+
+mod on_gpu;
 
 /// Where the network runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]

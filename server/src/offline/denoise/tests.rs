@@ -262,7 +262,7 @@ fn pattern(w: usize, h: usize) -> Image {
 fn nan_and_inf_stay_within_the_receptive_field() {
     let dir = tempfile::tempdir().unwrap();
     let net = Network::from_archive(&tza::read(&weights("rt_ldr.tza"), "rt_ldr.tza").unwrap()).unwrap();
-    let radius = super::super::tiles::receptive_radius(&net) as usize;
+    let radius = crate::denoise::tiles::receptive_radius(&net) as usize;
     let (w, h) = (240, 24);
     let clean = pattern(w, h);
     let mut bad = clean.clone();

@@ -9,11 +9,11 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-use super::Precision;
-use super::image::Image;
-use super::network::Network;
-use super::process::Mode;
-use super::tiles::{self, Rect, Tile};
+use crate::denoise::Precision;
+use crate::denoise::image::Image;
+use crate::denoise::network::Network;
+use crate::denoise::process::Mode;
+use crate::denoise::tiles::{self, Rect, Tile};
 use crate::diag::{Code, Diagnostic, Location};
 use crate::gpu::Gpu;
 use crate::render::capture::CapturedTensor;

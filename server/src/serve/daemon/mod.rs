@@ -1,0 +1,546 @@
+//! The daemon's render thread: the one place that owns the device. It takes
+//! events one at a time — file changes, compile results, client messages,
+//! frame ticks — and publishes snapshots and events for clients.
+//!
+//! Composition runs on worker threads (it never blocks rendering); only
+//! pipeline creation, which needs the device, runs here.
+//!
+//! Here: the loop, file and scene changes, starting reloads and installing
+//! their pipelines, submitting and collecting frames. `reload` is the
+//! reload state machine (which compile installs, when a reload is done and
+//! which frame shows it); `publish` writes snapshots and sends events;
+//! `device` handles a lost device; `gpu_errors` locates a frame's
+//! uncaptured wgpu errors; `nan` decides when to trace a NaN/Inf.
+
+mod device;
+mod gpu_errors;
+mod nan;
+mod publish;
+mod reload;
+
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::mpsc::{self, RecvTimeoutError, Sender};
+use std::time::{Duration, Instant};
+
+use super::event::{CompileResult, Event, FileBatch, FileChange, SceneCommand};
+use super::inbox::Inbox;
+use super::shared::{self, Shared};
+use crate::diag::{Diagnostic, display_path};
+use crate::gpu::Gpu;
+use crate::protocol::{NanReport, PassInfo, QUAD_STATISTICS, ServerEvent};
+use crate::render::FrameOptions;
+use crate::render::frame::{FrameResult, PendingFrame};
+use crate::render::passes::nan_watch;
+use crate::render::pipelines::Installed;
+use crate::render::resource::PipelineKey;
+use crate::render::session::Session;
+use crate::scene::{self, overrides::Overrides};
+use crate::shader::{Library, SourceFile, library};
+use reload::{ForFrame, Reloads, Succeeded, Verdict};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum RenderMode {
+    /// Render frames continuously, up to the frame-rate cap.
+    Continuous,
+    /// Render only when something changed.
+    OnChange,
+}
+
+pub struct Config {
+    pub shader_root: PathBuf,
+    pub scene_path: PathBuf,
+    pub mode: RenderMode,
+    pub max_fps: f64,
+    /// Where the scene's files outside the watched roots are named.
+    pub watch_files: super::watch::WatchedFiles,
+}
+
+/// Where a submitted frame's results stand.
+enum Results {
+    /// Rendering, or being copied back.
+    Gpu(Box<PendingFrame>),
+    /// Landed, and being converted and measured on the conversion thread:
+    /// the render thread goes on submitting frames meanwhile.
+    Converting(mpsc::Receiver<FrameResult>),
+}
+
+struct InFlight {
+    results: Results,
+    /// The reloads this frame is the first to show.
+    reloads: Vec<Succeeded>,
+    started: Instant,
+    /// `pass/output` of the final output.
+    final_key: Option<String>,
+    /// No uncaptured wgpu error while recording or submitting it: its
+    /// images are real and may be published.
+    clean: bool,
+    /// `pass/output` of every output whose pass uses a pipeline swapped in
+    /// since the previous frame.
+    replaced: BTreeSet<String>,
+    /// Why this frame captured every output, when it did.
+    trace: Option<&'static str>,
+}
+
+pub struct Daemon {
+    /// The device, sources, scene, graph, pipelines and resources.
+    session: Session,
+    config: Config,
+    /// Files that failed to load, by display path: their last good content
+    /// stays in the session's library meanwhile.
+    file_errors: BTreeMap<String, Diagnostic>,
+    /// The scene file and the meshes it references: a change to any
+    /// reloads the scene.
+    scene_files: Vec<PathBuf>,
+    scene_error: Option<Diagnostic>,
+    /// Live values from the browser on top of the scene file.
+    overrides: Overrides,
+    shared: Arc<Shared>,
+    events: Sender<Event>,
+    workers: Arc<rayon::ThreadPool>,
+    reloads: Reloads,
+    in_flight: VecDeque<InFlight>,
+    /// The one thread captures are converted on, so results come back in
+    /// frame order and never more than the frames in flight.
+    converter: rayon::ThreadPool,
+    dirty: bool,
+    /// What each WebSocket client wants captured, by client id.
+    subscriptions: BTreeMap<u64, BTreeSet<String>>,
+    /// Uncaptured wgpu errors of the newest frame, as diagnostics.
+    gpu_errors: Vec<Diagnostic>,
+    /// Where each uncaptured error (by message) was first attributed, so a
+    /// persisting error keeps its file.
+    gpu_error_files: BTreeMap<String, Vec<String>>,
+    /// The pass list last announced in a `passes` event, without times.
+    announced_passes: Option<Vec<PassInfo>>,
+    /// The newest frame's per-pass times and how they were measured.
+    last_timings: Vec<(String, f64)>,
+    last_timing: String,
+    device_resets: u32,
+    /// The debug API asked for the device to be destroyed; its loss is on
+    /// its way.
+    destroy_requested: bool,
+    /// When the newest frame was submitted: the next one's time step.
+    last_frame: Option<Instant>,
+    /// The next frame captures every output, for this reason (`auto`,
+    /// `request`), to find where a NaN/Inf started.
+    trace_next: Option<&'static str>,
+    /// Sources or the scene changed since the last trace: a NaN now may
+    /// start elsewhere.
+    trace_stale: bool,
+    nan_report: Option<NanReport>,
+}
+
+impl Daemon {
+    pub fn new(gpu: Gpu, config: Config, shared: Arc<Shared>, events: Sender<Event>) -> Self {
+        let lib = library::read_tree(&config.shader_root).unwrap_or_else(|_| Library::new([]));
+        let (loaded, scene_error) = match scene::load(&config.scene_path) {
+            Ok(l) => (l, None),
+            Err(d) => {
+                let empty = scene::parse("", "").expect("the empty scene is valid");
+                (
+                    scene::Loaded { scene: empty, meshes: Default::default(), denoiser: None, files: vec![config.scene_path.clone()] },
+                    Some(d),
+                )
+            }
+        };
+        let workers = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .stack_size(256 << 20)
+            .thread_name(|i| format!("loupe-compile-{i}"))
+            .build()
+            .expect("compile worker threads");
+        let timing = if gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) { "gpu" } else { "cpu" };
+        config.watch_files.set(&loaded.files);
+        Daemon {
+            session: Session::new(gpu, &config.shader_root, lib, &loaded)
+                .with_options(FrameOptions { nan_watch: true, ..FrameOptions::default() }),
+            config,
+            file_errors: BTreeMap::new(),
+            scene_files: loaded.files,
+            scene_error,
+            overrides: Overrides::new(),
+            shared,
+            events,
+            workers: Arc::new(workers),
+            reloads: Reloads::default(),
+            in_flight: VecDeque::new(),
+            converter: rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .thread_name(|_| "loupe-convert".into())
+                .build()
+                .expect("the capture conversion thread"),
+            dirty: true,
+            subscriptions: BTreeMap::new(),
+            gpu_errors: Vec::new(),
+            gpu_error_files: BTreeMap::new(),
+            announced_passes: None,
+            last_timings: Vec::new(),
+            last_timing: timing.to_owned(),
+            device_resets: 0,
+            destroy_requested: false,
+            last_frame: None,
+            trace_next: None,
+            trace_stale: false,
+            nan_report: None,
+        }
+    }
+
+    fn gpu(&self) -> &Gpu {
+        self.session.gpu()
+    }
+
+    /// Runs until `Shutdown` or until every sender is gone.
+    pub fn run(mut self, rx: Inbox) {
+        self.install_lost_callback();
+        let keys = self.session.wanted();
+        self.start_reload(keys, Vec::new(), 0.0);
+        self.publish_state();
+        self.publish_controls();
+        let interval = Duration::from_secs_f64(1.0 / self.config.max_fps.max(0.1));
+        loop {
+            // Frames on their way back are polled for; otherwise only an
+            // event (or the next frame falling due) changes anything.
+            let wait = if !self.in_flight.is_empty() {
+                Duration::from_millis(2)
+            } else if self.wants_frame() && self.can_render() {
+                self.until_due(interval)
+            } else {
+                Duration::from_millis(250)
+            };
+            match rx.recv_timeout(wait) {
+                Ok(Event::Shutdown) => break,
+                Ok(ev) => self.handle(ev),
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => break,
+            }
+            self.session.poll();
+            self.collect_frames();
+            if self.wants_frame() && self.until_due(interval).is_zero() && self.can_render() {
+                self.render();
+            }
+        }
+    }
+
+    fn wants_frame(&self) -> bool {
+        self.config.mode == RenderMode::Continuous || self.dirty || self.reloads.waiting() || self.session.converging()
+    }
+
+    /// How long until the next frame is due: at once when a reload is
+    /// waiting to be shown (the frame-rate cap does not delay a swap).
+    fn until_due(&self, interval: Duration) -> Duration {
+        match self.last_frame {
+            Some(at) if !self.reloads.waiting() => interval.saturating_sub(at.elapsed()),
+            _ => Duration::ZERO,
+        }
+    }
+
+    /// Frames render while shaders compile, except when that would show a
+    /// half-applied reload (some of its pipelines swapped, others not yet)
+    /// or a pass whose first pipeline is still compiling.
+    fn can_render(&self) -> bool {
+        let entries = &self.session.pipelines().entries;
+        let half_applied = self.reloads.half_applied(|k| entries.get(k).is_some_and(|e| e.current.is_some()));
+        self.in_flight.len() < 2 && !half_applied && !self.destroy_requested
+    }
+
+    fn handle(&mut self, ev: Event) {
+        match ev {
+            Event::FilesChanged(batch) => self.files_changed(batch),
+            Event::CompileFinished(r) => self.compile_finished(r),
+            Event::Scene(cmd) => self.scene_command(cmd),
+            Event::Rebuild => {
+                let keys = self.session.wanted();
+                self.start_reload(keys, Vec::new(), 0.0);
+            }
+            Event::Subscriptions { client, outputs } => {
+                let before = self.subscriptions.remove(&client).unwrap_or_default();
+                // A new output (or quad statistics) needs a frame that
+                // captures it.
+                self.dirty |= !outputs.is_subset(&before);
+                if !outputs.is_empty() {
+                    self.subscriptions.insert(client, outputs);
+                }
+                let quads = self.subscriptions.values().any(|s| s.contains(QUAD_STATISTICS));
+                self.session.set_quads(quads);
+                if !quads {
+                    shared::write(&self.shared.quads, None);
+                }
+            }
+            Event::Tick => self.dirty = true,
+            Event::DeviceLost { device, reason, message } => self.device_lost(device, reason, message),
+            Event::LoseDevice => {
+                log::warn!("destroying the device on request (debug API)");
+                self.destroy_requested = true;
+                self.gpu().device.destroy();
+                self.session.poll();
+            }
+            Event::Trace => {
+                self.trace_next = Some("request");
+                self.dirty = true;
+            }
+            Event::Shutdown => {}
+        }
+    }
+
+    fn files_changed(&mut self, batch: FileBatch) {
+        let watch_ms = batch.ready.duration_since(batch.first_event).as_secs_f64() * 1e3;
+        let mut lib = (**self.session.library()).clone();
+        let mut touched = BTreeSet::new();
+        let mut scene_changed = false;
+        for change in &batch.changes {
+            let path = change.path();
+            let display = display_path(path);
+            if self.scene_files.iter().any(|f| same_file(path, f)) {
+                scene_changed = true;
+                touched.insert(display);
+                continue;
+            }
+            if path.extension().is_none_or(|e| e != "wgsl") {
+                continue;
+            }
+            touched.insert(display.clone());
+            match change {
+                FileChange::Removed { .. } => {
+                    self.file_errors.remove(&display);
+                    lib.remove(&display);
+                }
+                FileChange::Written { content, .. } => match SourceFile::from_bytes(path, display.clone(), content.to_vec()) {
+                    Ok(f) => {
+                        self.file_errors.remove(&display);
+                        lib.upsert(f);
+                    }
+                    Err(d) => {
+                        self.file_errors.insert(display.clone(), d);
+                    }
+                },
+            }
+        }
+        self.session.apply_sources(lib);
+        if scene_changed {
+            self.reload_scene();
+        }
+        // Exactly the pipelines whose sources depend on a touched file, plus
+        // any the (new) graph needs that were never built.
+        let lib = self.session.library().clone();
+        let affected: BTreeSet<String> = touched.iter().flat_map(|d| lib.dependents(d)).collect();
+        let mut keys = self.session.built_from(&affected);
+        keys.extend(self.session.missing());
+        self.start_reload(keys, touched.into_iter().collect(), watch_ms);
+    }
+
+    fn reload_scene(&mut self) {
+        match scene::load_with(&self.config.scene_path, &self.overrides) {
+            Ok(l) => self.install_scene(l),
+            // The last good scene keeps rendering.
+            Err(d) => self.scene_error = Some(d),
+        }
+        self.dirty = true;
+        self.publish_controls();
+    }
+
+    fn install_scene(&mut self, l: scene::Loaded) {
+        self.trace_stale = true;
+        self.session.set_scene(&l);
+        self.scene_files = l.files;
+        self.config.watch_files.set(&self.scene_files);
+        self.scene_error = None;
+    }
+
+    /// Live overrides: a value that makes the scene invalid is refused with
+    /// the scene's diagnostic and the previous overrides stay.
+    fn scene_command(&mut self, cmd: SceneCommand) {
+        let display = display_path(&self.config.scene_path);
+        let overrides = match cmd {
+            SceneCommand::Set { path, value } => {
+                let mut o = self.overrides.clone();
+                o.insert(path, value);
+                o
+            }
+            SceneCommand::Clear => Overrides::new(),
+            SceneCommand::Save => {
+                let saved = std::fs::read_to_string(&self.config.scene_path)
+                    .map_err(|e| e.to_string())
+                    .and_then(|text| scene::overrides::apply(&text, &self.overrides))
+                    .and_then(|text| write_atomically(&self.config.scene_path, &text).map_err(|e| e.to_string()));
+                match saved {
+                    // The file now holds the values: the watcher's reload
+                    // of it renders the same scene.
+                    Ok(()) => self.overrides.clear(),
+                    Err(e) => self.shared.publish(ServerEvent::Error { message: format!("cannot save {display}: {e}") }),
+                }
+                self.publish_controls();
+                return;
+            }
+        };
+        match scene::load_with(&self.config.scene_path, &overrides) {
+            Ok(l) => {
+                self.overrides = overrides;
+                self.install_scene(l);
+                self.dirty = true;
+                let keys = self.session.missing();
+                self.start_reload(keys, vec![display], 0.0);
+            }
+            Err(d) => self.shared.publish(ServerEvent::Error { message: format!("override refused: {d}") }),
+        }
+        self.publish_controls();
+    }
+
+    fn start_reload(&mut self, keys: BTreeSet<PipelineKey>, files: Vec<String>, watch_ms: f64) {
+        let id = self.reloads.start(&keys, files, watch_ms);
+        if let Some((files, pipelines)) = self.reloads.describe(id) {
+            self.shared.publish(ServerEvent::ReloadStarted { id, files: files.to_vec(), pipelines: pipelines.to_vec() });
+        }
+        let lib = self.session.library().clone();
+        for key in keys {
+            let display = self.session.shader_display(key.spec);
+            let tx = self.events.clone();
+            // A file that failed to load fails every pipeline built from it,
+            // even while its last good content is still in the library.
+            let file_error = self
+                .file_errors
+                .values()
+                .find(|d| {
+                    d.file().is_some_and(|f| {
+                        f == display
+                            || lib.get(&display).is_some_and(|s| lib.dependencies(s).is_ok_and(|deps| deps.iter().any(|x| x.display == f)))
+                    })
+                })
+                .cloned();
+            let compose = self.session.compose_job(&key);
+            self.workers.spawn(move || {
+                let start = Instant::now();
+                let result = match file_error {
+                    Some(d) => Err(vec![d]),
+                    None => compose(),
+                };
+                let compose_ms = start.elapsed().as_secs_f64() * 1e3;
+                let _ = tx.send(Event::CompileFinished(CompileResult { reload: id, key, result, compose_ms }));
+            });
+        }
+        self.finish_reload(id);
+    }
+
+    fn compile_finished(&mut self, r: CompileResult) {
+        if self.reloads.compiled(r.reload, &r.key) == Verdict::Install {
+            let start = Instant::now();
+            // Creation under an error scope; wgpu errors keep the old pipeline.
+            let installed = self.session.install(&r.key, r.result);
+            let pipeline_ms = start.elapsed().as_secs_f64() * 1e3;
+            let diagnostics = match installed {
+                Installed::Swapped => Vec::new(),
+                _ => self.session.pipelines().entries[&r.key].diagnostics.clone(),
+            };
+            self.reloads.installed(r.reload, &r.key, installed, r.compose_ms, pipeline_ms, diagnostics);
+        }
+        self.finish_reload(r.reload);
+    }
+
+    /// Publishes reload `id`'s failure once it waits for nothing; a success
+    /// waits for the first frame that shows it (`publish_frame`).
+    fn finish_reload(&mut self, id: u64) {
+        let file_errors = &self.file_errors;
+        let scene_error = &self.scene_error;
+        let finished = self.reloads.finish(id, |files| {
+            let named = file_errors.values().filter(|d| d.file().is_some_and(|f| files.iter().any(|x| x == f)));
+            named.chain(scene_error.iter()).cloned().collect()
+        });
+        match finished {
+            None => return,
+            Some(Ok(())) => self.trace_stale = true,
+            Some(Err(f)) => self.shared.publish(ServerEvent::ReloadFailed {
+                id: f.id,
+                files: f.files,
+                pipelines: f.pipelines,
+                diagnostics: f.diagnostics,
+            }),
+        }
+        self.dirty = true;
+        self.publish_state();
+    }
+
+    /// The one place a frame is submitted.
+    fn render(&mut self) {
+        let started = Instant::now();
+        // Real time drives temporal passes, capped so a stall (a long
+        // compile, a paused on-change session) does not jump them.
+        let dt = self.last_frame.map_or(0.0, |t| t.elapsed().as_secs_f32().min(0.25));
+        self.last_frame = Some(started);
+        self.dirty = false;
+        let final_key = self.session.graph().final_name();
+        let mut capture: BTreeSet<String> = self.subscriptions.values().flatten().filter(|k| *k != QUAD_STATISTICS).cloned().collect();
+        capture.extend(final_key.clone());
+        capture.insert(nan_watch::OUTPUT.to_owned());
+        // A traced frame captures every output.
+        let trace = self.trace_next.take();
+        let pending = self.session.submit(if trace.is_some() { None } else { Some(&capture) }, dt);
+        // wgpu reports invalid frame commands on this thread, while the
+        // frame is recorded and submitted: they belong to this frame.
+        let errors = self.session.take_uncaptured();
+        let clean = errors.is_empty();
+        let ForFrame { reloads, swapped } = self.reloads.for_frame();
+        self.set_gpu_errors(&errors, &swapped);
+        // The outputs of passes whose pipelines this frame is the first to
+        // use: their previous images become the "last good" ones.
+        let replaced = self
+            .session
+            .graph()
+            .passes
+            .iter()
+            .filter(|p| p.pipelines.iter().any(|k| swapped.contains(k)))
+            .flat_map(|p| p.writes().map(|h| self.session.graph().resource(h).name.clone()))
+            .collect();
+        self.in_flight.push_back(InFlight {
+            results: Results::Gpu(Box::new(pending)),
+            reloads,
+            started,
+            final_key,
+            clean,
+            replaced,
+            trace,
+        });
+    }
+
+    /// Hands every landed frame to the conversion thread, and publishes
+    /// converted frames in order.
+    fn collect_frames(&mut self) {
+        for f in &mut self.in_flight {
+            if matches!(&f.results, Results::Gpu(p) if p.ready()) {
+                let (tx, rx) = mpsc::sync_channel(1);
+                let Results::Gpu(pending) = std::mem::replace(&mut f.results, Results::Converting(rx)) else {
+                    unreachable!("matched above")
+                };
+                self.converter.spawn(move || {
+                    let _ = tx.send(pending.finish());
+                });
+            }
+        }
+        while let Some(Results::Converting(rx)) = self.in_flight.front().map(|f| &f.results) {
+            let result = match rx.try_recv() {
+                Ok(result) => result,
+                Err(mpsc::TryRecvError::Empty) => break,
+                Err(mpsc::TryRecvError::Disconnected) => {
+                    log::error!("a frame's conversion was lost");
+                    self.in_flight.pop_front();
+                    continue;
+                }
+            };
+            let done = self.in_flight.pop_front().expect("checked");
+            self.publish_frame(done, result);
+        }
+    }
+}
+
+fn same_file(a: &Path, b: &Path) -> bool {
+    let c = |p: &Path| p.canonicalize().unwrap_or_else(|_| std::path::absolute(p).unwrap_or_else(|_| p.to_owned()));
+    c(a) == c(b)
+}
+
+/// Writes like an editor that saves safely: a temporary file beside the
+/// target, renamed over it, so a reader never sees half a file.
+fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
+    let tmp = path.with_extension("toml.loupe-save~");
+    std::fs::write(&tmp, text)?;
+    std::fs::rename(&tmp, path)
+}

@@ -1,0 +1,158 @@
+//! Publishing: what the render thread writes into `Shared` (the
+//! snapshots HTTP serves) and the events it sends clients, after a frame
+//! and whenever the state they describe changes.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use super::{Daemon, InFlight, RenderMode};
+use crate::diag::{Diagnostic, Severity, display_path};
+use crate::protocol::{
+    self, ControlsReport, PassInfo, PassQuadReport, PassStatus, PassTiming, QuadReport, ReloadTimings, ServerEvent, Status,
+};
+use crate::render::frame::FrameResult;
+use crate::render::session::PassState;
+use crate::scene;
+use crate::serve::shared::{self, FrameImages};
+
+impl Daemon {
+    pub(super) fn publish_controls(&self) {
+        let report = ControlsReport {
+            scene: display_path(&self.config.scene_path),
+            controls: scene::overrides::controls(self.session.scene()),
+            overrides: self.overrides.clone(),
+        };
+        shared::write(&self.shared.controls, report.clone());
+        self.shared.publish(ServerEvent::Controls(report));
+    }
+
+    pub(super) fn publish_frame(&mut self, done: InFlight, result: FrameResult) {
+        let InFlight { results: _, reloads, started, final_key, clean, replaced, trace } = done;
+        if clean {
+            self.follow_nan(&result, trace);
+        }
+        let render_ms = started.elapsed().as_secs_f64() * 1e3;
+        let total = result.total_ms;
+        let mut images = None;
+        if clean {
+            let mut captures = (*shared::read(&self.shared.captures)).clone();
+            if !replaced.is_empty() {
+                // What a pass showed before its pipelines changed is what
+                // A/B compares against; other passes keep theirs.
+                let mut last_good = (*shared::read(&self.shared.last_good)).clone();
+                last_good.extend(replaced.iter().filter_map(|k| captures.get(k).map(|c| (k.clone(), c.clone()))));
+                shared::write(&self.shared.last_good, Arc::new(last_good));
+            }
+            let this_frame: BTreeMap<String, Arc<_>> = result.captures.into_iter().map(|c| (c.key(), Arc::new(c))).collect();
+            captures.extend(this_frame.iter().map(|(k, c)| (k.clone(), c.clone())));
+            shared::write(&self.shared.captures, Arc::new(captures));
+            let mut tensors = (*shared::read(&self.shared.tensors)).clone();
+            tensors.extend(result.tensors.into_iter().map(|t| (t.key(), Arc::new(t))));
+            shared::write(&self.shared.tensors, Arc::new(tensors));
+            images = Some(FrameImages::new(result.frame, final_key, this_frame));
+        }
+        if clean && !result.quads.is_empty() {
+            self.publish_quads(result.frame, result.quads, &result.fragment_invocations);
+        }
+        self.last_timings = result.timings;
+        self.last_timing = result.timing.to_owned();
+        for r in &reloads {
+            let timings = ReloadTimings { render_ms, ..r.timings };
+            self.shared.publish(ServerEvent::ReloadSucceeded { id: r.id, files: r.files.clone(), pipelines: r.pipelines.clone(), timings });
+        }
+        self.publish_passes();
+        let passes: Vec<PassTiming> = self.last_timings.iter().map(|(n, t)| PassTiming { name: n.clone(), time_ms: *t }).collect();
+        let ids: Vec<u64> = reloads.iter().map(|r| r.id).collect();
+        self.shared.publish(ServerEvent::Frame {
+            frame: result.frame,
+            passes,
+            total_ms: total,
+            timing: result.timing.to_owned(),
+            reload: ids.last().copied(),
+            reloads: ids,
+        });
+        let mut status = shared::read(&self.shared.status);
+        status.frame = result.frame;
+        shared::write(&self.shared.status, status);
+        // Images last: encoding and sending them takes a client a while,
+        // and the events say what they show.
+        if let Some(images) = images {
+            self.shared.frames.send_replace(Some(Arc::new(images)));
+        }
+    }
+
+    /// A frame's quad statistics, beside the adapter's own counts.
+    pub(super) fn publish_quads(&mut self, frame: u64, quads: Vec<crate::render::quads::PassQuads>, invocations: &[(String, u64)]) {
+        let passes = quads
+            .into_iter()
+            .map(|q| PassQuadReport { fragment_invocations: invocations.iter().find(|(p, _)| *p == q.pass).map(|(_, n)| *n), quads: q })
+            .collect();
+        let report = QuadReport { frame, adapter: self.gpu().adapter_name(), passes };
+        shared::write(&self.shared.quads, Some(Arc::new(report.clone())));
+        self.shared.publish(ServerEvent::Quads(report));
+    }
+
+    /// Writes the pass list snapshot (with the newest times) and announces
+    /// it in a `passes` event only when something but the times changed.
+    pub(super) fn publish_passes(&mut self) {
+        let passes: Vec<PassInfo> = self
+            .session
+            .passes()
+            .into_iter()
+            .map(|p| {
+                let time_ms = (p.status != PassState::Culled)
+                    .then(|| self.last_timings.iter().find(|(n, _)| *n == p.name).map(|(_, t)| *t))
+                    .flatten();
+                PassInfo::new(p, time_ms, &self.last_timing)
+            })
+            .collect();
+        shared::write(&self.shared.passes, passes.clone());
+        let shape: Vec<PassInfo> = passes.iter().map(PassInfo::shape).collect();
+        if self.announced_passes.as_ref() != Some(&shape) {
+            self.announced_passes = Some(shape);
+            self.shared.publish(ServerEvent::Passes { passes });
+        }
+    }
+
+    pub(super) fn diagnostics(&self) -> Vec<Diagnostic> {
+        let mut all = self.session.pipeline_diagnostics();
+        for d in self.file_errors.values().chain(self.scene_error.iter()).chain(self.gpu_errors.iter()) {
+            if !all.iter().any(|x| x.to_string() == d.to_string()) {
+                all.push(d.clone());
+            }
+        }
+        all
+    }
+
+    pub(super) fn publish_state(&mut self) {
+        let diagnostics = self.diagnostics();
+        let infos: Vec<protocol::PipelineInfo> = self.session.pipeline_summaries().into_iter().map(Into::into).collect();
+        let count = |s: PassStatus| infos.iter().filter(|i| i.status == s).count();
+        let gpu = self.gpu();
+        let status = Status {
+            protocol: protocol::VERSION,
+            version: env!("CARGO_PKG_VERSION").to_owned(),
+            adapter: gpu.adapter_name(),
+            cpu_adapter: gpu.is_cpu(),
+            features: gpu.feature_names(),
+            degraded: gpu.degraded.clone(),
+            scene: display_path(&self.config.scene_path),
+            frame: shared::read(&self.shared.status).frame,
+            pipelines_ok: count(PassStatus::Ok),
+            pipelines_stale: count(PassStatus::Stale),
+            pipelines_failed: count(PassStatus::Failed),
+            device_resets: self.device_resets,
+            errors: diagnostics.iter().filter(|d| d.severity == Severity::Error).count(),
+            warnings: diagnostics.iter().filter(|d| d.severity == Severity::Warning).count(),
+            render_mode: match self.config.mode {
+                RenderMode::Continuous => "continuous".into(),
+                RenderMode::OnChange => "on-change".into(),
+            },
+        };
+        shared::write(&self.shared.status, status);
+        shared::write(&self.shared.pipelines, infos);
+        shared::write(&self.shared.diagnostics, diagnostics.clone());
+        self.shared.publish(ServerEvent::Diagnostics { diagnostics });
+        self.publish_passes();
+    }
+}
