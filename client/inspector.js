@@ -513,11 +513,6 @@ export class Inspector {
     this.frameRequested = true;
     requestAnimationFrame(() => {
       this.frameRequested = false;
-    this.streamed = new Map(); // `pass/output` → newest streamed capture not yet shown
-    this.streamTimer = null;
-    this.lastStreamed = -Infinity; // when a streamed capture last arrived
-    this.lastApplied = -Infinity;
-    this.streamedLoads = 0;
       this.flush();
     });
   }
