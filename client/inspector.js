@@ -1051,6 +1051,8 @@ export class Inspector {
       loading: this.loading,
       loads: this.loads,
       streamedLoads: this.streamedLoads,
+      // Whether live refresh rides the stream (true) or fetches (false).
+      streaming: performance.now() - this.lastStreamed < 2000,
       error: this.error ? errorText(this.error) : null,
       width: a?.width ?? null,
       height: a?.height ?? null,

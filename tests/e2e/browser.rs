@@ -890,3 +890,54 @@ async fn the_tradeoffs_chart_shows_the_sweep_and_applies_a_point() {
     assert_eq!(controls["overrides"], serde_json::json!({ "quality.path_spp": 4, "quality.renderer": "path" }));
     c.close().await.unwrap();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_inspector_keeps_its_live_stream_across_control_changes_and_auto_fit() {
+    let p = Project::copy_of_repo("browser-stream");
+    // Continuous rendering: a streamed capture of the final output every frame.
+    let s = Server::start(&p.root, &[]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    let inspector = "window.loupe.state.inspector";
+    until(&c, &s, "the inspector streaming", &format!("{inspector}.streaming && {inspector}.streamedLoads >= 3")).await;
+    let fetches = c.execute(&format!("return {inspector}.loads;"), vec![]).await.unwrap();
+
+    // Each round changes display controls as a user does and then, in the
+    // animation frame that redraws (registered after the change, so it runs
+    // after the inspector's), reads the stream state: a control change
+    // must not touch it.
+    let controls = [
+        "const e = document.querySelector('#exposure'); e.value = '1.5'; e.dispatchEvent(new Event('input'));",
+        "document.querySelector('#auto-fit').click();",
+        "const ch = document.querySelector('#channel'); ch.value = 'g'; ch.dispatchEvent(new Event('change'));",
+        "const e = document.querySelector('#srgb'); e.checked = !e.checked; e.dispatchEvent(new Event('change'));",
+        "window.loupe.autoFit();",
+        "const m = document.querySelector('#range-max'); m.value = '2'; m.dispatchEvent(new Event('input'));",
+    ];
+    for round in 0..3 {
+        for change in controls {
+            until(&c, &s, "the inspector streaming", &format!("{inspector}.streaming")).await;
+            let seen = c
+                .execute_async(
+                    &format!(
+                        "const done = arguments[0];
+                         const before = {inspector};
+                         {change}
+                         requestAnimationFrame(() => {{ const after = {inspector}; done([before.streamedLoads, after.streamedLoads, after.streaming]); }});"
+                    ),
+                    vec![],
+                )
+                .await
+                .unwrap();
+            let (before, after) = (seen[0].as_u64().unwrap(), seen[1].as_u64().unwrap());
+            assert!(after >= before, "round {round}, `{change}`: the streamed loads went from {before} back to {after}");
+            assert_eq!(seen[2], true, "round {round}, `{change}`: the inspector stopped streaming and would fetch");
+        }
+    }
+    // The stream goes on after the changes, and never fell back to fetching.
+    let now = c.execute(&format!("return {inspector}.streamedLoads;"), vec![]).await.unwrap().as_u64().unwrap();
+    until(&c, &s, "more streamed captures", &format!("{inspector}.streamedLoads >= {}", now + 3)).await;
+    let after = c.execute(&format!("return {inspector}.loads;"), vec![]).await.unwrap();
+    assert_eq!(after, fetches, "the inspector fetched while it was streaming");
+    c.close().await.unwrap();
+}
