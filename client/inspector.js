@@ -598,8 +598,6 @@ export class Inspector {
       loading: live.loading,
       loads: live.fetches,
       streamedLoads: live.streamedLoads,
-      // Whether live refresh rides the stream (true) or fetches (false).
-      streaming: live.streaming,
       throttle: live,
       error: this.error ? errorText(this.error) : null,
       width: a?.width ?? null,

@@ -111,6 +111,7 @@ export class LiveThrottle {
   snapshot() {
     return {
       streaming: this.streaming(),
+      lastStreamed: this.lastStreamed,
       streamedLoads: this.streamedLoads,
       fetches: this.fetches,
       loading: this.loading,

@@ -34,6 +34,7 @@ test('a streamed capture is shown at once, later ones at most once per interval,
     throttle.streamed('tonemap/color', n);
   }
   throttle.streamed('gbuffer/normal', 7);
+  const lastStreamed = clock.now();
   assert.equal(clock.timers.size, 1, 'one pending timer for any number of captures');
   clock.advance(MIN_INTERVAL_MS - 31);
   assert.equal(applied.length, 1, 'nothing before the interval is over');
@@ -45,6 +46,7 @@ test('a streamed capture is shown at once, later ones at most once per interval,
   assert.equal(throttle.streamedLoads, 2);
   assert.deepEqual(throttle.snapshot(), {
     streaming: true,
+    lastStreamed,
     streamedLoads: 2,
     fetches: 0,
     loading: false,
