@@ -6,7 +6,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use fantoccini::{Client, ClientBuilder, Locator};
-use loupe_tests::{Project, Server, reload};
+use loupe_tests::{Project, Server, reload, repo};
 
 const LIMIT: Duration = Duration::from_secs(60);
 const TONEMAP: &str = "shaders/post/tonemap.wgsl";
@@ -25,6 +25,11 @@ fn free_port() -> u16 {
 }
 
 async fn browser() -> (Driver, Client) {
+    browser_sized(1280, 800).await
+}
+
+/// Chromium with a window (and, headless, a page) of width × height.
+async fn browser_sized(width: u32, height: u32) -> (Driver, Client) {
     let port = free_port();
     let driver = Driver(
         Command::new("chromedriver")
@@ -39,7 +44,7 @@ async fn browser() -> (Driver, Client) {
             "binary": "/usr/bin/chromium",
             "args": ["--headless", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
                      "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                     "--no-first-run", "--window-size=1280,800"]
+                     "--no-first-run", format!("--window-size={width},{height}")]
         }
     }))
     .unwrap();
@@ -889,4 +894,103 @@ async fn the_tradeoffs_chart_shows_the_sweep_and_applies_a_point() {
     let controls: serde_json::Value = serde_json::from_slice(&body).unwrap();
     assert_eq!(controls["overrides"], serde_json::json!({ "quality.path_spp": 4, "quality.renderer": "path" }));
     c.close().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_inspector_keeps_its_live_stream_across_control_changes_and_auto_fit() {
+    let p = Project::copy_of_repo("browser-stream");
+    // Continuous rendering: a streamed capture of the final output every frame.
+    let s = Server::start(&p.root, &[]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    let throttle = "window.loupe.state.inspector.throttle";
+    until(&c, &s, "the inspector streaming", &format!("{throttle}.streaming && {throttle}.streamedLoads >= 3")).await;
+
+    // Each round changes display controls as a user does and then, in the
+    // animation frame that redraws (registered after the change, so it runs
+    // after the inspector's), reads the stream's state. A control change
+    // must leave it alone: the count of streamed captures shown never goes
+    // back, the time of the last one (which decides whether a frame is
+    // fetched instead) is kept, and a capture waiting to be shown has a
+    // timer to show it (or waits for a fetch in flight).
+    let controls = [
+        "const e = document.querySelector('#exposure'); e.value = '1.5'; e.dispatchEvent(new Event('input'));",
+        "document.querySelector('#auto-fit').click();",
+        "const ch = document.querySelector('#channel'); ch.value = 'g'; ch.dispatchEvent(new Event('change'));",
+        "const e = document.querySelector('#srgb'); e.checked = !e.checked; e.dispatchEvent(new Event('change'));",
+        "window.loupe.autoFit();",
+        "const m = document.querySelector('#range-max'); m.value = '2'; m.dispatchEvent(new Event('input'));",
+    ];
+    for round in 0..3 {
+        for change in controls {
+            let seen = c
+                .execute_async(
+                    &format!(
+                        "const done = arguments[0];
+                         const before = {throttle};
+                         {change}
+                         requestAnimationFrame(() => {{
+                           const after = {throttle};
+                           done([before.streamedLoads, after.streamedLoads, after.lastStreamed >= before.lastStreamed,
+                                 !after.pending || after.applyTimer || after.loading]);
+                         }});"
+                    ),
+                    vec![],
+                )
+                .await
+                .unwrap();
+            let (before, after) = (seen[0].as_u64().unwrap(), seen[1].as_u64().unwrap());
+            assert!(after >= before, "round {round}, `{change}`: the streamed captures shown went from {before} back to {after}");
+            assert_eq!(seen[2], true, "round {round}, `{change}`: the inspector forgot the stream, so it would fetch");
+            assert_eq!(seen[3], true, "round {round}, `{change}`: a streamed capture waits without a timer to show it");
+        }
+    }
+    // The stream goes on after the changes.
+    let now = c.execute(&format!("return {throttle}.streamedLoads;"), vec![]).await.unwrap().as_u64().unwrap();
+    until(&c, &s, "more streamed captures", &format!("{throttle}.streamedLoads >= {}", now + 3)).await;
+    c.close().await.unwrap();
+}
+
+/// The docs' picture of the inspector, `docs/images/inspector.png`: the
+/// showcase scene, raster, with the inspector on the final output and a
+/// pixel's values read out. Regenerate it with
+/// `LOUPE_BLESS=1 cargo test -p loupe-tests --test e2e browser::the_docs_screenshot`;
+/// without LOUPE_BLESS the test takes the picture all the same and checks it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_docs_screenshot_of_the_inspector_is_regenerable() {
+    const WIDTH: u32 = 1600;
+    const HEIGHT: u32 = 857;
+    let committed = repo().join("docs/images/inspector.png");
+    let p = Project::copy_of_repo("browser-screenshot");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/showcase.toml"]);
+    let (_driver, c) = browser_sized(WIDTH, HEIGHT).await;
+    // The window is larger than the page by the browser's own bars: grow
+    // it by that much so that the page, which the screenshot shows, has the size.
+    let inner = c.execute("return [window.innerWidth, window.innerHeight];", vec![]).await.unwrap();
+    let (w, h) = (inner[0].as_u64().unwrap() as u32, inner[1].as_u64().unwrap() as u32);
+    c.set_window_size(2 * WIDTH - w, 2 * HEIGHT - h).await.unwrap();
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "a frame", "document.querySelector('#frame').complete && Number(document.querySelector('#frame').dataset.frame || 0)")
+        .await;
+    // The inspector opens on the final output by itself; asking for it
+    // again resolves once its data is shown (fetched anew if the first
+    // fetch came before the capture).
+    let loaded = c.execute_async("window.loupe.inspect('tonemap', 'color').then(arguments[0]);", vec![]).await.unwrap();
+    assert_eq!(loaded, true, "the inspector shows tonemap/color\n{}", s.log());
+    // A pixel of the image read out, as when a user hovers it.
+    let value = c.execute("return window.loupe.hover(400, 170);", vec![]).await.unwrap();
+    assert!(value.is_array(), "the pixel read out: {value}");
+    let png = c.screenshot().await.unwrap();
+    c.close().await.unwrap();
+
+    let shot = image::load_from_memory_with_format(&png, image::ImageFormat::Png).expect("the screenshot is a PNG").to_rgb8();
+    assert_eq!(shot.dimensions(), (WIDTH, HEIGHT), "the screenshot's size");
+    let colours: std::collections::HashSet<[u8; 3]> = shot.pixels().map(|p| p.0).collect();
+    assert!(colours.len() > 1000, "the screenshot shows the page, not a blank: {} colours", colours.len());
+    if std::env::var_os("LOUPE_BLESS").is_some() {
+        std::fs::create_dir_all(committed.parent().unwrap()).unwrap();
+        std::fs::write(&committed, &png).unwrap();
+    }
+    let file = image::open(&committed).unwrap_or_else(|e| panic!("{} (LOUPE_BLESS=1 writes it): {e}", committed.display()));
+    assert_eq!((file.width(), file.height()), (WIDTH, HEIGHT), "{} has the screenshot's size", committed.display());
 }
