@@ -33,6 +33,8 @@ pub struct Setting {
     /// As written in the file: `post.exposure_ev`.
     pub path: &'static str,
     pub label: &'static str,
+    /// The field's doc comment, its lines joined ("" when it has none).
+    pub doc: &'static str,
     pub kind: Kind,
     /// The render passes whose output changes with this setting.
     pub affects: &'static [&'static str],
@@ -299,7 +301,7 @@ macro_rules! settings {
         $(#[$tm:meta])*
         $table:ident: $Struct:ident {
             $(
-                $(#[$doc:meta])*
+                $(#[doc = $doc:literal])*
                 $field:ident: $ty:ty = $default:expr, $kind:expr, $label:literal, affects $affects:expr $(, shown_when $shown:expr)?;
             )*
         }
@@ -308,7 +310,7 @@ macro_rules! settings {
             $(#[$tm])*
             #[derive(Debug, Clone, PartialEq)]
             pub struct $Struct {
-                $($(#[$doc])* pub $field: $ty,)*
+                $($(#[doc = $doc])* pub $field: $ty,)*
             }
 
             impl Default for $Struct {
@@ -323,6 +325,7 @@ macro_rules! settings {
             Setting {
                 path: concat!(stringify!($table), ".", stringify!($field)),
                 label: $label,
+                doc: concat!($($doc),*),
                 kind: $kind,
                 affects: &$affects,
                 shown_when: or_always!($($shown)?),

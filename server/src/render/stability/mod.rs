@@ -1,7 +1,7 @@
 //! The numerical stability suite: hard cases of sampling and shading, run
 //! through the real WGSL modules on the device (lavapipe without a GPU),
 //! each failing on a NaN or Inf or on leaving its stated bound. The cases
-//! and their bounds, listed here and in the README:
+//! and their bounds, listed here and in docs/stability.md:
 //!
 //! - `brdf_sample_draws_from_brdf_pdf` (`sampling`): over n·v ∈ {1, 0.5,
 //!   0.1, 0.001}, roughness ∈ {0.001 (clamped to 0.045), 0.05, 0.5, 1},
