@@ -10,6 +10,8 @@ pub mod bvh;
 pub mod check;
 pub mod denoise;
 pub mod diag;
+#[cfg(test)]
+mod docs_links;
 pub mod files;
 pub mod gpu;
 pub mod mesh;
