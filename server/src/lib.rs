@@ -10,8 +10,6 @@ pub mod bvh;
 pub mod check;
 pub mod denoise;
 pub mod diag;
-#[cfg(test)]
-mod docs_links;
 pub mod files;
 pub mod gpu;
 pub mod mesh;
@@ -20,6 +18,8 @@ pub mod offline;
 pub mod protocol;
 pub mod quads;
 pub mod render;
+#[cfg(test)]
+mod repo_docs;
 pub mod scene;
 pub mod serve;
 pub mod shader;

@@ -1,8 +1,9 @@
-//! The repository's Markdown stays navigable: README.md stays short, and
-//! every relative link in README.md, PROTOCOL.md, ARCHITECTURE.md and
-//! docs/*.md names a file that exists and, with a `#anchor`, a heading
-//! that file has. A test of the docs, not of the crate: it lives here
-//! because this crate's unit tests are the ones every run builds.
+//! The repository's Markdown stays navigable and sourced: README.md stays
+//! short; every relative link in README.md, PROTOCOL.md, ARCHITECTURE.md
+//! and docs/*.md names a file that exists and, with a `#anchor`, a heading
+//! that file has; every table of figures in docs/benchmarks.md comes with
+//! the command that made it. Tests of the docs, not of the crate: they
+//! live here because this crate's unit tests are the ones every run builds.
 
 use std::path::{Path, PathBuf};
 
@@ -102,6 +103,28 @@ fn every_relative_link_in_the_docs_resolves() {
         failures.extend(links(&text).iter().filter_map(|t| broken(&file, t)).map(|e| format!("{name}: {e}")));
     }
     assert!(failures.is_empty(), "broken links:\n{}", failures.join("\n"));
+}
+
+/// Each section of docs/benchmarks.md that holds a table also says how
+/// to make it again: a `- Command:` line, or a paragraph marked
+/// **Historical** naming the commit and the command.
+#[test]
+fn every_benchmark_table_names_its_command() {
+    let text = std::fs::read_to_string(repo().join("docs/benchmarks.md")).unwrap();
+    let mut sections: Vec<Vec<&str>> = vec![Vec::new()];
+    for line in prose(&text) {
+        if line.starts_with('#') {
+            sections.push(Vec::new());
+        }
+        sections.last_mut().unwrap().push(line);
+    }
+    let unsourced: Vec<&str> = sections
+        .iter()
+        .filter(|s| s.iter().any(|l| l.starts_with('|')))
+        .filter(|s| !s.iter().any(|l| l.starts_with("- Command: ") || l.contains("**Historical**")))
+        .map(|s| s[0])
+        .collect();
+    assert!(unsourced.is_empty(), "docs/benchmarks.md: tables without their command under {unsourced:?}");
 }
 
 #[test]
