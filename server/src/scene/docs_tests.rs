@@ -27,6 +27,12 @@ fn table() -> String {
     out
 }
 
+/// The first row where two tables differ, `None` past the end of one.
+fn first_difference<'a>(a: &'a str, b: &'a str) -> (Option<&'a str>, Option<&'a str>) {
+    let rows = |t: &'a str| t.lines().map(Some).chain(std::iter::once(None));
+    rows(a).zip(rows(b)).find(|(x, y)| x != y).unwrap_or_default()
+}
+
 #[test]
 fn docs_scenes_md_holds_the_settings_table() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/scenes.md");
@@ -38,7 +44,12 @@ fn docs_scenes_md_holds_the_settings_table() {
     let (held, wanted) = (doc[start..end].trim_matches('\n'), table());
     if std::env::var_os("LOUPE_BLESS").is_some() {
         std::fs::write(&path, format!("{}\n{wanted}{}", &doc[..start], &doc[end..])).unwrap();
-    } else {
-        assert_eq!(held, wanted.trim_end(), "docs/scenes.md's settings table differs from settings! (LOUPE_BLESS=1 to regenerate)");
+    } else if held != wanted.trim_end() {
+        let (doc_row, code_row) = first_difference(held, &wanted);
+        panic!(
+            "docs/scenes.md's settings table differs from settings! (LOUPE_BLESS=1 to regenerate):\n  doc:  {}\n  code: {}",
+            doc_row.unwrap_or("(no row)"),
+            code_row.unwrap_or("(no row)")
+        );
     }
 }
