@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Benchmark `loupe check --no-device` against naga's own CLI (naga-cli) on the
-# same generated WGSL corpus, and print a markdown table for the README.
+# same generated WGSL corpus, and print a markdown table for docs/benchmarks.md.
 #
 #   (a) loupe check --no-device --format json CORPUS   one process, whole dir
 #   (b) naga FILE, once per file                        one process per file

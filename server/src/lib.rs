@@ -18,6 +18,8 @@ pub mod offline;
 pub mod protocol;
 pub mod quads;
 pub mod render;
+#[cfg(test)]
+mod repo_docs;
 pub mod scene;
 pub mod serve;
 pub mod shader;

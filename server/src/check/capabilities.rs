@@ -211,7 +211,7 @@ mod tests {
     fn the_documented_default_is_the_real_one() {
         let default = describe(gpu::capabilities_without_device());
         assert_eq!(default, "primitive-index,subgroup,subgroup-barrier,shader-float16");
-        assert!(include_str!("../../../README.md").contains(&format!("without one: `{default}`")), "README states {default}");
+        assert!(include_str!("../../../docs/check.md").contains(&format!("without one: `{default}`")), "docs/check.md states {default}");
         assert!(include_str!("../main.rs").contains(&format!("/// `{default}`")), "--help states {default}");
     }
 

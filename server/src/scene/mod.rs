@@ -242,4 +242,6 @@ fn load_weights(dir: &Path, d: &Denoiser, files: &mut Vec<PathBuf>) -> Result<Ne
 }
 
 #[cfg(test)]
+mod docs_tests;
+#[cfg(test)]
 mod tests;

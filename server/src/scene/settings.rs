@@ -56,6 +56,8 @@ pub struct Setting {
     /// As written in the file: `post.exposure_ev`.
     pub path: &'static str,
     pub label: &'static str,
+    /// The field's doc comment, its lines joined ("" when it has none).
+    pub doc: &'static str,
     pub kind: Kind,
     /// The render passes whose output changes with this setting.
     pub affects: &'static [&'static str],
@@ -322,7 +324,7 @@ macro_rules! settings {
         $(#[$tm:meta])*
         $table:ident: $Struct:ident {
             $(
-                $(#[$doc:meta])*
+                $(#[doc = $doc:literal])*
                 $field:ident: $ty:ty = $default:expr, $kind:expr, $label:literal, affects $affects:expr $(, shown_when $shown:expr)?;
             )*
         }
@@ -331,7 +333,7 @@ macro_rules! settings {
             $(#[$tm])*
             #[derive(Debug, Clone, PartialEq)]
             pub struct $Struct {
-                $($(#[$doc])* pub $field: $ty,)*
+                $($(#[doc = $doc])* pub $field: $ty,)*
             }
 
             impl Default for $Struct {
@@ -346,6 +348,7 @@ macro_rules! settings {
             Setting {
                 path: concat!(stringify!($table), ".", stringify!($field)),
                 label: $label,
+                doc: concat!($($doc),*),
                 kind: $kind,
                 affects: &$affects,
                 shown_when: or_always!($($shown)?),
@@ -418,9 +421,12 @@ settings! {
         /// The luminance range the meter considers, in EV.
         auto_exposure_min_ev: f32 = -8.0, Float { min: -16.0, max: 16.0, step: 0.5 },
             "Metering range min (EV)", affects ["exposure_histogram", "exposure_adapt"], shown_when auto_exposure;
+        /// The top of the metering range, in EV.
         auto_exposure_max_ev: f32 = 8.0, Float { min: -16.0, max: 16.0, step: 0.5 },
             "Metering range max (EV)", affects ["exposure_histogram", "exposure_adapt"], shown_when auto_exposure;
+        /// The curve from HDR to the display.
         tonemap: Tonemap = Tonemap::Aces, Choice(Tonemap::NAMES), "Tonemap", affects ["tonemap"];
+        /// A G-buffer channel shown instead of the lit frame, or `none`.
         debug_view: DebugView = DebugView::None, Choice(DebugView::NAMES), "Debug view", affects ["debug_view"];
         /// Draw fullscreen passes as two triangles instead of one, to compare.
         two_triangles: bool = false, Toggle, "Fullscreen as two triangles", affects FULLSCREEN;
@@ -428,15 +434,21 @@ settings! {
 
     /// `[quality]`: the renderer, and shadow, ray-march and path costs.
     quality: Quality {
+        /// Which renderer makes the HDR image: the raster frame, or the
+        /// progressive path tracer, its reference.
         renderer: Renderer = Renderer::Raster, Choice(Renderer::NAMES), "Renderer", affects RENDERED;
         /// Samples per pixel the path tracer accumulates to, one a frame.
         path_spp: u32 = 256, Int { min: 1, max: 65536, step: 1 }, "Path samples per pixel", affects ["path_trace"], shown_when path_traced;
         /// Indirect bounces; 0 is direct light only.
         path_bounces: u32 = 4, Int { min: 0, max: 64, step: 1 }, "Path bounces", affects ["path_trace"], shown_when path_traced;
+        /// The raster's shadow maps, for the lights that cast shadows.
         shadows: bool = true, Toggle, "Shadows", affects ["shadows", "lighting", "volume_march", "volumes"], shown_when rastered;
+        /// Texels per side of each shadow-map layer.
         shadow_map_size: u32 = 1024, Int { min: 64, max: 4096, step: 64 }, "Shadow map size", affects ["shadows"], shown_when rastered;
         /// The shadow maps' percentage-closer filter: (2r + 1)² taps.
         shadow_filter: u32 = 1, Int { min: 0, max: 4, step: 1 }, "Shadow filter radius (texels; 1 is 3×3 PCF)", affects ["lighting"], shown_when rastered;
+        /// How the raster integrates a rect light: linearly transformed
+        /// cosines, or 16 × 16 points through the BRDF (the reference).
         rect_lights: RectLights = RectLights::Ltc, Choice(RectLights::NAMES), "Rect lights", affects ["ltc_tables", "lighting"], shown_when raster_rect;
         /// Ray-march steps per pixel through the media.
         volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volume_march", "volumes"], shown_when raster_media;
@@ -452,6 +464,8 @@ settings! {
         /// pixels, brought back to the frame by a depth-aware upsample.
         volume_resolution: VolumeResolution = VolumeResolution::Full, Choice(VolumeResolution::NAMES),
             "Volume march resolution", affects ["volume_march", "volumes"], shown_when raster_media;
+        /// How each march step integrates in-scattered light: constant
+        /// (biased), or analytic (exact for constant coefficients).
         volume_estimator: Estimator = Estimator::Analytic, Choice(Estimator::NAMES),
             "In-scattering estimator", affects ["volume_march", "volumes"], shown_when raster_media;
         /// Denoise the path-traced image with the scene's `[denoiser]`; off,
@@ -465,6 +479,8 @@ settings! {
         /// tensor can be inspected. The denoised image is the same.
         denoiser_fused: bool = true, Toggle, "Denoiser: fuse upsample + concat into the convolution",
             affects ["denoise"], shown_when denoised;
+        /// Which kernel runs the convolutions: one invocation per pixel
+        /// (`direct`) or workgroup-tiled; the denoised image is the same.
         denoiser_kernel: DenoiserKernel = DenoiserKernel::Direct, Choice(DenoiserKernel::NAMES), "Denoiser: convolution kernel",
             affects ["denoise"], shown_when denoised;
     }

@@ -14,7 +14,8 @@ pub enum Event {
     /// Debounced, content-checked changes from the watcher.
     FilesChanged(FileBatch),
     /// A compile worker finished composing one pipeline's shader.
-    CompileFinished(CompileResult),
+    /// Boxed: a compiled module is far larger than every other event.
+    CompileFinished(Box<CompileResult>),
     /// Rebuild every pipeline from the current sources (the WebSocket
     /// `rebuild` message, `POST /api/reload`).
     Rebuild,

@@ -248,7 +248,7 @@ impl Daemon {
     fn handle(&mut self, ev: Event) {
         match ev {
             Event::FilesChanged(batch) => self.files_changed(batch),
-            Event::CompileFinished(r) => self.compile_finished(r),
+            Event::CompileFinished(r) => self.compile_finished(*r),
             Event::Scene(cmd) => self.scene_command(cmd),
             Event::Rebuild => {
                 let keys = self.session.wanted();
@@ -416,7 +416,7 @@ impl Daemon {
                     None => compose(),
                 };
                 let compose_ms = start.elapsed().as_secs_f64() * 1e3;
-                let _ = tx.send(Event::CompileFinished(CompileResult { reload: id, key, result, compose_ms }));
+                let _ = tx.send(Event::CompileFinished(Box::new(CompileResult { reload: id, key, result, compose_ms })));
             });
         }
         self.finish_reload(id);
