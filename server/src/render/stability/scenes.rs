@@ -17,10 +17,11 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 
+use crate::loaded::Loaded;
 use crate::render::session::Session;
+use crate::scene::Scene;
 use crate::scene::overrides::Value;
 use crate::scene::settings::{self, Kind, SETTINGS, Setting};
-use crate::scene::{Loaded, Scene};
 
 /// A setting's extremes.
 fn extremes(s: &Setting) -> Vec<Value> {
@@ -78,7 +79,7 @@ pub fn bundled() -> Vec<(String, Loaded)> {
     paths
         .into_iter()
         .map(|p| {
-            let mut loaded = crate::scene::load(&p).unwrap_or_else(|d| panic!("{d}"));
+            let mut loaded = crate::loaded::load(&p).unwrap_or_else(|d| panic!("{d}"));
             (loaded.scene.width, loaded.scene.height) = (64, 36);
             (p.file_name().unwrap().to_string_lossy().into_owned(), loaded)
         })

@@ -26,7 +26,8 @@ use crate::mesh::MeshData;
 use crate::render::capture::CapturedImage;
 use crate::render::frame::FrameResult;
 use crate::render::session::{PassState, Session};
-use crate::scene::{Loaded, Scene};
+use crate::loaded::Loaded;
+use crate::scene::Scene;
 
 const COLOR: &str = "path_trace/color";
 const ALBEDO: &str = "path_trace/albedo";
@@ -588,7 +589,7 @@ fn degenerate_geometry_makes_no_nan_and_takes_no_light() {
     let write = |name: &str, text: String| {
         let path = dir.path().join(name);
         std::fs::write(&path, text).unwrap();
-        crate::scene::load(&path).unwrap_or_else(|d| panic!("{d}"))
+        crate::loaded::load(&path).unwrap_or_else(|d| panic!("{d}"))
     };
     let clean = write("clean.toml", stage(48, 32, &format!("{}{}{disc}", mesh("clean"), mesh("tilted"))));
     let mut degenerate = write("degenerate.toml", stage(48, 32, &format!("{}{}{disc}{speck}", mesh("degenerate"), mesh("tilted"))));
