@@ -9,9 +9,11 @@
 pub mod bvh;
 pub mod check;
 pub mod denoise;
+pub mod denoise_options;
 pub mod diag;
 pub mod files;
 pub mod gpu;
+pub mod loaded;
 pub mod mesh;
 pub mod npy;
 pub mod offline;

@@ -7,11 +7,9 @@ pub(crate) fn fixture(name: &str) -> String {
     repo().join("server/src/denoise/fixtures").join(name).display().to_string()
 }
 
-/// OIDN's weights beside the repository (CI has them: missing fails).
+/// OIDN's weights as the repository ships them.
 pub(crate) fn weights(name: &str) -> String {
-    let p = repo().join("../shared/weights/oidn").join(name);
-    assert!(p.is_file(), "OIDN's weights file {} is missing", p.display());
-    p.display().to_string()
+    loupe_tests::oidn_weights(name).display().to_string()
 }
 
 #[test]
@@ -91,5 +89,51 @@ fn bad_input_has_exit_codes() {
         args.extend_from_slice(usage);
         p.run(&args).code(2);
     }
+    assert!(!p.path("o.pfm").exists());
+}
+
+/// The largest difference between two images' values.
+fn max_difference(a: &std::path::Path, b: &std::path::Path) -> f32 {
+    let read = |p: &std::path::Path| loupe::denoise::image::read(p, &p.display().to_string()).unwrap_or_else(|d| panic!("{d}"));
+    let (a, b) = (read(a), read(b));
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    a.data.iter().zip(&b.data).map(|(x, y)| (x - y).abs()).fold(0.0, f32::max)
+}
+
+/// Without --weights, the network loupe bundles for the range and the
+/// inputs: in LDR, OIDN 2.5.1's own output for `rt_ldr.tza` and
+/// `rt_ldr_alb_nrm.tza` (fixtures/README.md); in HDR, what `rt_hdr.tza`
+/// named gives, not what `rt_ldr.tza` does; colour and albedo alone, which
+/// no bundled network takes, an error at the albedo.
+#[test]
+fn without_weights_the_bundled_network_fits_the_range_and_inputs() {
+    let p = Project::empty("denoise-bundled");
+    let (color, albedo, normal) = (fixture("color.pfm"), fixture("albedo.pfm"), fixture("normal.pfm"));
+    let root = repo().display().to_string();
+    p.run(&["denoise", "--root", &root, "--color", &color, "--ldr", "-o", "ldr.exr"]).code(0).stdout_has("32x24, colour, input scale 1");
+    p.run(&["denoise", "--root", &root, "--color", &color, "--albedo", &albedo, "--normal", &normal, "--ldr", "-o", "aux.exr"]).code(0);
+    let oidn = |name: &str| std::path::PathBuf::from(fixture(name));
+    for (ours, theirs) in [("ldr.exr", "oidn_ldr.pfm"), ("aux.exr", "oidn_ldr_alb_nrm.pfm")] {
+        let d = max_difference(&p.path(ours), &oidn(theirs));
+        assert!(d < 1e-3, "{ours} is {d} from OIDN's {theirs}");
+    }
+    assert!(max_difference(&p.path("ldr.exr"), &oidn("oidn_ldr_alb_nrm.pfm")) > 1e-2, "the two networks differ: the check can tell");
+
+    let hdr = |weights: Option<String>, out: &str| {
+        let mut args = vec!["denoise", "-d", "cpu", "--color", &color, "--hdr", "-o", out];
+        if let Some(w) = &weights {
+            args.extend(["--weights", w.as_str()]);
+        }
+        p.run(&args).code(0);
+        p.path(out)
+    };
+    let (bundled, named, ldr) =
+        (hdr(None, "hdr.pfm"), hdr(Some(weights("rt_hdr.tza")), "named.pfm"), hdr(Some(weights("rt_ldr.tza")), "l.pfm"));
+    assert_eq!(std::fs::read(&bundled).unwrap(), std::fs::read(&named).unwrap(), "--hdr: rt_hdr.tza");
+    assert!(max_difference(&bundled, &ldr) > 1e-2, "not rt_ldr.tza");
+
+    p.run(&["denoise", "-d", "cpu", "--color", &color, "--albedo", &albedo, "--ldr", "-o", "o.pfm"])
+        .code(1)
+        .stderr_has("albedo.pfm:1:1: error[weights]: loupe bundles OIDN's networks for colour alone and for colour, albedo and normal; none takes colour and albedo");
     assert!(!p.path("o.pfm").exists());
 }

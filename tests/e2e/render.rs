@@ -401,14 +401,6 @@ fn the_path_tracer_renders_offline_with_albedo_and_normal() {
     assert_eq!(culled_reason(&report.unwrap(), "path_trace"), "quality.renderer is raster");
 }
 
-/// OIDN's LDR colour + albedo + normal weights, beside the repository
-/// (CI has them; they are never copied into it).
-fn oidn_weights() -> std::path::PathBuf {
-    let path = loupe_tests::repo().join("../shared/weights/oidn/rt_ldr_alb_nrm.tza");
-    assert!(path.is_file(), "{} is missing: the tests read OIDN's weights from ../shared/weights/oidn/", path.display());
-    path
-}
-
 /// A small lit scene whose path-traced colour stays within [0, 1], what
 /// the LDR weights expect; `denoiser` is its `[denoiser]` section, if any.
 fn denoised_scene(denoiser: &str) -> String {
@@ -451,9 +443,8 @@ fn mse(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
 #[test]
 fn the_denoiser_runs_after_the_path_tracer_and_writes_every_tensor() {
     let p = Project::copy_of_repo("render-denoise");
-    let weights = oidn_weights();
-    let section = format!("[denoiser]\nweights = {:?}\nmode = \"ldr\"\n", weights.display().to_string());
-    p.write("scenes/denoised.toml", denoised_scene(&section));
+    // No weights named: the bundled LDR network for colour, albedo and normal.
+    p.write("scenes/denoised.toml", denoised_scene("[denoiser]\nmode = \"ldr\"\n"));
     p.write("scenes/reference.toml", denoised_scene(""));
     let (run, report) = render_at(&p, "scenes/denoised.toml", "64x48", &["--renderer", "path", "--spp", "2"]);
     run.code(0);

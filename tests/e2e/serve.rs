@@ -437,8 +437,7 @@ fn break_and_mend_buffer(p: &Project, s: &Server, bin: &str) {
 #[test]
 fn broken_denoiser_weights_keep_the_last_good_denoiser_rendering() {
     let p = Project::copy_of_repo("serve-weights");
-    let weights = std::fs::read(loupe_tests::repo().join("../shared/weights/oidn/rt_ldr_alb_nrm.tza"))
-        .expect("OIDN's weights in ../shared/weights/oidn/");
+    let weights = std::fs::read(loupe_tests::oidn_weights("rt_ldr_alb_nrm.tza")).unwrap();
     p.write("weights/rt_ldr_alb_nrm.tza", &weights);
     let scene = p.read("scenes/minimal.toml").replace("width = 640\nheight = 360", "width = 64\nheight = 48")
         + "\n[quality]\nrenderer = \"path\"\npath_spp = 2\n\n[denoiser]\nweights = \"../weights/rt_ldr_alb_nrm.tza\"\nmode = \"ldr\"\n";

@@ -18,6 +18,14 @@ pub fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("tests/ is inside the repo").to_owned()
 }
 
+/// One of OIDN's weights files as the repository ships them (the files
+/// `loupe` embeds, `server/assets/weights/oidn/`).
+pub fn oidn_weights(name: &str) -> PathBuf {
+    let path = repo().join("server/assets/weights/oidn").join(name);
+    assert!(path.is_file(), "OIDN's weights file {} is missing from the repository", path.display());
+    path
+}
+
 /// The CPU model and core count, for benchmark output.
 pub fn machine() -> String {
     let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();

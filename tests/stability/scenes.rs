@@ -17,10 +17,11 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 
+use loupe::loaded::Loaded;
 use loupe::render::session::Session;
+use loupe::scene::Scene;
 use loupe::scene::overrides::Value;
 use loupe::scene::settings::{self, Kind, SETTINGS, Setting};
-use loupe::scene::{Loaded, Scene};
 
 /// A setting's extremes.
 fn extremes(s: &Setting) -> Vec<Value> {
@@ -78,7 +79,7 @@ pub fn bundled() -> Vec<(String, Loaded)> {
     paths
         .into_iter()
         .map(|p| {
-            let mut loaded = loupe::scene::load(&p).unwrap_or_else(|d| panic!("{d}"));
+            let mut loaded = loupe::loaded::load(&p).unwrap_or_else(|d| panic!("{d}"));
             (loaded.scene.width, loaded.scene.height) = (64, 36);
             (p.file_name().unwrap().to_string_lossy().into_owned(), loaded)
         })

@@ -242,7 +242,7 @@ fn is_toml(path: &Path) -> bool {
 fn check_scene(path: &Path) -> Checked {
     let start = Instant::now();
     let display = display_path(path);
-    let diagnostics = guarded(&display, "the scene loader", || crate::scene::load(path).map_err(|d| vec![d])).err().unwrap_or_default();
+    let diagnostics = guarded(&display, "the scene loader", || crate::loaded::load(path).map_err(|d| vec![d])).err().unwrap_or_default();
     Checked { duration: start.elapsed(), ..Checked::uncompiled(&display, ModuleKind::Scene, diagnostics) }
 }
 

@@ -11,9 +11,11 @@ use loupe::offline::denoise::{self, Device, Job};
 #[derive(clap::Args)]
 #[command(group(clap::ArgGroup::new("range").required(true).args(["ldr", "hdr"])))]
 pub struct Args {
-    /// The weights: an OIDN .tza file whose network takes the inputs given.
+    /// The weights: an OIDN .tza file whose network takes the inputs given
+    /// [default: OIDN's network bundled with loupe for the range (--hdr or
+    /// --ldr) and the inputs (colour, or colour, albedo and normal)].
     #[arg(long)]
-    weights: PathBuf,
+    weights: Option<PathBuf>,
     /// The noisy colour.
     #[arg(long)]
     color: PathBuf,

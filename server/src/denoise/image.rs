@@ -11,8 +11,9 @@ use std::path::Path;
 use crate::diag::{Code, Diagnostic, Location};
 use crate::files::read_capped;
 
-/// The largest side of an image loupe reads (the scene's output limit).
-pub const MAX_SIDE: usize = crate::scene::MAX_SIDE as usize;
+/// The largest side of an image loupe reads: a file's header may ask for no
+/// more than 8192² pixels (768 MiB as RGB f32), whatever its size claims.
+pub const MAX_SIDE: usize = 8192;
 
 /// The largest image file loupe reads: a PFM of 8192² RGB f32 plus a header.
 pub const MAX_FILE_BYTES: u64 = (MAX_SIDE * MAX_SIDE * 12 + 4096) as u64;

@@ -11,6 +11,7 @@
 //! the renderer. `loupe denoise` itself, on the GPU or on `cpu`, is
 //! `crate::offline::denoise`.
 
+pub mod bundled;
 pub mod cpu;
 pub mod image;
 pub mod network;
@@ -18,16 +19,8 @@ pub mod process;
 pub mod tiles;
 pub mod tza;
 
+pub use crate::denoise_options::Precision;
 use crate::diag::{Code, Diagnostic, Location};
-
-/// How tensors are stored between ops. Accumulation is f32 either way;
-/// `F16` rounds every tensor to half precision when it is stored, as the
-/// GPU's f16 storage does.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Precision {
-    F16,
-    F32,
-}
 
 /// A problem in a weights file: a binary file has no lines, so the location
 /// is the file and the message says the byte.

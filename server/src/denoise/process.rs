@@ -12,22 +12,7 @@
 
 use super::cpu::Tensor;
 use super::image::Image;
-
-/// How the colour is encoded, as OIDN's `hdr` and `srgb` flags say: the
-/// range the weights were trained for (OIDN ships `rt_hdr_*` and
-/// `rt_ldr_*` variants of each network). The scene's `[denoiser] mode`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Mode {
-    /// Linear values in [0, 1]; the network sees them sRGB-encoded.
-    Ldr,
-    /// Values already sRGB-encoded, in [0, 1] (OIDN's `srgb`): used as they are.
-    LdrSrgb,
-    /// Linear values of any magnitude; the network sees them through the
-    /// perceptual (PU) curve, after the input scale.
-    #[default]
-    Hdr,
-}
+pub use crate::denoise_options::Mode;
 
 /// The curve from the colour's encoding into the network's space.
 #[derive(Debug, Clone, Copy, PartialEq)]

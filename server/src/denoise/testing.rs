@@ -1,17 +1,13 @@
 //! Test fixtures of the denoiser, for its tests and the renderer's: OIDN's
-//! weights beside the repository, and small U-Nets with random weights.
+//! weights as the repository ships them, and small U-Nets with random weights.
 
 use std::path::PathBuf;
 
-/// One of OIDN's weights files in `../shared/weights/oidn/` (relative to
-/// the repository root). CI has them: a missing file fails the test.
+/// One of OIDN's weights files in `server/assets/weights/oidn/`, the files
+/// `bundled` embeds.
 pub fn weights(name: &str) -> PathBuf {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/weights/oidn").join(name);
-    assert!(
-        path.is_file(),
-        "OIDN's weights file {} is missing: tests read it from ../shared/weights/oidn/ beside the repository",
-        path.display()
-    );
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/weights/oidn").join(name);
+    assert!(path.is_file(), "OIDN's weights file {} is missing from the repository", path.display());
     path
 }
 

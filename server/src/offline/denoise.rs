@@ -14,7 +14,7 @@ use std::time::Instant;
 use crate::denoise::image::{self, Format, Image};
 use crate::denoise::network::{Inputs, Network};
 use crate::denoise::process::{self, Mode, Transfer};
-use crate::denoise::{Precision, cpu, tza};
+use crate::denoise::{Precision, bundled, cpu, tza};
 use crate::diag::{Code, Diagnostic, Location};
 use crate::render::passes::images::TileImages;
 
@@ -31,7 +31,9 @@ pub enum Device {
 }
 
 pub struct Job {
-    pub weights: PathBuf,
+    /// An OIDN .tza; `None`: the bundled network for `mode` that takes the
+    /// inputs given (`bundled`).
+    pub weights: Option<PathBuf>,
     pub color: PathBuf,
     pub albedo: Option<PathBuf>,
     pub normal: Option<PathBuf>,
@@ -75,9 +77,6 @@ fn display(path: &Path) -> String {
 }
 
 pub fn run(job: &Job) -> Result<Report, Diagnostic> {
-    let weights = display(&job.weights);
-    let archive = tza::read(&job.weights, &weights)?;
-    let net = Network::from_archive(&archive).map_err(|e| e.diagnostic(&weights))?;
     let given = match (&job.albedo, &job.normal) {
         (None, None) => Inputs::Color,
         (Some(_), None) => Inputs::ColorAlbedo,
@@ -87,13 +86,26 @@ pub fn run(job: &Job) -> Result<Report, Diagnostic> {
             return Err(Diagnostic::error(Code::Image, message).at(Location::file_start(&display(normal))));
         }
     };
-    if given != net.inputs {
-        return Err(Diagnostic::error(
-            Code::Weights,
-            format!("these weights take {}, but {} were given", net.inputs.describe(), given.describe()),
-        )
-        .at(Location::file_start(&weights)));
-    }
+    let (weights, net) = match &job.weights {
+        Some(path) => {
+            let weights = display(path);
+            let net = Network::from_archive(&tza::read(path, &weights)?).map_err(|e| e.diagnostic(&weights))?;
+            if given != net.inputs {
+                return Err(Diagnostic::error(
+                    Code::Weights,
+                    format!("these weights take {}, but {} were given", net.inputs.describe(), given.describe()),
+                )
+                .at(Location::file_start(&weights)));
+            }
+            (weights, net)
+        }
+        None => {
+            // Only colour with albedo alone has no bundled network: the albedo is what does not fit.
+            let at = job.albedo.as_deref().map_or_else(|| display(&job.color), display);
+            let b = bundled::weights(job.mode, given).map_err(|d| d.at(Location::file_start(&at)))?;
+            (b.display(), b.network()?)
+        }
+    };
 
     let color = read(&job.color, job.mode != Mode::LdrSrgb, None)?;
     let albedo = job.albedo.as_deref().map(|p| read(p, true, Some(&color))).transpose()?;

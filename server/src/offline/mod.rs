@@ -47,7 +47,7 @@ pub const FRAME_DT: f32 = 1.0 / 30.0;
 /// Opens the device, loads the scene (with overrides and size applied)
 /// and builds every pipeline its graph needs.
 pub fn prepare(job: &Job) -> Result<Session, OfflineError> {
-    let mut loaded = scene::load_with(&job.scene, &job.overrides).map_err(|d| OfflineError::Input(vec![d]))?;
+    let mut loaded = crate::loaded::load_with(&job.scene, &job.overrides).map_err(|d| OfflineError::Input(vec![d]))?;
     if let Some((w, h)) = job.size {
         loaded.scene.width = w;
         loaded.scene.height = h;

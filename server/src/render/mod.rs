@@ -37,7 +37,7 @@ pub struct FrameOptions {
 }
 
 /// Assembles the frame from the scene and the network its `[denoiser]`
-/// names (`Loaded::denoiser`): only what the scene calls for.
+/// names (`loaded::Loaded::denoiser`): only what the scene calls for.
 pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOptions) -> Graph {
     let mut g = GraphBuilder::new();
     let raster = ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volume_march", "volumes"];

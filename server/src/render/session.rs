@@ -27,8 +27,9 @@ use crate::denoise::network::Network;
 use crate::diag::{Diagnostic, display_path};
 use crate::gpu::Gpu;
 use crate::gpu::pipeline::{MESH_VERTICES, PipelineSpec, Stages};
+use crate::loaded::Loaded;
 use crate::mesh::MeshData;
-use crate::scene::{Loaded, Scene};
+use crate::scene::Scene;
 use crate::shader::{ComposeCache, Library};
 
 /// How a pass stands this frame.
@@ -497,7 +498,7 @@ mod tests {
 
     fn pattern(two_triangles: bool) -> Loaded {
         let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/pattern.toml");
-        crate::scene::load_with(&scenes, &Overrides::from([("post.two_triangles".to_owned(), Value::Bool(two_triangles))])).unwrap()
+        crate::loaded::load_with(&scenes, &Overrides::from([("post.two_triangles".to_owned(), Value::Bool(two_triangles))])).unwrap()
     }
 
     /// With timestamp queries every pass has a time and they add up to the

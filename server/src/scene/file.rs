@@ -7,7 +7,7 @@
 use serde::Deserialize;
 use serde::de::IgnoredAny;
 
-use crate::denoise::process::Mode;
+use crate::denoise_options::{Mode, Precision};
 
 pub type Vec3 = [f32; 3];
 
@@ -95,8 +95,9 @@ impl Default for Environment {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Denoiser {
-    /// An OIDN weights file (.tza), relative to the scene file.
-    pub weights: String,
+    /// An OIDN weights file (.tza), relative to the scene file; `None`:
+    /// the network loupe bundles for `mode`, with albedo and normal.
+    pub weights: Option<String>,
     /// How tensors are stored between layers; accumulation is f32 either way.
     #[serde(default)]
     pub precision: Precision,
@@ -105,14 +106,6 @@ pub struct Denoiser {
     /// Multiplies the colour before the network and divides the output
     /// (OIDN's `inputScale`); by default OIDN's autoexposure in HDR, else 1.
     pub input_scale: Option<f32>,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Precision {
-    F16,
-    #[default]
-    F32,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize)]

@@ -2,7 +2,9 @@
 //! at file:line:col. The renderer only ever sees a validated `Scene`.
 //!
 //! Reading is two steps: `parse` turns text into a `Scene` (pure, no file
-//! system), and `load` reads the file and the meshes it references.
+//! system), and `load` reads the file and the meshes it references. The
+//! denoiser's network is built above this module (`crate::loaded`): a scene
+//! names its weights and settings, and knows nothing of the denoiser.
 
 mod file;
 pub mod overrides;
@@ -16,9 +18,7 @@ use std::sync::Arc;
 pub use file::{Camera, Environment, Material, Noise, SdfShape, Vec3};
 pub use settings::{DebugView, DenoiserKernel, Estimator, Post, Quality, Renderer, Tonemap, VolumeResolution};
 
-use crate::denoise::Precision;
-use crate::denoise::network::Network;
-use crate::denoise::process::Mode;
+use crate::denoise_options::{Mode, Precision};
 use crate::diag::{Code, Diagnostic, LineIndex, Location};
 use crate::mesh::MeshData;
 
@@ -49,9 +49,11 @@ pub struct Scene {
 /// `[denoiser]`: OIDN's U-Net run on the path tracer's output.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Denoiser {
-    /// The weights file as written, relative to the scene file.
-    pub weights: String,
-    /// Where `weights` is written, for diagnostics about the file.
+    /// The weights file as written, relative to the scene file; `None`:
+    /// the network loupe bundles for `mode`, with albedo and normal.
+    pub weights: Option<String>,
+    /// Where `weights` is written (else the section), for diagnostics
+    /// about the file.
     pub at: Location,
     pub precision: Precision,
     pub mode: Mode,
@@ -168,28 +170,26 @@ fn syntax_error(display: &str, text: &str, message: &str, span: Option<std::ops:
     }
 }
 
-/// A scene and the meshes and weights it references, read from disk.
+/// A scene and the meshes it references, read from disk.
 #[derive(Debug, Clone)]
-pub struct Loaded {
+pub struct Read {
     pub scene: Scene,
     /// Mesh data by the file name as written in the scene.
     pub meshes: BTreeMap<String, Arc<MeshData>>,
-    /// The network `[denoiser]` names, built from its weights.
-    pub denoiser: Option<Arc<Network>>,
-    /// Every file this scene was read from (itself, its meshes and
-    /// weights), for the watcher's dependency graph.
+    /// Every file this scene was read from (itself and its meshes), for
+    /// the watcher's dependency graph.
     pub files: Vec<PathBuf>,
 }
 
 /// Reads a scene file and every mesh it references. A mesh that fails to
 /// load is an error located in the mesh file, with the scene line that
 /// references it as a second label.
-pub fn load(path: &Path) -> Result<Loaded, Diagnostic> {
+pub fn load(path: &Path) -> Result<Read, Diagnostic> {
     load_with(path, &overrides::Overrides::new())
 }
 
 /// `load` with live overrides applied on top of the file's text.
-pub fn load_with(path: &Path, overrides: &overrides::Overrides) -> Result<Loaded, Diagnostic> {
+pub fn load_with(path: &Path, overrides: &overrides::Overrides) -> Result<Read, Diagnostic> {
     let display = crate::diag::display_path(path);
     let mut text = std::fs::read_to_string(path)
         .map_err(|e| Diagnostic::error(Code::Io, format!("cannot read scene: {e}")).at(Location::file_start(&display)))?;
@@ -216,29 +216,7 @@ pub fn load_with(path: &Path, overrides: &overrides::Overrides) -> Result<Loaded
         let mesh = crate::mesh::load_gltf(&mesh_path, &mesh_display).map_err(|d| d.with_label(at.clone(), "referenced here", false))?;
         meshes.insert(name.to_owned(), Arc::new(mesh));
     }
-    let denoiser = match &scene.denoiser {
-        Some(d) => Some(Arc::new(load_weights(dir, d, &mut files)?)),
-        None => None,
-    };
-    Ok(Loaded { scene, meshes, denoiser, files })
-}
-
-/// Reads the `[denoiser]` weights and builds the network they describe. A
-/// missing file is an error at `weights`; a malformed one is the weights
-/// file's own diagnostic, with `weights` as a second label.
-fn load_weights(dir: &Path, d: &Denoiser, files: &mut Vec<PathBuf>) -> Result<Network, Diagnostic> {
-    let path = dir.join(&d.weights);
-    let display = crate::diag::display_path(&path);
-    files.push(path.clone());
-    if !path.is_file() {
-        return Err(Diagnostic::error(Code::Scene, format!("weights file `{display}` does not exist")).with_label(
-            d.at.clone(),
-            "named here",
-            true,
-        ));
-    }
-    let archive = crate::denoise::tza::read(&path, &display).map_err(|e| e.with_label(d.at.clone(), "named here", false))?;
-    Network::from_archive(&archive).map_err(|e| e.diagnostic(&display).with_label(d.at.clone(), "named here", false))
+    Ok(Read { scene, meshes, files })
 }
 
 #[cfg(test)]

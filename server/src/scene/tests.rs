@@ -108,19 +108,19 @@ fn missing_and_malformed_meshes_are_diagnosed_at_the_reference() {
 
 #[test]
 fn the_denoiser_section_reads_its_weights_precision_mode_and_input_scale() {
+    use crate::denoise_options::{Mode, Precision};
     assert_eq!(parse("s.toml", BASE).unwrap().denoiser, None, "no section, no denoiser");
     let s = parse("s.toml", "[denoiser]\nweights = \"w/rt_hdr.tza\"\n").unwrap();
     let d = s.denoiser.expect("a denoiser");
-    assert_eq!(
-        (d.weights.as_str(), d.precision, d.mode),
-        ("w/rt_hdr.tza", crate::denoise::Precision::F32, crate::denoise::process::Mode::Hdr),
-        "the defaults"
-    );
+    assert_eq!((d.weights.as_deref(), d.precision, d.mode), (Some("w/rt_hdr.tza"), Precision::F32, Mode::Hdr), "the defaults");
     assert_eq!((d.at.line, d.at.column), (2, 11), "where the weights are named");
     let d = parse("s.toml", "[denoiser]\nweights = \"a.tza\"\nprecision = \"f16\"\nmode = \"ldr\"\n").unwrap().denoiser.unwrap();
-    assert_eq!((d.precision, d.mode, d.input_scale), (crate::denoise::Precision::F16, crate::denoise::process::Mode::Ldr, None));
+    assert_eq!((d.precision, d.mode, d.input_scale), (Precision::F16, Mode::Ldr, None));
     let d = parse("s.toml", "[denoiser]\nweights = \"a.tza\"\nmode = \"ldr_srgb\"\ninput_scale = 0.25\n").unwrap().denoiser.unwrap();
-    assert_eq!((d.mode, d.input_scale), (crate::denoise::process::Mode::LdrSrgb, Some(0.25)));
+    assert_eq!((d.mode, d.input_scale), (Mode::LdrSrgb, Some(0.25)));
+    // No weights: the bundled network, chosen when the scene is loaded.
+    let d = parse("s.toml", "[denoiser]\nprecision = \"f16\"\n").unwrap().denoiser.unwrap();
+    assert_eq!((d.weights, d.precision, d.mode), (None, Precision::F16, Mode::Hdr));
     for (text, line, col) in [
         ("[denoiser]\nweights = \"a.tza\"\ninput_scale = 0\n", 3, 15),
         ("[denoiser]\nweights = \"a.tza\"\ninput_scale = nan\n", 3, 15),
@@ -128,40 +128,9 @@ fn the_denoiser_section_reads_its_weights_precision_mode_and_input_scale() {
         ("[denoiser]\nweights = \"a.tza\"\nmode = \"hdr10\"\n", 3, 8),
         ("[denoiser]\nweights = \"a.tza\"\nstrength = 1\n", 3, 1),
         ("[denoiser]\nweights = \"  \"\n", 2, 11),
-        ("[denoiser]\nprecision = \"f16\"\n", 1, 1),
     ] {
         assert_eq!(at(&err(text)), (line, col), "{text}");
     }
-}
-
-#[test]
-fn missing_and_malformed_weights_are_diagnosed_at_the_reference() {
-    let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("s.toml");
-    std::fs::write(&scene, format!("{BASE}\n[denoiser]\nweights = \"gone.tza\"\n")).unwrap();
-    let e = load(&scene).unwrap_err();
-    assert!(e.message.contains("gone.tza") && e.message.contains("does not exist"), "{}", e.message);
-    assert_eq!(at(&e), (9, 11));
-    // A file that is not a .tza: the weights diagnostic, in the file, with the reference.
-    std::fs::write(dir.path().join("bad.tza"), b"not a tensor archive").unwrap();
-    std::fs::write(&scene, format!("{BASE}\n[denoiser]\nweights = \"bad.tza\"\n")).unwrap();
-    let e = load(&scene).unwrap_err();
-    assert_eq!(e.code, Code::Weights);
-    assert!(e.file().is_some_and(|f| f.ends_with("bad.tza")), "located in the weights file: {e}");
-    assert!(e.labels.iter().any(|l| l.location.file.ends_with("s.toml") && l.location.line == 9), "and at the reference: {e:?}");
-    // A well-formed archive that is not a U-Net: the network's diagnostic.
-    let not_a_unet = crate::denoise::testing::archive(&crate::denoise::testing::small_unet(9)[..3], 1);
-    std::fs::write(dir.path().join("bad.tza"), not_a_unet).unwrap();
-    let e = load(&scene).unwrap_err();
-    assert!(e.code == Code::Weights && e.message.contains("layer"), "{e}");
-    // Good weights: the network is built, and the file is one the scene depends on.
-    let good = dir.path().join("sub/good.tza");
-    std::fs::create_dir_all(good.parent().unwrap()).unwrap();
-    std::fs::write(&good, crate::denoise::testing::archive(&crate::denoise::testing::small_unet(9), 1)).unwrap();
-    std::fs::write(&scene, format!("{BASE}\n[denoiser]\nweights = \"sub/good.tza\"\n")).unwrap();
-    let loaded = load(&scene).unwrap_or_else(|d| panic!("{d}"));
-    assert_eq!(loaded.denoiser.expect("the network").inputs, crate::denoise::network::Inputs::ColorAlbedoNormal);
-    assert!(loaded.files.iter().any(|f| f.ends_with("sub/good.tza")), "{:?}", loaded.files);
 }
 
 // ---- the settings table: [post] and [quality] ----------------------------

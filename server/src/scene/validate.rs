@@ -374,16 +374,12 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
     let denoiser = match &f.denoiser {
         Some(d) => {
             let path = [K("denoiser"), K("weights")];
-            if d.weights.trim().is_empty() {
-                return Err(c.error(&path, "must name a weights file (.tza)"));
+            if d.weights.as_ref().is_some_and(|w| w.trim().is_empty()) {
+                return Err(c.error(&path, "must name a weights file (.tza), or be left out for the bundled network"));
             }
-            let precision = match d.precision {
-                file::Precision::F16 => Precision::F16,
-                file::Precision::F32 => Precision::F32,
-            };
-            let at = c.location(&path).unwrap_or_else(|| Location::file_start(display));
+            let at = c.location(&path).or_else(|| c.location(&path[..1])).unwrap_or_else(|| Location::file_start(display));
             let input_scale = d.input_scale.map(|s| c.positive(&[K("denoiser"), K("input_scale")], s)).transpose()?;
-            Some(Denoiser { weights: d.weights.clone(), at, precision, mode: d.mode, input_scale })
+            Some(Denoiser { weights: d.weights.clone(), at, precision: d.precision, mode: d.mode, input_scale })
         }
         None => None,
     };

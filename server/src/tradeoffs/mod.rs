@@ -21,7 +21,7 @@ use crate::render::frame::FrameResult;
 use crate::render::resource::ResourceDesc;
 use crate::render::session::Session;
 use crate::scene::overrides::{Overrides, Value};
-use crate::scene::{self, settings};
+use crate::scene::settings;
 use metric::Rgba;
 use sweep::{Reference, Series};
 
@@ -166,7 +166,7 @@ fn view(c: &CapturedImage) -> Rgba<'_> {
 /// Loads the scene with `overrides` into the session and builds what its
 /// frame lacks.
 fn load(session: &mut Session, job: &Job, overrides: &Overrides) -> Result<(), OfflineError> {
-    let mut loaded = scene::load_with(&job.scene, &merged(job, overrides)).map_err(|d| OfflineError::Input(vec![d]))?;
+    let mut loaded = crate::loaded::load_with(&job.scene, &merged(job, overrides)).map_err(|d| OfflineError::Input(vec![d]))?;
     (loaded.scene.width, loaded.scene.height) = job.size;
     session.set_scene(&loaded);
     let errors = session.install_missing();

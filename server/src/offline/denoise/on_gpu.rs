@@ -16,11 +16,12 @@ use crate::denoise::process::Mode;
 use crate::denoise::tiles::{self, Rect, Tile};
 use crate::diag::{Code, Diagnostic, Location};
 use crate::gpu::Gpu;
+use crate::loaded::Loaded;
 use crate::render::capture::CapturedTensor;
 use crate::render::passes::images::TileImages;
 use crate::render::session::Session;
 use crate::scene::settings::DenoiseAt;
-use crate::scene::{Denoiser, Loaded, Renderer};
+use crate::scene::{Denoiser, Renderer};
 
 /// How the network runs, beyond the images.
 pub struct Settings {
@@ -66,7 +67,7 @@ pub fn denoise(gpu: Gpu, shader_root: &Path, net: Arc<Network>, images: &TileIma
     // Every tile is a frame of its own, each to be denoised.
     scene.quality.denoise_at = DenoiseAt::Every;
     scene.denoiser = Some(Denoiser {
-        weights: String::new(),
+        weights: None,
         at: Location::file_start("loupe denoise"),
         precision: s.precision,
         mode: s.mode,

@@ -11,7 +11,7 @@ fn job(weights_file: &str, aux: bool, mode: Mode, output: PathBuf) -> Job {
         shader_root: PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shaders"),
         max_memory_mb: 2048,
         tile: None,
-        weights: weights(weights_file),
+        weights: Some(weights(weights_file)),
         color: fixture("color.pfm"),
         albedo: aux.then(|| fixture("albedo.pfm")),
         normal: aux.then(|| fixture("normal.pfm")),
@@ -175,7 +175,7 @@ fn inputs_must_fit_the_weights_and_each_other() {
     let bad = dir.path().join("bad.tza");
     std::fs::write(&bad, b"\xD7\x41\x02\x00").unwrap();
     let mut j = job("rt_ldr.tza", false, Mode::Ldr, out);
-    j.weights = bad;
+    j.weights = Some(bad);
     let d = run(&j).unwrap_err();
     assert_eq!(
         (d.code, d.message.as_str()),

@@ -107,7 +107,7 @@ mod tests {
             for (key, values) in switches {
                 for v in *values {
                     let overrides = Overrides::from([((*key).to_owned(), v.clone())]);
-                    let loaded = crate::scene::load_with(&path, &overrides).unwrap_or_else(|d| panic!("{d}"));
+                    let loaded = crate::loaded::load_with(&path, &overrides).unwrap_or_else(|d| panic!("{d}"));
                     for nan_watch in [false, true] {
                         let options = crate::render::FrameOptions { nan_watch, ..Default::default() };
                         for k in crate::render::build_graph(&loaded.scene, loaded.denoiser.as_deref(), options).pipelines() {

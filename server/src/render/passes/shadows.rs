@@ -59,7 +59,7 @@ mod tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/minimal.toml");
         let scene = |r: i64| {
             let o = Overrides::from([("quality.shadow_filter".to_owned(), Value::Int(r)), ("output.width".to_owned(), Value::Int(96)), ("output.height".to_owned(), Value::Int(54))]);
-            crate::scene::load_with(&path, &o).unwrap_or_else(|d| panic!("{d}"))
+            crate::loaded::load_with(&path, &o).unwrap_or_else(|d| panic!("{d}"))
         };
         let mut s = session(&scene(0));
         let wanted: BTreeSet<String> = ["lighting/color".to_owned()].into();

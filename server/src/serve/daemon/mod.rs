@@ -135,12 +135,17 @@ pub struct Daemon {
 impl Daemon {
     pub fn new(gpu: Gpu, config: Config, shared: Arc<Shared>, events: Sender<Event>) -> Self {
         let lib = library::read_tree(&config.shader_root).unwrap_or_else(|_| Library::new([]));
-        let (loaded, scene_error) = match scene::load(&config.scene_path) {
+        let (loaded, scene_error) = match crate::loaded::load(&config.scene_path) {
             Ok(l) => (l, None),
             Err(d) => {
                 let empty = scene::parse("", "").expect("the empty scene is valid");
                 (
-                    scene::Loaded { scene: empty, meshes: Default::default(), denoiser: None, files: vec![config.scene_path.clone()] },
+                    crate::loaded::Loaded {
+                        scene: empty,
+                        meshes: Default::default(),
+                        denoiser: None,
+                        files: vec![config.scene_path.clone()],
+                    },
                     Some(d),
                 )
             }
@@ -331,7 +336,7 @@ impl Daemon {
     }
 
     fn reload_scene(&mut self) {
-        match scene::load_with(&self.config.scene_path, &self.overrides) {
+        match crate::loaded::load_with(&self.config.scene_path, &self.overrides) {
             Ok(l) => self.install_scene(l),
             // The last good scene keeps rendering.
             Err(d) => self.scene_error = Some(d),
@@ -340,7 +345,7 @@ impl Daemon {
         self.publish_controls();
     }
 
-    fn install_scene(&mut self, l: scene::Loaded) {
+    fn install_scene(&mut self, l: crate::loaded::Loaded) {
         self.trace_stale = true;
         self.session.set_scene(&l);
         self.scene_files = l.files;
@@ -374,7 +379,7 @@ impl Daemon {
                 return;
             }
         };
-        match scene::load_with(&self.config.scene_path, &overrides) {
+        match crate::loaded::load_with(&self.config.scene_path, &overrides) {
             Ok(l) => {
                 self.overrides = overrides;
                 self.install_scene(l);

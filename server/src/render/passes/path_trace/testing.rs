@@ -10,7 +10,7 @@ use crate::mesh::MeshData;
 use crate::render::capture::CapturedImage;
 use crate::render::frame::FrameResult;
 use crate::render::session::Session;
-use crate::scene::Loaded;
+use crate::loaded::Loaded;
 
 pub const COLOR: &str = "path_trace/color";
 pub const ALBEDO: &str = "path_trace/albedo";

@@ -500,7 +500,7 @@ fn degenerate_geometry_makes_no_nan_and_takes_no_light() {
     let write = |name: &str, text: String| {
         let path = dir.path().join(name);
         std::fs::write(&path, text).unwrap();
-        crate::scene::load(&path).unwrap_or_else(|d| panic!("{d}"))
+        crate::loaded::load(&path).unwrap_or_else(|d| panic!("{d}"))
     };
     let clean = write("clean.toml", stage(48, 32, &format!("{}{}{disc}", mesh("clean"), mesh("tilted"))));
     let mut degenerate = write("degenerate.toml", stage(48, 32, &format!("{}{}{disc}{speck}", mesh("degenerate"), mesh("tilted"))));

@@ -20,7 +20,8 @@ use crate::render::capture::CapturedImage;
 use crate::render::frame::FrameResult;
 use crate::render::session::Session;
 use crate::scene::overrides::Overrides;
-use crate::scene::{Estimator, Loaded};
+use crate::loaded::Loaded;
+use crate::scene::Estimator;
 
 const COLOR: &str = "volumes/color";
 const TRANSMITTANCE: &str = "volumes/transmittance";
@@ -91,7 +92,7 @@ fn assert_finite(r: &FrameResult, key: &str) {
 fn volume_scene(set: &[(&str, crate::scene::overrides::Value)]) -> Loaded {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/volume.toml");
     let overrides: Overrides = set.iter().map(|(k, v)| ((*k).to_owned(), v.clone())).collect();
-    let mut loaded = crate::scene::load_with(&path, &overrides).unwrap_or_else(|d| panic!("{d}"));
+    let mut loaded = crate::loaded::load_with(&path, &overrides).unwrap_or_else(|d| panic!("{d}"));
     (loaded.scene.width, loaded.scene.height) = (96, 54);
     loaded
 }

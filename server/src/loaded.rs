@@ -1,0 +1,69 @@
+//! A scene as the renderer takes it: the scene and its meshes, read by
+//! `scene`, and the network its `[denoiser]` names, built from `denoise`.
+//! Joining them here keeps the scene file's reader free of the denoiser.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use crate::denoise::network::{Inputs, Network};
+use crate::denoise::{bundled, tza};
+use crate::diag::{Code, Diagnostic};
+use crate::mesh::MeshData;
+use crate::scene::{self, Denoiser, Scene, overrides::Overrides};
+
+/// A scene and the meshes and weights it references, read from disk.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    pub scene: Scene,
+    /// Mesh data by the file name as written in the scene.
+    pub meshes: BTreeMap<String, Arc<MeshData>>,
+    /// The network `[denoiser]` names (or the bundled one), built from its
+    /// weights.
+    pub denoiser: Option<Arc<Network>>,
+    /// Every file this scene was read from (itself, its meshes and
+    /// weights), for the watcher's dependency graph.
+    pub files: Vec<PathBuf>,
+}
+
+/// Reads a scene file, every mesh it references (`scene::load`) and its
+/// denoiser's weights.
+pub fn load(path: &Path) -> Result<Loaded, Diagnostic> {
+    load_with(path, &Overrides::new())
+}
+
+/// `load` with live overrides applied on top of the file's text.
+pub fn load_with(path: &Path, overrides: &Overrides) -> Result<Loaded, Diagnostic> {
+    let scene::Read { scene, meshes, mut files } = scene::load_with(path, overrides)?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let denoiser = scene.denoiser.as_ref().map(|d| network(dir, d, &mut files)).transpose()?.map(Arc::new);
+    Ok(Loaded { scene, meshes, denoiser, files })
+}
+
+/// The network of `[denoiser]`: without `weights`, the bundled one for its
+/// mode that takes the colour, albedo and normal the path tracer writes.
+/// Else the file's: a missing file is an error at `weights`; a malformed
+/// one is the weights file's own diagnostic, with `weights` as a second
+/// label.
+fn network(dir: &Path, d: &Denoiser, files: &mut Vec<PathBuf>) -> Result<Network, Diagnostic> {
+    let Some(weights) = &d.weights else {
+        return bundled::weights(d.mode, Inputs::ColorAlbedoNormal)
+            .and_then(bundled::Bundled::network)
+            .map_err(|e| e.with_label(d.at.clone(), "the denoiser without weights", true));
+    };
+    let path = dir.join(weights);
+    let display = crate::diag::display_path(&path);
+    files.push(path.clone());
+    if !path.is_file() {
+        return Err(Diagnostic::error(Code::Scene, format!("weights file `{display}` does not exist")).with_label(
+            d.at.clone(),
+            "named here",
+            true,
+        ));
+    }
+    let archive = tza::read(&path, &display).map_err(|e| e.with_label(d.at.clone(), "named here", false))?;
+    Network::from_archive(&archive).map_err(|e| e.diagnostic(&display).with_label(d.at.clone(), "named here", false))
+}
+
+#[cfg(test)]
+mod tests;
