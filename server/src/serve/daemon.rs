@@ -419,7 +419,7 @@ impl Daemon {
     fn publish_controls(&self) {
         let report = ControlsReport {
             scene: library::display_path(&self.config.scene_path),
-            controls: scene::overrides::controls(self.session.scene()),
+            controls: scene::overrides::controls(self.session.scene(), passes::affected),
             overrides: self.overrides.clone(),
         };
         shared::write(&self.shared.controls, report.clone());
