@@ -424,11 +424,6 @@ fn report(edges: &Edges, found: &[(ModPath, BTreeSet<String>)]) -> String {
     s
 }
 
-/// Imports being removed on other branches of issue 20, left out until
-/// those land; an entry whose import is gone fails the test, to be
-/// deleted. (parent, from, to, who removes it)
-const LEAVING: &[(&str, &str, &str, &str)] = &[("", "scene", "denoise", "scene stops importing denoise: the scene-denoise branch")];
-
 #[test]
 fn the_crate_has_no_import_circles() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -443,12 +438,6 @@ fn the_crate_has_no_import_circles() {
     assert!(edge(&["render"], "graph", "context") && edge(&[], "render", "scene"), "the scan sees imports: {:?}", edges.keys());
     assert!(edge(&["scene"], "overrides", "settings"), "the scan sees `super::` imports: {:?}", edges.keys());
     assert!(!modules.keys().any(|m| m.last().is_some_and(|n| n == "tests" || n == "testing")), "test modules are left out");
-    let mut edges = edges;
-    for (parent, from, to, who) in LEAVING {
-        let parent: ModPath = parent.split("::").filter(|p| !p.is_empty()).map(str::to_owned).collect();
-        let key = (parent, (*from).to_owned(), (*to).to_owned());
-        assert!(edges.remove(&key).is_some(), "{from} → {to} is gone ({who}): delete its line in LEAVING");
-    }
     let found = circles(&edges);
     assert!(found.is_empty(), "import circles:{}", report(&edges, &found));
 }

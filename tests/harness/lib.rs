@@ -89,21 +89,29 @@ impl Run {
 
 /// Runs `loupe args...` in `dir` to completion.
 pub fn loupe(dir: &Path, args: &[&str]) -> Run {
-    loupe_with_env(dir, args, &[])
+    loupe_at(&loupe_bin(), dir, args)
 }
 
 /// Runs `loupe args...` in `dir` to completion with `env` set besides.
 pub fn loupe_with_env(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Run {
-    let out = Command::new(loupe_bin())
-        .args(args)
-        .current_dir(dir)
-        .env("NO_COLOR", "1")
-        .envs(env.iter().copied())
-        .output()
-        .expect("the loupe binary starts");
-    let env: Vec<String> = env.iter().map(|(k, v)| format!("{k}={v} ")).collect();
+    let mut cmd = Command::new(loupe_bin());
+    cmd.args(args).current_dir(dir).env("NO_COLOR", "1").envs(env.iter().copied());
+    let shown: Vec<String> = env.iter().map(|(k, v)| format!("{k}={v} ")).collect();
+    run(cmd, format!("(cd {} && {}loupe {})", dir.display(), shown.concat(), args.join(" ")))
+}
+
+/// Runs the loupe binary `bin` with `args` in `dir` to completion.
+pub fn loupe_at(bin: &Path, dir: &Path, args: &[&str]) -> Run {
+    let mut cmd = Command::new(bin);
+    cmd.args(args).current_dir(dir).env("NO_COLOR", "1");
+    run(cmd, format!("(cd {} && loupe {})", dir.display(), args.join(" ")))
+}
+
+/// Runs `cmd` to completion; `shown` is how a failure names it.
+pub fn run(mut cmd: Command, shown: String) -> Run {
+    let out = cmd.output().unwrap_or_else(|e| panic!("{shown} starts: {e}"));
     Run {
-        cmd: format!("(cd {} && {}loupe {})", dir.display(), env.concat(), args.join(" ")),
+        cmd: shown,
         code: out.status.code().unwrap_or(-1),
         stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
         stderr: String::from_utf8_lossy(&out.stderr).into_owned(),

@@ -122,7 +122,7 @@ pub struct Control {
     pub kind: ControlKind,
     pub value: Value,
     /// The render passes whose output it changes.
-    pub affects: &'static [&'static str],
+    pub affects: Vec<&'static str>,
 }
 
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -147,18 +147,26 @@ impl From<Kind> for ControlKind {
 /// The controls for `scene`: each setting of the table its scene shows,
 /// then the environment's intensity and each light's. (`[environment]` is
 /// a plain scene section, checked in `validate`, not a table of settings.)
-pub fn controls(scene: &Scene) -> Vec<Control> {
+/// `affected` turns a setting's `affects` into pass names
+/// (`render::passes::affected`, which knows the passes).
+pub fn controls(scene: &Scene, affected: fn(&[&'static str]) -> Vec<&'static str>) -> Vec<Control> {
     let mut out: Vec<Control> = SETTINGS
         .iter()
         .filter(|s| (s.shown_when)(scene))
-        .map(|s| Control { path: s.path.into(), label: s.label.into(), kind: s.kind.into(), value: (s.get)(scene), affects: s.affects })
+        .map(|s| Control {
+            path: s.path.into(),
+            label: s.label.into(),
+            kind: s.kind.into(),
+            value: (s.get)(scene),
+            affects: affected(s.affects),
+        })
         .collect();
     out.push(Control {
         path: "environment.intensity".into(),
         label: "Environment intensity".into(),
         kind: ControlKind::Slider { min: 0.0, max: 10.0, step: 0.05 },
         value: settings::float(scene.environment.intensity),
-        affects: &["lighting"],
+        affects: vec!["lighting"],
     });
     for (i, l) in scene.lights.iter().enumerate() {
         let kind = match l.kind {
@@ -172,7 +180,7 @@ pub fn controls(scene: &Scene) -> Vec<Control> {
             label: format!("Light {i} ({kind}) intensity"),
             kind: ControlKind::Slider { min: 0.0, max: 100.0, step: 0.1 },
             value: settings::float(l.intensity),
-            affects: &["lighting", "volume_march", "volumes"],
+            affects: vec!["lighting", "volume_march", "volumes"],
         });
     }
     out
@@ -211,7 +219,7 @@ mod tests {
     #[test]
     fn controls_follow_the_scene() {
         let s = crate::scene::parse("s.toml", TEXT).unwrap();
-        let c = controls(&s);
+        let c = controls(&s, crate::render::passes::affected);
         assert!(c.iter().any(|c| c.path == "lights[0].intensity" && c.value == Value::Float(5.0)));
         assert!(!c.iter().any(|c| c.path == "quality.volume_steps"), "no media, no volume controls");
     }

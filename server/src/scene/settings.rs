@@ -59,7 +59,9 @@ pub struct Setting {
     /// The field's doc comment, its lines joined ("" when it has none).
     pub doc: &'static str,
     pub kind: Kind,
-    /// The render passes whose output changes with this setting.
+    /// The render passes whose output changes with this setting, by name
+    /// or by a group the renderer expands (`FULLSCREEN`):
+    /// `render::passes::affected` gives the names.
     pub affects: &'static [&'static str],
     /// Whether the browser shows a control for it in this scene.
     pub shown_when: fn(&Scene) -> bool,
@@ -401,8 +403,10 @@ fn auto_exposure(s: &Scene) -> bool {
 const RENDERED: [&str; 9] =
     ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volume_march", "volumes", "path_trace"];
 
-/// Every pass drawn as a fullscreen triangle.
-const FULLSCREEN: [&str; 7] = ["test_pattern", "lighting", "volume_march", "volumes", "exposure", "tonemap", "debug_view"];
+/// In `affects`: every pass drawn as a fullscreen triangle. The passes are
+/// declared by the renderer, above the scene, so the table names the group
+/// and `render::passes::affected` expands it from the pass specs.
+pub const FULLSCREEN: &str = "@fullscreen";
 
 use Kind::{Choice, Float, Int, Toggle};
 
@@ -429,7 +433,7 @@ settings! {
         /// A G-buffer channel shown instead of the lit frame, or `none`.
         debug_view: DebugView = DebugView::None, Choice(DebugView::NAMES), "Debug view", affects ["debug_view"];
         /// Draw fullscreen passes as two triangles instead of one, to compare.
-        two_triangles: bool = false, Toggle, "Fullscreen as two triangles", affects FULLSCREEN;
+        two_triangles: bool = false, Toggle, "Fullscreen as two triangles", affects [FULLSCREEN];
     }
 
     /// `[quality]`: the renderer, and shadow, ray-march and path costs.

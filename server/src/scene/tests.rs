@@ -135,6 +135,7 @@ fn the_denoiser_section_reads_its_weights_precision_mode_and_input_scale() {
 
 // ---- the settings table: [post] and [quality] ----------------------------
 
+use crate::render::passes::affected;
 use crate::testing::line_col;
 use overrides::{ControlKind, controls};
 use settings::{Kind, SETTINGS, Value};
@@ -273,12 +274,15 @@ fn the_metering_range_must_be_ordered() {
 fn controls_are_the_table_entries_the_scene_shows() {
     for text in ["", "[post]\nauto_exposure = true\n", MEDIUM, &format!("[post]\nauto_exposure = true\n{MEDIUM}")] {
         let scene = parse("s.toml", text).unwrap();
-        let shown = controls(&scene);
+        let shown = controls(&scene, affected);
         let settings: Vec<_> = shown.iter().filter(|c| !c.path.starts_with("lights[") && !c.path.starts_with("environment.")).collect();
         let expected: Vec<_> = SETTINGS.iter().filter(|s| (s.shown_when)(&scene)).collect();
         assert_eq!(settings.len(), expected.len(), "{text}");
         for (c, s) in settings.iter().zip(expected) {
-            assert_eq!((c.path.as_str(), c.label.as_str(), c.affects, &c.value), (s.path, s.label, s.affects, &(s.get)(&scene)));
+            assert_eq!(
+                (c.path.as_str(), c.label.as_str(), &c.affects, &c.value),
+                (s.path, s.label, &affected(s.affects), &(s.get)(&scene))
+            );
             match (&c.kind, s.kind) {
                 (ControlKind::Toggle, Kind::Toggle) => {}
                 (ControlKind::Slider { min, max, step }, Kind::Int { min: lo, max: hi, step: st }) => {
@@ -305,8 +309,8 @@ fn every_affected_pass_is_a_pass_of_the_frame() {
     let graph = crate::render::build_graph(&load(&showcase).unwrap().scene, None, Default::default());
     let passes: Vec<&str> = graph.passes.iter().map(|p| p.name.as_str()).chain(graph.culled.iter().map(|c| c.name.as_str())).collect();
     for s in SETTINGS {
-        for pass in s.affects {
-            assert!(passes.contains(pass), "{} affects `{pass}`, which is not one of {passes:?}", s.path);
+        for pass in affected(s.affects) {
+            assert!(passes.contains(&pass), "{} affects `{pass}`, which is not one of {passes:?}", s.path);
         }
     }
 }
@@ -315,7 +319,7 @@ fn every_affected_pass_is_a_pass_of_the_frame() {
 fn control_values_read_as_written() {
     let scene =
         parse("s.toml", "[post]\nexposure_ev = 0.3\n\n[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1.2\n").unwrap();
-    let value = |p: &str| controls(&scene).into_iter().find(|c| c.path == p).unwrap().value;
+    let value = |p: &str| controls(&scene, affected).into_iter().find(|c| c.path == p).unwrap().value;
     assert_eq!((value("post.exposure_ev"), value("lights[0].intensity")), (Value::Float(0.3), Value::Float(1.2)));
 }
 
@@ -367,7 +371,7 @@ fn bad_environment_values_are_located() {
 #[test]
 fn the_environment_intensity_is_a_live_control() {
     let s = parse("s.toml", "[environment]\nintensity = 0.5\n").unwrap();
-    let c = overrides::controls(&s);
+    let c = overrides::controls(&s, affected);
     let env = c.iter().find(|c| c.path == "environment.intensity").expect("a control");
     assert_eq!(env.value, Value::Float(0.5));
     let mut o = overrides::Overrides::new();

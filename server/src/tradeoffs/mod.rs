@@ -246,7 +246,7 @@ struct Measured {
 
 fn measure(session: &mut Session, job: &Job, series: &Series, value: &Value, serial: bool) -> Result<Measured, OfflineError> {
     load(session, job, &series.point(value))?;
-    let affects = settings::find(series.setting).map_or(&[][..], |s| s.affects);
+    let affects = settings::find(series.setting).map_or(vec![], |s| crate::render::passes::affected(s.affects));
     let live: Vec<String> = session.graph().passes.iter().map(|p| p.name.clone()).collect();
     // The denoiser's passes are part of what a denoised sample costs.
     let passes: Vec<String> =

@@ -3,22 +3,21 @@
 //! function taking the graph builder and input handles and returning
 //! output handles. `render::build_graph` assembles them into a frame.
 
-use crate::gpu::pipeline::{ALL, Binding, COMPUTE, FRAG, Group, PipelineSpec, sizes, storage, uniform};
+use crate::gpu::pipeline::{ALL, Binding, COMPUTE, FRAG, Group, PipelineSpec, Stages, sizes, storage, uniform};
 use crate::scene::Scene;
+use crate::scene::settings::FULLSCREEN;
 
 use super::resource::PipelineKey;
 
 pub use crate::gpu::pipeline::TWO_TRIANGLES;
 
-/// Lists the pass modules; every spec they declare lands in `SPECS`.
+/// Lists the pass modules; every spec they declare lands in `specs()`.
 macro_rules! passes {
     ($($pass:ident),* $(,)?) => {
         $(pub mod $pass;)*
 
-        /// Every pipeline any pass can build: what `loupe check` creates.
-        pub fn specs() -> impl Iterator<Item = &'static PipelineSpec> {
-            [$($pass::SPECS),*].into_iter().flatten().copied()
-        }
+        /// Each pass module's name and its `SPECS`.
+        const MODULES: &[(&str, &[&PipelineSpec])] = &[$((stringify!($pass), $pass::SPECS)),*];
     };
 }
 
@@ -41,6 +40,24 @@ passes![
     debug_view,
     nan_watch,
 ];
+
+/// Every pipeline any pass can build: what `loupe check` creates.
+pub fn specs() -> impl Iterator<Item = &'static PipelineSpec> {
+    MODULES.iter().flat_map(|(_, specs)| specs.iter().copied())
+}
+
+/// The passes drawn as a fullscreen triangle: the modules declaring a
+/// `Stages::Fullscreen` spec, since a fullscreen pass is named after its
+/// module (a test holds every frame to that).
+pub fn fullscreen() -> impl Iterator<Item = &'static str> {
+    MODULES.iter().filter(|(_, specs)| specs.iter().any(|s| matches!(s.stages, Stages::Fullscreen { .. }))).map(|(name, _)| *name)
+}
+
+/// A setting's `affects` as pass names: its groups (`settings::FULLSCREEN`)
+/// expanded.
+pub fn affected(affects: &[&'static str]) -> Vec<&'static str> {
+    affects.iter().flat_map(|&a| if a == FULLSCREEN { fullscreen().collect() } else { vec![a] }).collect()
+}
 
 /// The spec named `name`.
 pub fn spec(name: &str) -> Option<&'static PipelineSpec> {
@@ -77,26 +94,63 @@ mod tests {
     use std::collections::BTreeSet;
 
     use super::*;
-    use crate::scene::overrides::{Overrides, Value};
+    use crate::render::graph::Graph;
+    use crate::scene::overrides::{self, Overrides, Value};
+    use crate::scene::settings::{self, Kind, SETTINGS};
+
+    /// The values a setting is tried at: a toggle's two, a choice's every
+    /// option, a number's extremes.
+    fn switch_values(kind: Kind) -> Vec<Value> {
+        match kind {
+            Kind::Toggle => vec![Value::Bool(false), Value::Bool(true)],
+            Kind::Choice(options) => options.iter().map(|o| Value::Text((*o).to_owned())).collect(),
+            Kind::Int { min, max, .. } => vec![Value::Int(min), Value::Int(max)],
+            Kind::Float { min, max, .. } => vec![Value::Float(min), Value::Float(max)],
+        }
+    }
+
+    /// Every override of one setting of the table, so a new setting is
+    /// tried without a line here.
+    fn switches() -> impl Iterator<Item = (&'static str, Value)> {
+        SETTINGS.iter().flat_map(|s| switch_values(s.kind).into_iter().map(move |v| (s.path, v)))
+    }
+
+    /// An override refused by the scene is one of an ordered pair's: the
+    /// extreme crosses the other setting's value.
+    fn refused_for_order(key: &str, why: impl std::fmt::Display) {
+        assert!(settings::ORDERED.iter().any(|(a, b)| *a == key || *b == key), "{key}: {why}");
+    }
+
+    /// What the frames of the test use.
+    #[derive(Default)]
+    struct Seen {
+        specs: BTreeSet<&'static str>,
+        /// The passes that draw with a fullscreen spec.
+        fullscreen: BTreeSet<String>,
+    }
+
+    /// Holds `graph` to `specs()` and notes what it uses.
+    fn check(graph: &Graph, seen: &mut Seen) {
+        for k in graph.pipelines() {
+            assert!(specs().any(|s| std::ptr::eq(s, k.spec)), "{} is built by a frame but not listed for loupe check", k.label());
+            seen.specs.insert(k.spec.name);
+        }
+        for p in &graph.passes {
+            if p.pipelines.iter().any(|k| matches!(k.spec.stages, Stages::Fullscreen { .. })) {
+                seen.fullscreen.insert(p.name.clone());
+            }
+        }
+    }
 
     /// Every pipeline a frame can use is one `loupe check` creates: the
-    /// graphs of every bundled scene under every switch that changes the
-    /// pass list or a permutation only name specs in `specs()`, and every
-    /// spec there is used by some frame.
+    /// graphs of every bundled scene under every value of every setting
+    /// (each alone) only name specs in `specs()`, and every spec there is
+    /// used by some frame. The passes drawn fullscreen are the ones
+    /// `fullscreen()` names after their modules.
     #[test]
     fn every_pipeline_a_frame_uses_is_enumerated_for_loupe_check() {
         let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
-        let switches: &[(&str, &[Value])] = &[
-            ("post.auto_exposure", &[Value::Bool(false), Value::Bool(true)]),
-            ("post.two_triangles", &[Value::Bool(false), Value::Bool(true)]),
-            ("post.tonemap", &[Value::Text("aces".into()), Value::Text("reinhard".into())]),
-            ("post.debug_view", &[Value::Text("none".into()), Value::Text("normal".into()), Value::Text("depth".into())]),
-            ("post.exposure_ev", &[Value::Float(0.0), Value::Float(1.0)]),
-            ("quality.shadows", &[Value::Bool(true), Value::Bool(false)]),
-            ("quality.volume_estimator", &[Value::Text("constant".into()), Value::Text("analytic".into())]),
-            ("quality.renderer", &[Value::Text("raster".into()), Value::Text("path".into())]),
-        ];
-        let mut used = BTreeSet::new();
+        let mut seen = Seen::default();
         let mut scenes_seen = 0;
         for entry in std::fs::read_dir(&scenes).unwrap() {
             let path = entry.unwrap().path();
@@ -104,27 +158,25 @@ mod tests {
                 continue;
             }
             scenes_seen += 1;
-            for (key, values) in switches {
-                for v in *values {
-                    let overrides = Overrides::from([((*key).to_owned(), v.clone())]);
-                    let loaded = crate::loaded::load_with(&path, &overrides).unwrap_or_else(|d| panic!("{d}"));
-                    for nan_watch in [false, true] {
-                        let options = crate::render::FrameOptions { nan_watch, ..Default::default() };
-                        for k in crate::render::build_graph(&loaded.scene, loaded.denoiser.as_deref(), options).pipelines() {
-                            assert!(
-                                specs().any(|s| std::ptr::eq(s, k.spec)),
-                                "{} is built by a frame but not listed for loupe check",
-                                k.label()
-                            );
-                            used.insert(k.spec.name);
-                        }
+            for (key, v) in switches() {
+                let overrides = Overrides::from([(key.to_owned(), v)]);
+                let loaded = match crate::loaded::load_with(&path, &overrides) {
+                    Ok(loaded) => loaded,
+                    Err(d) => {
+                        refused_for_order(key, d);
+                        continue;
                     }
+                };
+                for nan_watch in [false, true] {
+                    let options = crate::render::FrameOptions { nan_watch, ..Default::default() };
+                    check(&crate::render::build_graph(&loaded.scene, loaded.denoiser.as_deref(), options), &mut seen);
                 }
             }
         }
         assert!(scenes_seen >= 4, "the bundled scenes are found");
         // No bundled scene names weights (they are not in the repository):
-        // a denoised frame on a small random network, in each of its modes.
+        // a denoised frame on a small random network, in each of its modes,
+        // the first under every setting too.
         let network = crate::denoise::testing::network(&crate::denoise::testing::small_unet(9), 1);
         let modes = [
             ("f32", "hdr", true, "direct", ""),
@@ -134,18 +186,23 @@ mod tests {
             ("f32", "ldr_srgb", true, "direct", ""),
             ("f32", "hdr", true, "tiled", "input_scale = 0.5"),
         ];
-        for (precision, mode, fused, kernel, scale) in modes {
+        for (i, (precision, mode, fused, kernel, scale)) in modes.into_iter().enumerate() {
             let text = format!(
                 "[quality]\nrenderer = \"path\"\ndenoiser_fused = {fused}\ndenoiser_kernel = \"{kernel}\"\n[denoiser]\nweights = \"w.tza\"\nprecision = \"{precision}\"\nmode = \"{mode}\"\n{scale}\n\
                  [[materials]]\nname = \"m\"\n[[objects]]\nshape = \"sphere\"\nmaterial = \"m\"\n"
             );
-            let scene = crate::scene::parse("denoised.toml", &text).unwrap_or_else(|d| panic!("{d}"));
-            for k in crate::render::build_graph(&scene, Some(&network), Default::default()).pipelines() {
-                assert!(specs().any(|s| std::ptr::eq(s, k.spec)), "{} is built by a frame but not listed for loupe check", k.label());
-                used.insert(k.spec.name);
+            let switched = if i == 0 { switches().map(|(k, v)| Overrides::from([(k.to_owned(), v)])).collect() } else { vec![] };
+            for o in std::iter::once(Overrides::new()).chain(switched) {
+                let scene = overrides::apply(&text, &o).and_then(|t| crate::scene::parse("denoised.toml", &t).map_err(|d| d.to_string()));
+                match scene {
+                    Ok(scene) => check(&crate::render::build_graph(&scene, Some(&network), Default::default()), &mut seen),
+                    Err(why) => refused_for_order(o.keys().next().expect("only overrides are refused"), why),
+                }
             }
         }
         let listed: BTreeSet<&str> = specs().map(|s| s.name).collect();
-        assert_eq!(listed, used, "every listed spec is used by some frame");
+        assert_eq!(listed, seen.specs, "every listed spec is used by some frame");
+        let named: BTreeSet<String> = fullscreen().map(str::to_owned).collect();
+        assert_eq!(named, seen.fullscreen, "fullscreen() names the passes that draw fullscreen: each is named after its module");
     }
 }

@@ -11,6 +11,7 @@ use crate::protocol::{
     self, ControlsReport, PassInfo, PassQuadReport, PassStatus, PassTiming, QuadReport, ReloadTimings, ServerEvent, Status,
 };
 use crate::render::frame::FrameResult;
+use crate::render::passes;
 use crate::render::session::PassState;
 use crate::scene;
 use crate::serve::shared::{self, FrameImages};
@@ -19,7 +20,7 @@ impl Daemon {
     pub(super) fn publish_controls(&self) {
         let report = ControlsReport {
             scene: display_path(&self.config.scene_path),
-            controls: scene::overrides::controls(self.session.scene()),
+            controls: scene::overrides::controls(self.session.scene(), passes::affected),
             overrides: self.overrides.clone(),
         };
         shared::write(&self.shared.controls, report.clone());
