@@ -53,7 +53,7 @@ fn a_denoiser_without_weights_gets_the_bundled_network_for_its_mode() {
         std::fs::write(&scene, format!("{BASE}\n[denoiser]\n{section}")).unwrap();
         let loaded = load(&scene).unwrap_or_else(|d| panic!("{d}"));
         assert!(*loaded.denoiser.expect("a network") == network(mode), "{section}: the bundled {mode:?} network");
-        assert_eq!(loaded.files, [scene.clone()], "nothing but the scene to watch");
+        assert_eq!(loaded.files, std::slice::from_ref(&scene), "nothing but the scene to watch");
     }
     // The two ranges are different networks: the choice is seen.
     assert!(network(Mode::Hdr) != network(Mode::Ldr));
