@@ -5,6 +5,7 @@ mod browser;
 mod check;
 mod denoise;
 mod golden;
+mod protocol;
 mod render;
 mod serve;
 mod tradeoffs;

@@ -348,24 +348,93 @@ fn import_range_of(file: &SourceFile, dep: &SourceFile) -> Option<Range<usize>> 
 }
 
 /// The path diagnostics show for `path`: relative to the working directory
-/// when it lies under it, with forward slashes.
+/// when it lies under it, with forward slashes. A byte of the name that is
+/// not UTF-8 shows as `\xHH`: no other `\` is left (they become `/`), so
+/// two names never show alike and [`display_uri`] recovers the bytes.
 pub fn display_path(path: &Path) -> String {
     let cwd = std::env::current_dir().ok();
     let shown = cwd.as_deref().and_then(|c| path.strip_prefix(c).ok()).unwrap_or(path);
     // `./shaders/x.wgsl` and `shaders/x.wgsl` are one file: drop `.` parts.
     let parts: Vec<_> = shown.components().filter(|c| !matches!(c, std::path::Component::CurDir)).collect();
     let shown: PathBuf = parts.iter().collect();
-    shown.to_string_lossy().replace('\\', "/")
+    let mut out = String::new();
+    for chunk in os_bytes(&shown).utf8_chunks() {
+        out.push_str(&chunk.valid().replace('\\', "/"));
+        for b in chunk.invalid() {
+            out.push_str(&format!("\\x{b:02X}"));
+        }
+    }
+    out
+}
+
+/// A path's bytes as the file system holds them.
+#[cfg(unix)]
+fn os_bytes(path: &Path) -> Vec<u8> {
+    std::os::unix::ffi::OsStrExt::as_bytes(path.as_os_str()).to_vec()
+}
+
+/// A path's bytes: UTF-16 names are not bytes, so any unpaired surrogate
+/// shows as U+FFFD.
+#[cfg(not(unix))]
+fn os_bytes(path: &Path) -> Vec<u8> {
+    path.to_string_lossy().into_owned().into_bytes()
+}
+
+/// A relative URI reference for a [`display_path`]: the file's real bytes
+/// (a `\xHH` escape is the byte itself), percent-encoded where a URI path
+/// may not hold them (`:` too, which would read as a scheme).
+pub fn display_uri(display: &str) -> String {
+    let mut bytes = Vec::with_capacity(display.len());
+    let mut rest = display.as_bytes();
+    while let Some((&b, tail)) = rest.split_first() {
+        let escaped =
+            tail.strip_prefix(b"x").and_then(|hex| std::str::from_utf8(hex.get(..2)?).ok()).and_then(|h| u8::from_str_radix(h, 16).ok());
+        match (b, escaped) {
+            (b'\\', Some(byte)) => {
+                bytes.push(byte);
+                rest = &tail[3..];
+            }
+            _ => {
+                bytes.push(b);
+                rest = tail;
+            }
+        }
+    }
+    let mut uri = String::with_capacity(bytes.len());
+    for b in bytes {
+        if b.is_ascii_alphanumeric() || b"-._~/!$&'()*+,;=@".contains(&b) {
+            uri.push(b as char);
+        } else {
+            uri.push_str(&format!("%{b:02X}"));
+        }
+    }
+    uri
 }
 
 /// The readable `*.wgsl` files under `root`, as a library. Unreadable ones
 /// are left out here: whoever builds from them reports the missing file.
 pub fn read_tree(root: &Path) -> Result<Library, String> {
-    let files = discover(std::slice::from_ref(&root.to_path_buf()))?
+    load_tree(root).map(|(lib, _)| lib)
+}
+
+/// [`read_tree`], and a warning at each file left out because its name is
+/// not UTF-8: the daemon could neither watch it (the watcher matches names
+/// as text) nor name it in a URL, so it is left out loudly.
+pub fn load_tree(root: &Path) -> Result<(Library, Vec<Diagnostic>), String> {
+    let (named, unnamed): (Vec<PathBuf>, Vec<PathBuf>) =
+        discover(std::slice::from_ref(&root.to_path_buf()))?.into_iter().partition(|p| p.to_str().is_some());
+    let files = named.iter().filter_map(|p| SourceFile::read(p, display_path(p)).ok()).collect::<Vec<_>>();
+    let skipped = unnamed
         .iter()
-        .filter_map(|p| SourceFile::read(p, display_path(p)).ok())
-        .collect::<Vec<_>>();
-    Ok(Library::new(files))
+        .map(|p| {
+            Diagnostic::warning(
+                Code::Encoding,
+                "the file name is not valid UTF-8: the file is not loaded (it cannot be watched or named in a URL); rename it",
+            )
+            .at(Location::file_start(&display_path(p)))
+        })
+        .collect();
+    Ok((Library::new(files), skipped))
 }
 
 /// Every `*.wgsl` file under `roots` (files named directly are taken as
@@ -410,6 +479,32 @@ pub fn discover_with(roots: &[PathBuf], wanted: impl Fn(&Path, &Path) -> bool) -
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A name that is not UTF-8 shows escaped, never as U+FFFD, its URI
+    /// holds the real bytes, and the daemon's loader says why it skips it.
+    #[cfg(unix)]
+    #[test]
+    fn names_that_are_not_utf8_are_escaped_and_reported() {
+        use std::os::unix::ffi::OsStrExt;
+        let dir = std::env::temp_dir().join(format!("loupe-lib-names-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let latin1 = dir.join(std::ffi::OsStr::from_bytes(b"caf\xe9.wgsl"));
+        std::fs::write(&latin1, "fn f() {}\n").unwrap();
+        std::fs::write(dir.join("caf\u{e9} x.wgsl"), "fn g() {}\n").unwrap();
+        let shown = display_path(&latin1);
+        assert!(shown.ends_with("/caf\\xE9.wgsl"), "{shown}");
+        assert!(display_uri(&shown).ends_with("/caf%E9.wgsl"), "{}", display_uri(&shown));
+        assert_eq!(display_uri("shaders/caf\u{e9} x.wgsl"), "shaders/caf%C3%A9%20x.wgsl");
+        assert_eq!(display_uri("c:/a.wgsl"), "c%3A/a.wgsl");
+
+        let (lib, skipped) = load_tree(&dir).unwrap();
+        assert_eq!(lib.files().map(|f| f.display.rsplit('/').next().unwrap().to_owned()).collect::<Vec<_>>(), ["caf\u{e9} x.wgsl"]);
+        assert_eq!(skipped.len(), 1);
+        assert_eq!((skipped[0].code, skipped[0].file()), (Code::Encoding, Some(shown.as_str())));
+        assert!(skipped[0].message.contains("not valid UTF-8"), "{}", skipped[0].message);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     fn file(name: &str, text: &str) -> SourceFile {
         SourceFile::from_text(name.to_owned(), PathBuf::from(name), text.into())

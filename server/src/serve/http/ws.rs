@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use axum::extract::State;
-use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade};
+use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade, close_code};
 use axum::http::StatusCode;
 use axum::response::Response;
 use serde::Serialize;
@@ -149,9 +149,7 @@ fn client_message(
     let (kind, command) = match msg {
         ClientMessage::Subscribe { pass, output, encoding } => {
             let key = format!("{pass}/{output}");
-            if subscriptions.len() >= MAX_SUBSCRIPTIONS && !subscriptions.contains_key(&key) {
-                return Err(format!("subscription to `{key}` refused: a connection may subscribe to at most {MAX_SUBSCRIPTIONS} outputs"));
-            }
+            room_for(subscriptions, &key, &format!("subscription to `{key}`"))?;
             if subscriptions.insert(key, encoding).is_none() {
                 client.subscribe(subscriptions.keys().cloned().collect());
             }
@@ -165,6 +163,7 @@ fn client_message(
         }
         ClientMessage::QuadStatistics { on } => {
             let changed = if on {
+                room_for(subscriptions, QUAD_STATISTICS, "`quad_statistics`")?;
                 subscriptions.insert(QUAD_STATISTICS.to_owned(), Encoding::default()).is_none()
             } else {
                 subscriptions.remove(QUAD_STATISTICS).is_some()
@@ -185,6 +184,16 @@ fn client_message(
         // the client then.
         Ok(()) | Err(Refused::Gone) => Ok(()),
     }
+}
+
+/// Whether `key` may join a connection's subscriptions: it is there
+/// already, or fewer than [`MAX_SUBSCRIPTIONS`] are (quad statistics count
+/// as one). `Err`: what to tell the client, naming the request as `what`.
+fn room_for(subscriptions: &BTreeMap<String, Encoding>, key: &str, what: &str) -> Result<(), String> {
+    if subscriptions.len() >= MAX_SUBSCRIPTIONS && !subscriptions.contains_key(key) {
+        return Err(format!("{what} refused: a connection may subscribe to at most {MAX_SUBSCRIPTIONS} outputs"));
+    }
+    Ok(())
 }
 
 /// One WebSocket client. Memory per client is bounded: events wait in the
@@ -242,7 +251,8 @@ async fn client_loop(st: Arc<AppState>, mut socket: WebSocket, mut client: Clien
                 Err(RecvError::Closed) => Ok(false),
             },
             incoming = socket.recv() => match incoming {
-                None | Some(Err(_)) | Some(Ok(Message::Close(_))) => Ok(false),
+                None | Some(Ok(Message::Close(_))) => Ok(false),
+                Some(Err(e)) => unreadable(&mut socket, e).await,
                 Some(Ok(Message::Text(text))) => match serde_json::from_str::<ClientMessage>(text.as_str()) {
                     Ok(msg) => match client_message(&shared, &mut client, &mut subscriptions, msg) {
                         Ok(()) => Ok(true),
@@ -282,6 +292,23 @@ async fn client_loop(st: Arc<AppState>, mut socket: WebSocket, mut client: Clien
             Ok(false) | Err(_) => return,
         }
     }
+}
+
+/// A message the WebSocket layer could not read ends the connection. A
+/// text message that is not UTF-8 (close code 1007) or one over
+/// [`MAX_CLIENT_MESSAGE`] (1009) is said first in an `error` event; any
+/// other failure (the peer went away) just ends it.
+async fn unreadable(socket: &mut WebSocket, e: axum::Error) -> Result<bool, axum::Error> {
+    let (code, reason, message) = match e.into_inner().downcast::<tungstenite::Error>().map(|e| *e) {
+        Ok(tungstenite::Error::Utf8(_)) => (close_code::INVALID, "text message not UTF-8", "a text message that is not UTF-8".to_owned()),
+        Ok(tungstenite::Error::Capacity(_)) => {
+            (close_code::SIZE, "message too big", format!("a message larger than {MAX_CLIENT_MESSAGE} bytes (1 MiB)"))
+        }
+        _ => return Ok(false),
+    };
+    send_error(socket, format!("invalid message: {message}; the connection closes")).await?;
+    socket.send(Message::Close(Some(CloseFrame { code, reason: reason.into() }))).await?;
+    Ok(false)
 }
 
 /// Sends an `error` event; the connection stays open.
@@ -624,6 +651,40 @@ mod tests {
         assert!(matches!(e, Some(Event::Rebuild)));
     }
 
+    /// A text frame that is not UTF-8, and a message over the limit: an
+    /// `error` event, then the close code that says why.
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn unreadable_messages_close_with_1007_and_1009_after_an_error_event() {
+        use tungstenite::protocol::frame::Frame;
+        use tungstenite::protocol::frame::coding::{Data, OpCode};
+        let s = start(vec![]).await;
+        let not_utf8 = tungstenite::Message::Frame(Frame::message(&b"{\"type\":\"caf\xe9\"}"[..], OpCode::Data(Data::Text), true));
+        let too_big = tungstenite::Message::text(" ".repeat(MAX_CLIENT_MESSAGE + 1));
+        for (message, code, says) in [(not_utf8, 1007, "not UTF-8"), (too_big, 1009, "larger than 1048576 bytes")] {
+            let (mut sink, mut stream) = connect(s.addr, None).await.unwrap().split();
+            // The server stops reading at the frame's header: the rest of
+            // a message too big may never be taken, so it is sent aside.
+            let writer = tokio::spawn(async move {
+                let _ = sink.send(message).await;
+            });
+            let mut received = Vec::new();
+            let close = loop {
+                let m = tokio::time::timeout(Duration::from_secs(10), stream.next()).await.expect("a message in time");
+                match m {
+                    Some(Ok(tungstenite::Message::Text(t))) => {
+                        received.push(serde_json::from_str::<serde_json::Value>(t.as_str()).unwrap())
+                    }
+                    Some(Ok(tungstenite::Message::Close(f))) => break f,
+                    other => panic!("expected events, then a close frame with {code}; got {other:?} after {received:?}"),
+                }
+            };
+            assert_eq!(received.iter().map(|e| e["type"].as_str().unwrap()).collect::<Vec<_>>(), ["hello", "error"]);
+            assert!(received[1]["message"].as_str().unwrap().contains(says), "{}", received[1]);
+            assert_eq!(close.map(|f| u16::from(f.code)), Some(code));
+            writer.abort();
+        }
+    }
+
     #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
     async fn subscriptions_past_the_limit_are_refused_and_the_set_stays() {
         let s = start(vec![]).await;
@@ -641,6 +702,12 @@ mod tests {
         assert_eq!(e["type"], "error");
         let message = e["message"].as_str().unwrap();
         assert!(message.contains("`too_many/o`") && message.contains(&format!("at most {MAX_SUBSCRIPTIONS}")), "{message}");
+        // Quad statistics count as one subscription (PROTOCOL.md).
+        ws.send(tungstenite::Message::text(r#"{"type":"quad_statistics","on":true}"#)).await.unwrap();
+        let e = next_json(&mut ws).await;
+        assert_eq!(e["type"], "error");
+        let message = e["message"].as_str().unwrap();
+        assert!(message.contains("`quad_statistics` refused") && message.contains(&format!("at most {MAX_SUBSCRIPTIONS}")), "{message}");
 
         // At the limit, changing the encoding of an output it has is fine.
         ws.send(subscribe("p0", "f32")).await.unwrap();
@@ -648,7 +715,7 @@ mod tests {
         assert_eq!(next_json(&mut ws).await["message"], "marker");
 
         // The daemon reads the newest set once (the sets that waited were
-        // replaced): the first MAX_SUBSCRIPTIONS, without the refused one.
+        // replaced): the first MAX_SUBSCRIPTIONS, without the refused ones.
         let (e, s) = daemon_event_async(s).await;
         let (_, outputs) = subscriptions(e);
         wanted.sort();
