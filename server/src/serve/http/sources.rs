@@ -170,13 +170,15 @@ mod tests {
             "/api/sources//etc/passwd".to_owned(),
             "/api/sources/C:%5cWindows%5cwin.ini".to_owned(),
             "/api/sources/./a.wgsl".to_owned(),
-            "/api/sources/".to_owned(),
         ];
         let not_found = [
             "/api/sources/link.wgsl".to_owned(),
             "/api/sources/dirlink/secret.txt".to_owned(),
             "/api/sources/missing.wgsl".to_owned(),
             "/api/sources/sub".to_owned(),
+            // No path at all, and a path that leaves `/api/sources`: no
+            // such route.
+            "/api/sources/".to_owned(),
             "/api/../secret.txt".to_owned(),
         ];
         for (path, status) in refused.iter().map(|p| (p, 403)).chain(not_found.iter().map(|p| (p, 404))) {

@@ -26,6 +26,9 @@ const MAX_CLIENT_MESSAGE: usize = 1024 * 1024;
 /// How often pending skipped-frame counts are reported when no event is
 /// flowing to carry them.
 const DROPPED_REPORT_INTERVAL: Duration = Duration::from_secs(1);
+/// How long a connection closed over a message too big to read is held
+/// before the socket goes, so that the close frame reaches the client.
+const CLOSE_LINGER: Duration = Duration::from_secs(1);
 /// How many outputs one WebSocket client may subscribe to.
 pub const MAX_SUBSCRIPTIONS: usize = 64;
 
@@ -299,15 +302,23 @@ async fn client_loop(st: Arc<AppState>, mut socket: WebSocket, mut client: Clien
 /// [`MAX_CLIENT_MESSAGE`] (1009) is said first in an `error` event; any
 /// other failure (the peer went away) just ends it.
 async fn unreadable(socket: &mut WebSocket, e: axum::Error) -> Result<bool, axum::Error> {
-    let (code, reason, message) = match e.into_inner().downcast::<tungstenite::Error>().map(|e| *e) {
-        Ok(tungstenite::Error::Utf8(_)) => (close_code::INVALID, "text message not UTF-8", "a text message that is not UTF-8".to_owned()),
+    let (code, reason, message, unread) = match e.into_inner().downcast::<tungstenite::Error>().map(|e| *e) {
+        Ok(tungstenite::Error::Utf8(_)) => {
+            (close_code::INVALID, "text message not UTF-8", "a text message that is not UTF-8".to_owned(), false)
+        }
         Ok(tungstenite::Error::Capacity(_)) => {
-            (close_code::SIZE, "message too big", format!("a message larger than {MAX_CLIENT_MESSAGE} bytes (1 MiB)"))
+            (close_code::SIZE, "message too big", format!("a message larger than {MAX_CLIENT_MESSAGE} bytes (1 MiB)"), true)
         }
         _ => return Ok(false),
     };
     send_error(socket, format!("invalid message: {message}; the connection closes")).await?;
     socket.send(Message::Close(Some(CloseFrame { code, reason: reason.into() }))).await?;
+    if unread {
+        // The rest of the message is never read: closing the socket over
+        // it resets the connection, and a reset can discard the close frame
+        // before the client reads it. Held a moment, the client reads it.
+        tokio::time::sleep(CLOSE_LINGER).await;
+    }
     Ok(false)
 }
 
