@@ -559,3 +559,20 @@ fn the_path_tracer_accumulates_to_its_samples_and_restarts_on_a_change() {
     let counts = sample_counts(&mut ws, |c| c.len() > 1 && c.last() == Some(&6.0));
     assert!(counts.iter().any(|c| *c < 6.0), "restarted after the edit: {counts:?}");
 }
+
+/// A WGSL file whose name is not UTF-8 cannot be watched or named in a
+/// URL: the daemon leaves it out, and says so with a warning at the file
+/// (it used to leave it out silently).
+#[cfg(unix)]
+#[test]
+fn a_shader_whose_name_is_not_utf8_is_reported_not_ignored() {
+    use std::os::unix::ffi::OsStrExt;
+    let p = Project::copy_of_repo("serve-latin1-name");
+    std::fs::write(p.path("shaders").join(std::ffi::OsStr::from_bytes(b"caf\xe9.wgsl")), "fn f() {}\n").expect("write");
+    let s = Server::start(&p.root, &["--render", "on-change"]);
+    let d = s.wait_for("the file's warning", LIMIT, || {
+        let d = s.get_json("/api/diagnostics");
+        d["diagnostics"].as_array()?.iter().find(|d| d["code"] == "encoding").cloned()
+    });
+    assert_eq!((d["severity"].as_str(), d["location"]["file"].as_str()), (Some("warning"), Some("shaders/caf\\xE9.wgsl")), "{d}");
+}
