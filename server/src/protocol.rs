@@ -62,8 +62,8 @@ pub struct OutputInfo {
     /// A texture's size; for a buffer, its element count and 1.
     pub width: u32,
     pub height: u32,
-    /// A buffer's dimensions, outermost first: `[["bin", 256]]`.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// A buffer's dimensions, outermost first: `[["bin", 256]]`; `null`
+    /// for a texture.
     pub shape: Option<Vec<(String, u32)>>,
     /// Kept across frames (a history resource).
     pub history: bool,

@@ -152,6 +152,9 @@ fn exit_codes() {
     p.write("shaders/orphan.wgsl", "fn helper() -> f32 { return 1.0; }\n");
     p.run(&["check", "--no-device"]).code(0).stdout_has("1 warning");
     p.run(&["check", "--no-device", "--deny-warnings"]).code(1);
+    // Every format agrees with the exit code: a denied warning is a failure.
+    p.run(&["check", "--no-device", "--deny-warnings", "--format", "junit"]).code(1).stdout_has("failures=\"1\"");
+    p.run(&["check", "--no-device", "--deny-warnings", "--format", "sarif"]).code(1).stdout_has("\"level\": \"error\"");
     loupe(&repo(), &["--version"]).code(0).stdout_has("loupe ");
     for sub in ["check", "serve"] {
         loupe(&repo(), &[sub, "--help"]).code(0).stdout_has("Usage:");
@@ -354,4 +357,32 @@ fn a_bad_project_file_is_a_located_usage_error() {
         p.write("loupe.toml", text);
         p.run(&["check", "--no-device"]).code(2).stderr_has(at).stderr_has(says).stderr_has("error[project-file]");
     }
+}
+
+/// A file name that is not UTF-8 (Latin-1 `café`): human output shows the
+/// byte escaped, never U+FFFD; SARIF's URI holds the real byte, so it
+/// names the file that exists.
+#[cfg(unix)]
+#[test]
+fn a_file_name_that_is_not_utf8_is_shown_escaped_and_its_uri_is_real() {
+    use std::os::unix::ffi::OsStrExt;
+    let p = Project::empty("latin1-name");
+    std::fs::create_dir_all(p.path("shaders")).expect("mkdir");
+    let name = std::ffi::OsStr::from_bytes(b"caf\xe9.wgsl");
+    std::fs::write(p.path("shaders").join(name), "fn f() -> f32 { return 1u; }\n").expect("write");
+    let human = p.run(&["check", "--no-device", "--color", "never", "shaders"]);
+    human.code(1).stdout_has("shaders/caf\\xE9.wgsl:1:").check(!human.stdout.contains('\u{fffd}'), "no U+FFFD in the output");
+    let sarif = p.run(&["check", "--no-device", "--format", "sarif", "shaders"]);
+    let log: serde_json::Value = serde_json::from_str(&sarif.stdout).expect("SARIF is JSON");
+    let uri = log["runs"][0]["results"][0]["locations"][0]["physicalLocation"]["artifactLocation"]["uri"].as_str().expect("a URI");
+    assert_eq!(uri, "shaders/caf%E9.wgsl", "{}", sarif.stdout);
+    // Percent-decoded, the URI names the file on disk.
+    let (mut bytes, mut rest) = (Vec::new(), uri.as_bytes());
+    while let Some((&b, tail)) = rest.split_first() {
+        match (b, tail.get(..2).and_then(|h| u8::from_str_radix(std::str::from_utf8(h).ok()?, 16).ok())) {
+            (b'%', Some(byte)) => (bytes.push(byte), rest = &tail[2..]),
+            _ => (bytes.push(b), rest = tail),
+        };
+    }
+    assert!(p.root.join(std::ffi::OsStr::from_bytes(&bytes)).is_file(), "{uri}, decoded, is the file");
 }

@@ -6,6 +6,7 @@ mod check;
 mod denoise;
 mod golden;
 mod no_adapter;
+mod protocol;
 mod recipe;
 mod render;
 mod serve;

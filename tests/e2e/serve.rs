@@ -115,13 +115,16 @@ fn api_shapes() {
     assert!(names.contains(&"tonemap"), "{passes}");
     let tm = passes.as_array().unwrap().iter().find(|p| p["name"] == "tonemap").unwrap();
     assert!(tm["time_ms"].as_f64().is_some(), "{tm}");
-    let (code, raw) = s.get("/api/captures/tonemap/color.f32");
-    assert_eq!(code, 200);
-    let w = st["frame"].as_u64().map(|_| 960usize).unwrap();
-    assert_eq!(raw.len(), w * 540 * 4 * 4, "RGBA f32 of the scene's size");
+    let capture = s.capture_f32("tonemap/color").expect("the final output is captured");
+    // pattern.toml's [output] is 960×540: what the server says and sends.
+    assert_eq!((capture.width, capture.height), (960, 540), "the capture's X-Loupe-Width/Height");
+    assert_eq!(capture.data.len(), 960 * 540 * 4, "RGBA f32 of the scene's size");
+    let listed = s.get_json("/api/captures");
+    let final_entry = listed.as_array().unwrap().iter().find(|c| c["pass"] == "tonemap" && c["output"] == "color").expect("listed");
+    assert_eq!((final_entry["width"].as_u64(), final_entry["height"].as_u64()), (Some(960), Some(540)), "{final_entry}");
     // Real pixels: the test pattern's colour bars reach the final image
     // opaque (an invalid frame would read back as all zeros).
-    let px = |i: usize| f32::from_le_bytes(raw[i * 4..i * 4 + 4].try_into().unwrap());
+    let px = |i: usize| capture.data[i];
     let row = 270 * 960 * 4; // middle row: colour bars
     let last_bar = row + 959 * 4; // white bar, 0.75 before tonemapping
     assert_eq!(px(row + 3), 1.0, "alpha of the final image");
@@ -554,4 +557,21 @@ fn the_path_tracer_accumulates_to_its_samples_and_restarts_on_a_change() {
     );
     let counts = sample_counts(&mut ws, |c| c.len() > 1 && c.last() == Some(&6.0));
     assert!(counts.iter().any(|c| *c < 6.0), "restarted after the edit: {counts:?}");
+}
+
+/// A WGSL file whose name is not UTF-8 cannot be watched or named in a
+/// URL: the daemon leaves it out, and says so with a warning at the file
+/// (it used to leave it out silently).
+#[cfg(unix)]
+#[test]
+fn a_shader_whose_name_is_not_utf8_is_reported_not_ignored() {
+    use std::os::unix::ffi::OsStrExt;
+    let p = Project::copy_of_repo("serve-latin1-name");
+    std::fs::write(p.path("shaders").join(std::ffi::OsStr::from_bytes(b"caf\xe9.wgsl")), "fn f() {}\n").expect("write");
+    let s = Server::start(&p.root, &["--render", "on-change"]);
+    let d = s.wait_for("the file's warning", LIMIT, || {
+        let d = s.get_json("/api/diagnostics");
+        d["diagnostics"].as_array()?.iter().find(|d| d["code"] == "encoding").cloned()
+    });
+    assert_eq!((d["severity"].as_str(), d["location"]["file"].as_str()), (Some("warning"), Some("shaders/caf\\xE9.wgsl")), "{d}");
 }

@@ -2,8 +2,9 @@
 //! user would and, on any failed expectation, prints the command line, exit
 //! code, stdout and stderr. `ws` is a blocking WebSocket client for `/ws`;
 //! `reload` drives edits and measures them (shared by the e2e tests and the
-//! `bench-reload` benchmark).
+//! `bench-reload` benchmark); `protocol` reads PROTOCOL.md's key table.
 
+pub mod protocol;
 pub mod reload;
 pub mod ws;
 

@@ -67,10 +67,21 @@ impl CheckReport {
         self.modules.iter().map(|m| m.pipelines).sum()
     }
 
-    /// The process exit code: 0 clean, 1 any error (or warning when denied).
-    pub fn exit_code(&self, deny_warnings: bool) -> i32 {
-        let errors = self.count(Severity::Error);
-        let warnings = self.count(Severity::Warning);
-        if errors > 0 || (deny_warnings && warnings > 0) { 1 } else { 0 }
+    /// `--deny-warnings`: every warning becomes an error, with a note
+    /// saying why, so that every format reports the failure the exit code
+    /// says (a JUnit failure, a SARIF `error`, a GitHub `::error`).
+    pub fn deny_warnings(&mut self) {
+        for d in self.modules.iter_mut().flat_map(|m| m.diagnostics.iter_mut()).chain(self.general.iter_mut()) {
+            if d.severity == Severity::Warning {
+                d.severity = Severity::Error;
+                d.notes.push("a warning, made an error by --deny-warnings (or `deny_warnings = true` in loupe.toml)".to_owned());
+            }
+        }
+    }
+
+    /// The process exit code: 0 clean, 1 any error (warnings count once
+    /// `deny_warnings` has made them errors).
+    pub fn exit_code(&self) -> i32 {
+        i32::from(self.count(Severity::Error) > 0)
     }
 }

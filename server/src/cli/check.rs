@@ -82,7 +82,7 @@ pub fn run(args: Args) -> ExitCode {
         (false, false) => DeviceMode::Auto,
     };
     let capabilities = args.capabilities.or(defaults.capabilities);
-    let (report, files) = match check::run(&CheckOptions { paths, shader_root, device, capabilities }) {
+    let (mut report, files) = match check::run(&CheckOptions { paths, shader_root, device, capabilities }) {
         Ok(r) => r,
         Err(check::CheckError::BadPath(e)) => {
             eprintln!("loupe check: cannot read input: {e}");
@@ -93,6 +93,10 @@ pub fn run(args: Args) -> ExitCode {
             return ExitCode::from(exit::NO_DEVICE);
         }
     };
+    // Denied warnings are errors in every format, not only in the exit code.
+    if args.deny_warnings.or(defaults.deny_warnings).unwrap_or(false) {
+        report.deny_warnings();
+    }
     let color = match args.color {
         Color::Always => true,
         Color::Never => false,
@@ -108,7 +112,7 @@ pub fn run(args: Args) -> ExitCode {
         eprintln!("loupe check: cannot write output: {e}");
         return ExitCode::from(exit::USAGE);
     }
-    match report.exit_code(args.deny_warnings.or(defaults.deny_warnings).unwrap_or(false)) {
+    match report.exit_code() {
         0 => ExitCode::from(exit::OK),
         _ => ExitCode::from(exit::ERRORS),
     }

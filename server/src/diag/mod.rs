@@ -6,8 +6,10 @@
 //! source file as the user wrote it (never into composed or preprocessed
 //! text), with 1-based lines and 1-based columns counted in characters.
 
+mod path;
 mod source;
 
+pub use path::{display_path, display_uri};
 pub use source::{LineIndex, SourceFiles};
 
 use std::path::{Component, Path, PathBuf};
@@ -56,17 +58,6 @@ impl std::fmt::Display for Location {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "{}:{}:{}", self.file, self.line, self.column)
     }
-}
-
-/// The path diagnostics show for `path`: relative to the working directory
-/// when it lies under it, with forward slashes.
-pub fn display_path(path: &Path) -> String {
-    let cwd = std::env::current_dir().ok();
-    let shown = cwd.as_deref().and_then(|c| path.strip_prefix(c).ok()).unwrap_or(path);
-    // `./shaders/x.wgsl` and `shaders/x.wgsl` are one file: drop `.` parts.
-    let parts: Vec<_> = shown.components().filter(|c| !matches!(c, Component::CurDir)).collect();
-    let shown: PathBuf = parts.iter().collect();
-    shown.to_string_lossy().replace('\\', "/")
 }
 
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]

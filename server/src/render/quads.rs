@@ -131,8 +131,7 @@ pub struct DrawReport {
     pub name: String,
     #[serde(flatten)]
     pub shaded: quads::QuadStats,
-    /// Before the depth test; absent when the pipeline tests no depth.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// Before the depth test; `null` when the pipeline tests no depth.
     pub rasterized: Option<quads::QuadStats>,
 }
 
@@ -158,7 +157,7 @@ pub struct PassQuads {
     pub draws: Vec<DrawReport>,
     /// The draws summed.
     pub quads: DrawReport,
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// Fullscreen passes: the other mode modelled; else `null`.
     pub what_if: Option<WhatIf>,
     /// The maps of each render target of the pass, in order (a shadow
     /// map's layers one under another); shared, as reports are cloned for

@@ -102,7 +102,7 @@ impl Setting {
                 } else if (min..=max).contains(&f) {
                     Ok(())
                 } else {
-                    Err(format!("must be between {min} and {max}, not {f}"))
+                    Err(format!("must be between {min} and {max}, not {}", shown(f)))
                 }
             }
             (Kind::Choice(options), Value::Text(t)) => {
@@ -173,6 +173,12 @@ impl Typed for u32 {
     fn from_value(v: &Value) -> Option<Self> {
         if let Value::Int(i) = v { u32::try_from(*i).ok() } else { None }
     }
+}
+
+/// A number for a message: as written for everyday sizes, in exponent
+/// form past them (`1e308`, not 309 digits).
+pub fn shown(f: f64) -> String {
+    if f == 0.0 || (1e-6..1e16).contains(&f.abs()) { f.to_string() } else { format!("{f:e}") }
 }
 
 /// The shortest decimal that reads back as `f`, so a control shows 0.1 as

@@ -323,6 +323,22 @@ fn control_values_read_as_written() {
     assert_eq!((value("post.exposure_ev"), value("lights[0].intensity")), (Value::Float(0.3), Value::Float(1.2)));
 }
 
+/// `1e308` is a finite number no `f32` holds: the message says it is out
+/// of range, and which range, not that it is infinite.
+#[test]
+fn numbers_too_large_for_an_f32_are_out_of_range_not_infinite() {
+    let light = "[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = 1.0\n";
+    let o = overrides::Overrides::from([("lights[0].intensity".to_owned(), Value::Float(1e308))]);
+    let e = err(&overrides::apply(light, &o).unwrap());
+    assert_eq!(e.message, "lights[0].intensity: out of range: must be between -3.4028235e38 and 3.4028235e38, not 1e308");
+    assert_eq!(at(&e), (4, 13));
+    let e = err("[environment]\ntop = [0.1, -1e39, 0.3]\n");
+    assert_eq!(e.message, "environment.top[1]: out of range: must be between -3.4028235e38 and 3.4028235e38, not -1e39");
+    assert_eq!(at(&e), (2, 13));
+    let o = overrides::Overrides::from([("post.exposure_ev".to_owned(), Value::Float(1e308))]);
+    assert_eq!(overrides::apply("", &o), Err("post.exposure_ev: must be between -24 and 24, not 1e308".to_owned()));
+}
+
 #[test]
 fn overrides_of_settings_are_checked_by_the_table() {
     for (path, value, message) in [

@@ -51,10 +51,37 @@ impl Checker<'_> {
     }
 
     fn finite(&self, path: &[Seg], v: f32) -> Checked<f32> {
-        if v.is_finite() { Ok(v) } else { Err(self.error(path, format!("must be a finite number, not {v}"))) }
+        if v.is_finite() {
+            return Ok(v);
+        }
+        Err(match self.overflowed(path, v) {
+            Some(written) => self.out_of_range(path, written, f32::MIN, f32::MAX),
+            None => self.error(path, format!("must be a finite number, not {v}")),
+        })
+    }
+
+    /// The number written at `path` when it is finite but `v`, the `f32`
+    /// serde made of it, is not (`1e308`): too large, not infinite.
+    fn overflowed(&self, path: &[Seg], v: f32) -> Option<f64> {
+        if !v.is_infinite() {
+            return None;
+        }
+        let written: f64 = self.text.get(span_of(self.doc.as_item(), path)?)?.trim().replace('_', "").parse().ok()?;
+        written.is_finite().then_some(written)
+    }
+
+    fn out_of_range(&self, path: &[Seg], written: f64, lo: f32, hi: f32) -> Diagnostic {
+        // The shortest decimal of each bound: 3.4028235e38, not the f64
+        // nearest f32::MAX.
+        let bound = |f: f32| settings::shown(f.to_string().parse().unwrap_or(f64::from(f)));
+        let (lo, hi, written) = (bound(lo), bound(hi), settings::shown(written));
+        self.error(path, format!("out of range: must be between {lo} and {hi}, not {written}"))
     }
 
     fn range(&self, path: &[Seg], v: f32, lo: f32, hi: f32) -> Checked<f32> {
+        if let Some(written) = self.overflowed(path, v) {
+            return Err(self.out_of_range(path, written, lo, hi));
+        }
         self.finite(path, v)?;
         if (lo..=hi).contains(&v) { Ok(v) } else { Err(self.error(path, format!("must be between {lo} and {hi}, not {v}"))) }
     }

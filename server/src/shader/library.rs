@@ -350,11 +350,27 @@ fn import_range_of(file: &SourceFile, dep: &SourceFile) -> Option<Range<usize>> 
 /// The readable `*.wgsl` files under `root`, as a library. Unreadable ones
 /// are left out here: whoever builds from them reports the missing file.
 pub fn read_tree(root: &Path) -> Result<Library, String> {
-    let files = discover(std::slice::from_ref(&root.to_path_buf()))?
+    load_tree(root).map(|(lib, _)| lib)
+}
+
+/// [`read_tree`], and a warning at each file left out because its name is
+/// not UTF-8: the daemon could neither watch it (the watcher matches names
+/// as text) nor name it in a URL, so it is left out loudly.
+pub fn load_tree(root: &Path) -> Result<(Library, Vec<Diagnostic>), String> {
+    let (named, unnamed): (Vec<PathBuf>, Vec<PathBuf>) =
+        discover(std::slice::from_ref(&root.to_path_buf()))?.into_iter().partition(|p| p.to_str().is_some());
+    let files = named.iter().filter_map(|p| SourceFile::read(p, display_path(p)).ok()).collect::<Vec<_>>();
+    let skipped = unnamed
         .iter()
-        .filter_map(|p| SourceFile::read(p, display_path(p)).ok())
-        .collect::<Vec<_>>();
-    Ok(Library::new(files))
+        .map(|p| {
+            Diagnostic::warning(
+                Code::Encoding,
+                "the file name is not valid UTF-8: the file is not loaded (it cannot be watched or named in a URL); rename it",
+            )
+            .at(Location::file_start(&display_path(p)))
+        })
+        .collect();
+    Ok((Library::new(files), skipped))
 }
 
 /// Every `*.wgsl` file under `roots` (files named directly are taken as
@@ -399,6 +415,32 @@ pub fn discover_with(roots: &[PathBuf], wanted: impl Fn(&Path, &Path) -> bool) -
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A name that is not UTF-8 shows escaped, never as U+FFFD, its URI
+    /// holds the real bytes, and the daemon's loader says why it skips it.
+    #[cfg(unix)]
+    #[test]
+    fn names_that_are_not_utf8_are_escaped_and_reported() {
+        use std::os::unix::ffi::OsStrExt;
+        let dir = std::env::temp_dir().join(format!("loupe-lib-names-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let latin1 = dir.join(std::ffi::OsStr::from_bytes(b"caf\xe9.wgsl"));
+        std::fs::write(&latin1, "fn f() {}\n").unwrap();
+        std::fs::write(dir.join("caf\u{e9} x.wgsl"), "fn g() {}\n").unwrap();
+        let shown = display_path(&latin1);
+        assert!(shown.ends_with("/caf\\xE9.wgsl"), "{shown}");
+        assert!(display_uri(&shown).ends_with("/caf%E9.wgsl"), "{}", display_uri(&shown));
+        assert_eq!(display_uri("shaders/caf\u{e9} x.wgsl"), "shaders/caf%C3%A9%20x.wgsl");
+        assert_eq!(display_uri("c:/a.wgsl"), "c%3A/a.wgsl");
+
+        let (lib, skipped) = load_tree(&dir).unwrap();
+        assert_eq!(lib.files().map(|f| f.display.rsplit('/').next().unwrap().to_owned()).collect::<Vec<_>>(), ["caf\u{e9} x.wgsl"]);
+        assert_eq!(skipped.len(), 1);
+        assert_eq!((skipped[0].code, skipped[0].file()), (Code::Encoding, Some(shown.as_str())));
+        assert!(skipped[0].message.contains("not valid UTF-8"), "{}", skipped[0].message);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     fn file(name: &str, text: &str) -> SourceFile {
         SourceFile::from_text(name.to_owned(), PathBuf::from(name), text.into())

@@ -98,3 +98,47 @@ mod fixture {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diag::Severity;
+
+    /// Each format's output for a report whose only problem is a warning.
+    fn outputs(deny: bool) -> Vec<(Format, String)> {
+        let mut report = fixture::report();
+        report.modules[1].diagnostics.retain(|d| d.severity == Severity::Warning);
+        if deny {
+            report.deny_warnings();
+        }
+        assert_eq!(report.exit_code(), i32::from(deny), "the exit code");
+        [Format::Human, Format::Json, Format::Github, Format::Sarif, Format::Junit]
+            .into_iter()
+            .map(|f| {
+                let mut out = Vec::new();
+                write(f, &report, &fixture::files(), &Options::default(), &mut out).unwrap();
+                (f, String::from_utf8(out).unwrap())
+            })
+            .collect()
+    }
+
+    /// With `--deny-warnings` the exit code is 1, and every format must say
+    /// the run failed where it has a notion of failure; without it, none.
+    #[test]
+    fn denied_warnings_read_as_failures_in_every_format() {
+        for deny in [false, true] {
+            for (format, out) in outputs(deny) {
+                let failed = match format {
+                    Format::Human => out.contains(": 1 error, 0 warnings") && out.contains("error[binding-mismatch]"),
+                    Format::Json => out.contains(r#""severity":"error""#),
+                    Format::Github => out.starts_with("::error "),
+                    Format::Sarif => out.contains(r#""level": "error""#),
+                    Format::Junit => out.contains(r#"failures="1""#) && out.contains("<failure "),
+                };
+                assert_eq!(failed, deny, "{format:?} with deny {deny}:\n{out}");
+            }
+        }
+        let (_, human) = &outputs(true)[0];
+        assert!(human.contains("made an error by --deny-warnings"), "{human}");
+    }
+}

@@ -1,12 +1,12 @@
 //! A SARIF 2.1.0 log, the format code-scanning services (GitHub's among
 //! them) ingest.
 
-use std::fmt::Write as _;
 use std::io;
 
 use serde_json::{Value, json};
 
 use super::super::report::CheckReport;
+use crate::diag::display_uri;
 use crate::diag::{Code, Diagnostic, Location, Severity};
 
 pub fn write(report: &CheckReport, out: &mut dyn io::Write) -> io::Result<()> {
@@ -74,7 +74,7 @@ fn result(d: &Diagnostic) -> Value {
 fn physical(l: &Location) -> Value {
     json!({
         "physicalLocation": {
-            "artifactLocation": { "uri": uri(&l.file) },
+            "artifactLocation": { "uri": display_uri(&l.file) },
             "region": {
                 "startLine": l.line,
                 "startColumn": l.column,
@@ -83,21 +83,6 @@ fn physical(l: &Location) -> Value {
             },
         },
     })
-}
-
-/// A relative URI reference for a display path: forward slashes, and
-/// percent-encoding for bytes a URI path may not hold (`:` too, which would
-/// read as a scheme).
-fn uri(path: &str) -> String {
-    let mut uri = String::with_capacity(path.len());
-    for b in path.replace('\\', "/").bytes() {
-        if b.is_ascii_alphanumeric() || b"-._~/!$&'()*+,;=@".contains(&b) {
-            uri.push(b as char);
-        } else {
-            let _ = write!(uri, "%{b:02X}");
-        }
-    }
-    uri
 }
 
 #[cfg(test)]
@@ -152,6 +137,8 @@ mod tests {
         let result = &log(&report)["runs"][0]["results"][0];
         assert_eq!(result["ruleId"], "device-missing");
         assert!(result.get("locations").is_none());
-        assert_eq!(uri("shaders\\my lib:x/é.wgsl"), "shaders/my%20lib%3Ax/%C3%A9.wgsl");
+        assert_eq!(display_uri("shaders/my lib:x/é.wgsl"), "shaders/my%20lib%3Ax/%C3%A9.wgsl");
+        // A name that is not UTF-8: the URI holds its real byte.
+        assert_eq!(display_uri("shaders/caf\\xE9.wgsl"), "shaders/caf%E9.wgsl");
     }
 }

@@ -134,7 +134,7 @@ pub struct Daemon {
 
 impl Daemon {
     pub fn new(gpu: Gpu, config: Config, shared: Arc<Shared>, events: Sender<Event>) -> Self {
-        let lib = library::read_tree(&config.shader_root).unwrap_or_else(|_| Library::new([]));
+        let (lib, unnamed) = library::load_tree(&config.shader_root).unwrap_or_else(|_| (Library::new([]), Vec::new()));
         let (loaded, scene_error) = match crate::loaded::load(&config.scene_path) {
             Ok(l) => (l, None),
             Err(d) => {
@@ -162,7 +162,8 @@ impl Daemon {
             session: Session::new(gpu, &config.shader_root, lib, &loaded)
                 .with_options(FrameOptions { nan_watch: true, ..FrameOptions::default() }),
             config,
-            file_errors: BTreeMap::new(),
+            // Files whose names are not UTF-8 are left out, each with its warning.
+            file_errors: unnamed.into_iter().filter_map(|d| Some((d.file()?.to_owned(), d))).collect(),
             scene_files: loaded.files,
             scene_error,
             overrides: Overrides::new(),

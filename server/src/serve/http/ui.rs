@@ -2,7 +2,7 @@
 //! embedded in the binary.
 
 use axum::body::Body;
-use axum::http::{Method, StatusCode, Uri, header};
+use axum::http::{HeaderValue, Method, StatusCode, Uri, header};
 use axum::response::{IntoResponse, Response};
 use rust_embed::RustEmbed;
 
@@ -49,7 +49,10 @@ pub(super) async fn index() -> Response {
 
 pub(super) async fn static_file(method: Method, uri: Uri) -> Response {
     if method != Method::GET && method != Method::HEAD {
-        return error(StatusCode::METHOD_NOT_ALLOWED, "method not allowed");
+        // As axum answers for the API's routes: the methods that would work.
+        let mut refused = error(StatusCode::METHOD_NOT_ALLOWED, "method not allowed");
+        refused.headers_mut().insert(header::ALLOW, HeaderValue::from_static("GET,HEAD"));
+        return refused;
     }
     let raw = uri.path().trim_start_matches('/');
     match safe_relative(raw) {
@@ -80,6 +83,13 @@ mod tests {
             assert_eq!((head.status, head.body.len()), (200, 0));
         } else {
             assert_eq!(r.status, 404);
+        }
+        // A file is a known route: another method is 405, with the methods
+        // that work, as on the API (and on `/`, which axum routes).
+        for path in ["/index.html", "/app.js", "/no-such-file.js", "/"] {
+            let r = request(s.addr, "POST", path, "").await;
+            assert_eq!((r.status, r.header("allow").as_deref()), (405, Some("GET,HEAD")), "POST {path}");
+            assert_eq!(r.json()["error"], "method not allowed");
         }
         for path in ["/no-such-file.js", "/..%2fCargo.toml", "/%2e%2e/Cargo.toml", "/../Cargo.toml", "/..%5cCargo.toml"] {
             let r = get(s.addr, path).await;

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use axum::extract::State;
-use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade};
+use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade, close_code};
 use axum::http::StatusCode;
 use axum::response::Response;
 use serde::Serialize;
@@ -26,6 +26,9 @@ const MAX_CLIENT_MESSAGE: usize = 1024 * 1024;
 /// How often pending skipped-frame counts are reported when no event is
 /// flowing to carry them.
 const DROPPED_REPORT_INTERVAL: Duration = Duration::from_secs(1);
+/// How long a connection closed over a message too big to read is held
+/// before the socket goes, so that the close frame reaches the client.
+const CLOSE_LINGER: Duration = Duration::from_secs(1);
 /// How many outputs one WebSocket client may subscribe to.
 pub const MAX_SUBSCRIPTIONS: usize = 64;
 
@@ -149,9 +152,7 @@ fn client_message(
     let (kind, command) = match msg {
         ClientMessage::Subscribe { pass, output, encoding } => {
             let key = format!("{pass}/{output}");
-            if subscriptions.len() >= MAX_SUBSCRIPTIONS && !subscriptions.contains_key(&key) {
-                return Err(format!("subscription to `{key}` refused: a connection may subscribe to at most {MAX_SUBSCRIPTIONS} outputs"));
-            }
+            room_for(subscriptions, &key, &format!("subscription to `{key}`"))?;
             if subscriptions.insert(key, encoding).is_none() {
                 client.subscribe(subscriptions.keys().cloned().collect());
             }
@@ -165,6 +166,7 @@ fn client_message(
         }
         ClientMessage::QuadStatistics { on } => {
             let changed = if on {
+                room_for(subscriptions, QUAD_STATISTICS, "`quad_statistics`")?;
                 subscriptions.insert(QUAD_STATISTICS.to_owned(), Encoding::default()).is_none()
             } else {
                 subscriptions.remove(QUAD_STATISTICS).is_some()
@@ -185,6 +187,16 @@ fn client_message(
         // the client then.
         Ok(()) | Err(Refused::Gone) => Ok(()),
     }
+}
+
+/// Whether `key` may join a connection's subscriptions: it is there
+/// already, or fewer than [`MAX_SUBSCRIPTIONS`] are (quad statistics count
+/// as one). `Err`: what to tell the client, naming the request as `what`.
+fn room_for(subscriptions: &BTreeMap<String, Encoding>, key: &str, what: &str) -> Result<(), String> {
+    if subscriptions.len() >= MAX_SUBSCRIPTIONS && !subscriptions.contains_key(key) {
+        return Err(format!("{what} refused: a connection may subscribe to at most {MAX_SUBSCRIPTIONS} outputs"));
+    }
+    Ok(())
 }
 
 /// One WebSocket client. Memory per client is bounded: events wait in the
@@ -242,7 +254,8 @@ async fn client_loop(st: Arc<AppState>, mut socket: WebSocket, mut client: Clien
                 Err(RecvError::Closed) => Ok(false),
             },
             incoming = socket.recv() => match incoming {
-                None | Some(Err(_)) | Some(Ok(Message::Close(_))) => Ok(false),
+                None | Some(Ok(Message::Close(_))) => Ok(false),
+                Some(Err(e)) => unreadable(&mut socket, e).await,
                 Some(Ok(Message::Text(text))) => match serde_json::from_str::<ClientMessage>(text.as_str()) {
                     Ok(msg) => match client_message(&shared, &mut client, &mut subscriptions, msg) {
                         Ok(()) => Ok(true),
@@ -282,6 +295,31 @@ async fn client_loop(st: Arc<AppState>, mut socket: WebSocket, mut client: Clien
             Ok(false) | Err(_) => return,
         }
     }
+}
+
+/// A message the WebSocket layer could not read ends the connection. A
+/// text message that is not UTF-8 (close code 1007) or one over
+/// [`MAX_CLIENT_MESSAGE`] (1009) is said first in an `error` event; any
+/// other failure (the peer went away) just ends it.
+async fn unreadable(socket: &mut WebSocket, e: axum::Error) -> Result<bool, axum::Error> {
+    let (code, reason, message, unread) = match e.into_inner().downcast::<tungstenite::Error>().map(|e| *e) {
+        Ok(tungstenite::Error::Utf8(_)) => {
+            (close_code::INVALID, "text message not UTF-8", "a text message that is not UTF-8".to_owned(), false)
+        }
+        Ok(tungstenite::Error::Capacity(_)) => {
+            (close_code::SIZE, "message too big", format!("a message larger than {MAX_CLIENT_MESSAGE} bytes (1 MiB)"), true)
+        }
+        _ => return Ok(false),
+    };
+    send_error(socket, format!("invalid message: {message}; the connection closes")).await?;
+    socket.send(Message::Close(Some(CloseFrame { code, reason: reason.into() }))).await?;
+    if unread {
+        // The rest of the message is never read: closing the socket over
+        // it resets the connection, and a reset can discard the close frame
+        // before the client reads it. Held a moment, the client reads it.
+        tokio::time::sleep(CLOSE_LINGER).await;
+    }
+    Ok(false)
 }
 
 /// Sends an `error` event; the connection stays open.

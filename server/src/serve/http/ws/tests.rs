@@ -331,6 +331,38 @@ async fn a_flood_of_commands_fills_the_queue_to_its_bound_and_the_rest_is_refuse
     assert!(matches!(e, Some(Event::Rebuild)));
 }
 
+/// A text frame that is not UTF-8, and a message over the limit: an
+/// `error` event, then the close code that says why.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn unreadable_messages_close_with_1007_and_1009_after_an_error_event() {
+    use tungstenite::protocol::frame::Frame;
+    use tungstenite::protocol::frame::coding::{Data, OpCode};
+    let s = start(vec![]).await;
+    let not_utf8 = tungstenite::Message::Frame(Frame::message(&b"{\"type\":\"caf\xe9\"}"[..], OpCode::Data(Data::Text), true));
+    let too_big = tungstenite::Message::text(" ".repeat(MAX_CLIENT_MESSAGE + 1));
+    for (message, code, says) in [(not_utf8, 1007, "not UTF-8"), (too_big, 1009, "larger than 1048576 bytes")] {
+        let (mut sink, mut stream) = connect(s.addr, None).await.unwrap().split();
+        // The server stops reading at the frame's header: the rest of
+        // a message too big may never be taken, so it is sent aside.
+        let writer = tokio::spawn(async move {
+            let _ = sink.send(message).await;
+        });
+        let mut received = Vec::new();
+        let close = loop {
+            let m = tokio::time::timeout(Duration::from_secs(10), stream.next()).await.expect("a message in time");
+            match m {
+                Some(Ok(tungstenite::Message::Text(t))) => received.push(serde_json::from_str::<serde_json::Value>(t.as_str()).unwrap()),
+                Some(Ok(tungstenite::Message::Close(f))) => break f,
+                other => panic!("expected events, then a close frame with {code}; got {other:?} after {received:?}"),
+            }
+        };
+        assert_eq!(received.iter().map(|e| e["type"].as_str().unwrap()).collect::<Vec<_>>(), ["hello", "error"]);
+        assert!(received[1]["message"].as_str().unwrap().contains(says), "{}", received[1]);
+        assert_eq!(close.map(|f| u16::from(f.code)), Some(code));
+        writer.abort();
+    }
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn subscriptions_past_the_limit_are_refused_and_the_set_stays() {
     let s = start(vec![]).await;
@@ -348,6 +380,12 @@ async fn subscriptions_past_the_limit_are_refused_and_the_set_stays() {
     assert_eq!(e["type"], "error");
     let message = e["message"].as_str().unwrap();
     assert!(message.contains("`too_many/o`") && message.contains(&format!("at most {MAX_SUBSCRIPTIONS}")), "{message}");
+    // Quad statistics count as one subscription (PROTOCOL.md).
+    ws.send(tungstenite::Message::text(r#"{"type":"quad_statistics","on":true}"#)).await.unwrap();
+    let e = next_json(&mut ws).await;
+    assert_eq!(e["type"], "error");
+    let message = e["message"].as_str().unwrap();
+    assert!(message.contains("`quad_statistics` refused") && message.contains(&format!("at most {MAX_SUBSCRIPTIONS}")), "{message}");
 
     // At the limit, changing the encoding of an output it has is fine.
     ws.send(subscribe("p0", "f32")).await.unwrap();
@@ -355,7 +393,7 @@ async fn subscriptions_past_the_limit_are_refused_and_the_set_stays() {
     assert_eq!(next_json(&mut ws).await["message"], "marker");
 
     // The daemon reads the newest set once (the sets that waited were
-    // replaced): the first MAX_SUBSCRIPTIONS, without the refused one.
+    // replaced): the first MAX_SUBSCRIPTIONS, without the refused ones.
     let (e, s) = daemon_event_async(s).await;
     let (_, outputs) = subscriptions(e);
     wanted.sort();
