@@ -67,7 +67,7 @@ fn apply(root: &Path, e: &Edit) {
     std::fs::write(&path, out).expect("write");
 }
 
-/// A fresh copy of what `cargo build --bin loupe` reads, at a fixed place
+/// A fresh copy of what `cargo build --workspace --bins` reads, at a fixed place
 /// so that the loupe crate's incremental state is reused between runs.
 fn copy_workspace(to: &Path) {
     let _ = std::fs::remove_dir_all(to);
@@ -83,14 +83,29 @@ fn copy_workspace(to: &Path) {
 }
 
 /// Builds the copy's `loupe` in `target/recipe`, a target folder of its
-/// own: its dependencies are compiled once and kept, and the workspace's
-/// `target/debug/loupe`, which the other tests run, is left alone.
+/// own, so that the workspace's `target/debug/loupe`, which the other tests
+/// run, is left alone. The first time, it starts from a copy of the
+/// workspace's compiled dependencies (mtimes kept, so cargo finds them
+/// fresh), and builds what `tests/run` builds, so that features unify alike
+/// and only the copy's own crates compile.
 fn build(root: &Path, target: &Path) -> (Run, PathBuf) {
+    let debug = target.join("debug");
+    if !debug.exists() {
+        std::fs::create_dir_all(&debug).expect("mkdir");
+        for dir in [".fingerprint", "build", "deps"] {
+            let from = repo().join("target/debug").join(dir);
+            if from.exists() {
+                let ok = Command::new("cp").arg("-a").arg(&from).arg(&debug).status().is_ok_and(|s| s.success());
+                assert!(ok, "cp -a {} {}", from.display(), debug.display());
+            }
+        }
+    }
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let args = ["build", "--workspace", "--bins", "--offline", "--locked"];
     let mut cmd = Command::new(cargo);
-    cmd.args(["build", "--bin", "loupe", "--offline", "--locked"]).current_dir(root).env("CARGO_TARGET_DIR", target);
-    let shown = format!("(cd {} && CARGO_TARGET_DIR={} cargo build --bin loupe --offline --locked)", root.display(), target.display());
-    (run(cmd, shown), target.join("debug/loupe"))
+    cmd.args(args).current_dir(root).env("CARGO_TARGET_DIR", target);
+    let shown = format!("(cd {} && CARGO_TARGET_DIR={} cargo {})", root.display(), target.display(), args.join(" "));
+    (run(cmd, shown), debug.join("loupe"))
 }
 
 fn pass<'a>(report: &'a Value, name: &str) -> Option<&'a Value> {

@@ -574,4 +574,14 @@ fn a_shader_whose_name_is_not_utf8_is_reported_not_ignored() {
         d["diagnostics"].as_array()?.iter().find(|d| d["code"] == "encoding").cloned()
     });
     assert_eq!((d["severity"].as_str(), d["location"]["file"].as_str()), (Some("warning"), Some("shaders/caf\\xE9.wgsl")), "{d}");
+    // One saved while serving is reported too, and its warning goes with it.
+    let later = p.path("shaders").join(std::ffi::OsStr::from_bytes(b"na\xefve.wgsl"));
+    std::fs::write(&later, "fn g() {}\n").expect("write");
+    let warned = |file: &str| {
+        let d = s.get_json("/api/diagnostics");
+        d["diagnostics"].as_array().is_some_and(|all| all.iter().any(|d| d["code"] == "encoding" && d["location"]["file"] == file))
+    };
+    s.wait_for("the saved file's warning", LIMIT, || warned("shaders/na\\xEFve.wgsl").then_some(()));
+    std::fs::remove_file(&later).expect("remove");
+    s.wait_for("the warning to go with the file", LIMIT, || (!warned("shaders/na\\xEFve.wgsl")).then_some(()));
 }

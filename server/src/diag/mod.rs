@@ -12,8 +12,6 @@ mod source;
 pub use path::{display_path, display_uri};
 pub use source::{LineIndex, SourceFiles};
 
-use std::path::{Component, Path, PathBuf};
-
 use serde::Serialize;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]

@@ -360,17 +360,15 @@ pub fn load_tree(root: &Path) -> Result<(Library, Vec<Diagnostic>), String> {
     let (named, unnamed): (Vec<PathBuf>, Vec<PathBuf>) =
         discover(std::slice::from_ref(&root.to_path_buf()))?.into_iter().partition(|p| p.to_str().is_some());
     let files = named.iter().filter_map(|p| SourceFile::read(p, display_path(p)).ok()).collect::<Vec<_>>();
-    let skipped = unnamed
-        .iter()
-        .map(|p| {
-            Diagnostic::warning(
-                Code::Encoding,
-                "the file name is not valid UTF-8: the file is not loaded (it cannot be watched or named in a URL); rename it",
-            )
-            .at(Location::file_start(&display_path(p)))
-        })
-        .collect();
+    let skipped = unnamed.iter().map(|p| name_not_utf8(p)).collect();
     Ok((Library::new(files), skipped))
+}
+
+/// Why a file whose name is not UTF-8 is left out of the library, at the
+/// file: found at start-up or saved while serving alike.
+pub fn name_not_utf8(path: &Path) -> Diagnostic {
+    Diagnostic::warning(Code::Encoding, "the file name is not valid UTF-8: the file is not loaded (it cannot be named in a URL); rename it")
+        .at(Location::file_start(&display_path(path)))
 }
 
 /// Every `*.wgsl` file under `roots` (files named directly are taken as
@@ -415,6 +413,7 @@ pub fn discover_with(roots: &[PathBuf], wanted: impl Fn(&Path, &Path) -> bool) -
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::diag::display_uri;
 
     /// A name that is not UTF-8 shows escaped, never as U+FFFD, its URI
     /// holds the real bytes, and the daemon's loader says why it skips it.

@@ -307,6 +307,14 @@ impl Daemon {
                 continue;
             }
             touched.insert(display.clone());
+            if path.to_str().is_none() {
+                // Left out as at start-up, with its warning until it goes.
+                match change {
+                    FileChange::Removed { .. } => self.file_errors.remove(&display),
+                    FileChange::Written { .. } => self.file_errors.insert(display.clone(), library::name_not_utf8(path)),
+                };
+                continue;
+            }
             match change {
                 FileChange::Removed { .. } => {
                     self.file_errors.remove(&display);

@@ -16,10 +16,11 @@ use notify::event::{AccessKind, AccessMode, CreateKind, ModifyKind, RemoveKind, 
 /// temporary or backup file (`*.swp`, `*.swx`, `*~`, `4913`, `.#*`, `*.tmp`,
 /// or any name starting with `.`). Looks at the file name only.
 pub fn is_source_file(path: &Path) -> bool {
-    let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
+    let Some(name) = path.file_name() else {
         return false;
     };
-    if is_ignored_name(name) {
+    // A name that is not UTF-8 still counts: the daemon says it cannot load it.
+    if is_ignored_name(&name.to_string_lossy()) {
         return false;
     }
     match Path::new(name).extension().and_then(|e| e.to_str()) {
