@@ -212,7 +212,7 @@ mod tests {
         let default = describe(gpu::capabilities_without_device());
         assert_eq!(default, "primitive-index,subgroup,subgroup-barrier,shader-float16");
         assert!(include_str!("../../../docs/check.md").contains(&format!("without one: `{default}`")), "docs/check.md states {default}");
-        assert!(include_str!("../main.rs").contains(&format!("/// `{default}`")), "--help states {default}");
+        assert!(include_str!("../cli/check.rs").contains(&format!("/// `{default}`")), "--help states {default}");
     }
 
     #[test]

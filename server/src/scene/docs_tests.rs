@@ -19,7 +19,8 @@ fn table() -> String {
             Kind::Float { min, max, .. } => format!("number, {min} to {max}"),
             Kind::Choice(options) => options.iter().map(|o| format!("`\"{o}\"`")).collect::<Vec<_>>().join(", "),
         };
-        let affects = s.affects.iter().map(|p| format!("`{p}`")).collect::<Vec<_>>().join(", ");
+        // A group (`@fullscreen`) as the passes it stands for, as the browser shows it.
+        let affects = crate::render::passes::affected(s.affects).iter().map(|p| format!("`{p}`")).collect::<Vec<_>>().join(", ");
         let row =
             [format!("`{}`", s.path), values, format!("`{}`", (s.get)(&defaults)), s.label.to_owned(), s.doc.trim().to_owned(), affects];
         out += &format!("| {} |\n", row.map(|cell| cell.replace('|', "\\|")).join(" | "));
