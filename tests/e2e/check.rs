@@ -335,8 +335,9 @@ fn loupe_toml_sets_the_defaults_and_flags_override_them() {
     p.run(&["check", "--no-device", "src/orphan.wgsl"]).code(0).stdout_has("\"src/orphan.wgsl\"");
     // deny_warnings, and the flag's way back.
     p.write("loupe.toml", "[check]\npaths = [\"src\"]\ncapabilities = \"all\"\ndeny_warnings = true\n");
-    p.run(&["check", "--no-device"]).code(1).stdout_has("1 warning");
-    p.run(&["check", "--no-device", "--deny-warnings=false"]).code(0);
+    // A denied warning is an error in the output as in the exit code.
+    p.run(&["check", "--no-device"]).code(1).stdout_has("error[unused-module]").stdout_has("1 error");
+    p.run(&["check", "--no-device", "--deny-warnings=false"]).code(0).stdout_has("1 warning");
     p.write("loupe.toml", "[check]\npaths = [\"src\"]\ncapabilities = \"all\"\n");
     p.run(&["check", "--no-device", "--deny-warnings"]).code(1);
 }
