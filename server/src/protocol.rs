@@ -10,7 +10,8 @@ use crate::render::frame::NanOrigin;
 use crate::render::pipelines::{PipelineSummary, Status as PipelineStatus};
 use crate::render::quads::PassQuads;
 use crate::render::session::{PassState, PassSummary};
-use crate::scene::overrides::{Control, Overrides, Value as OverrideValue};
+use crate::scene::overrides::{Control, Overrides};
+use crate::scene::settings::Value as OverrideValue;
 
 pub const VERSION: u32 = 2;
 

@@ -95,17 +95,19 @@ pub fn loupe(dir: &Path, args: &[&str]) -> Run {
 
 /// Runs `loupe args...` in `dir` to completion with `env` set besides.
 pub fn loupe_with_env(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Run {
-    let mut cmd = Command::new(loupe_bin());
-    cmd.args(args).current_dir(dir).env("NO_COLOR", "1").envs(env.iter().copied());
-    let shown: Vec<String> = env.iter().map(|(k, v)| format!("{k}={v} ")).collect();
-    run(cmd, format!("(cd {} && {}loupe {})", dir.display(), shown.concat(), args.join(" ")))
+    run_loupe(&loupe_bin(), dir, args, env)
 }
 
 /// Runs the loupe binary `bin` with `args` in `dir` to completion.
 pub fn loupe_at(bin: &Path, dir: &Path, args: &[&str]) -> Run {
+    run_loupe(bin, dir, args, &[])
+}
+
+fn run_loupe(bin: &Path, dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Run {
     let mut cmd = Command::new(bin);
-    cmd.args(args).current_dir(dir).env("NO_COLOR", "1");
-    run(cmd, format!("(cd {} && loupe {})", dir.display(), args.join(" ")))
+    cmd.args(args).current_dir(dir).env("NO_COLOR", "1").envs(env.iter().copied());
+    let shown: Vec<String> = env.iter().map(|(k, v)| format!("{k}={v} ")).collect();
+    run(cmd, format!("(cd {} && {}loupe {})", dir.display(), shown.concat(), args.join(" ")))
 }
 
 /// Runs `cmd` to completion; `shown` is how a failure names it.

@@ -20,7 +20,7 @@ use std::path::Path;
 use loupe::loaded::Loaded;
 use loupe::render::session::Session;
 use loupe::scene::Scene;
-use loupe::scene::overrides::Value;
+use loupe::scene::settings::Value;
 use loupe::scene::settings::{self, Kind, SETTINGS, Setting};
 
 /// A setting's extremes.

@@ -6,7 +6,8 @@ use std::process::ExitCode;
 
 use super::{exit, init_logging, offline_failed, parse_size, tradeoffs, under_root};
 use loupe::offline;
-use loupe::scene::overrides::{Overrides, Value};
+use loupe::scene::overrides::Overrides;
+use loupe::scene::settings::Value;
 
 #[derive(clap::Args)]
 #[command(args_conflicts_with_subcommands = true)]

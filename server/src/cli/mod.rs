@@ -18,7 +18,7 @@ use clap::{Parser, Subcommand};
 
 use loupe::check::format;
 use loupe::offline::OfflineError;
-use loupe::scene::overrides::Value;
+use loupe::scene::settings::Value;
 
 /// Exit codes, the same for every subcommand.
 pub mod exit {

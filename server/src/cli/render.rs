@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use super::{exit, init_logging, offline_failed, parse_override, parse_size, under_root};
 use loupe::offline;
-use loupe::scene::overrides::Value;
+use loupe::scene::settings::Value;
 
 /// The scene and how it is changed, as `loupe render` takes them.
 #[derive(clap::Args)]

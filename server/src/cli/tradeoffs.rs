@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use super::{exit, offline_failed, parse_override, parse_size, under_root};
-use loupe::scene::overrides::Value;
+use loupe::scene::settings::Value;
 use loupe::tradeoffs::{self, report};
 
 #[derive(clap::Args)]

@@ -493,7 +493,8 @@ fn output_summary(graph: &Graph, h: super::resource::Handle) -> OutputSummary {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::overrides::{Overrides, Value};
+    use crate::scene::overrides::Overrides;
+    use crate::scene::settings::Value;
     use crate::shader::library;
 
     fn pattern(two_triangles: bool) -> Loaded {

@@ -8,10 +8,8 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 use toml_edit::{DocumentMut, Item, Table, Value as TomlValue};
 
+use super::settings::Value;
 use super::settings::{self, Kind, SETTINGS};
-// An override is a path and a value of the settings table; the value type
-// is the table's, named here too for whoever holds `Overrides`.
-pub use super::settings::Value;
 use super::{LightKind, Scene};
 
 /// Overrides by path, e.g. `post.exposure_ev`, `lights[1].intensity`.

@@ -41,7 +41,7 @@ pub enum Event {
 }
 
 pub enum SceneCommand {
-    Set { path: String, value: crate::scene::overrides::Value },
+    Set { path: String, value: crate::scene::settings::Value },
     Clear,
     Save,
 }

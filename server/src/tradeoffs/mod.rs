@@ -20,8 +20,9 @@ use crate::render::capture::CapturedImage;
 use crate::render::frame::FrameResult;
 use crate::render::resource::ResourceDesc;
 use crate::render::session::Session;
-use crate::scene::overrides::{Overrides, Value};
+use crate::scene::overrides::Overrides;
 use crate::scene::settings;
+use crate::scene::settings::Value;
 use metric::Rgba;
 use sweep::{Reference, Series};
 

@@ -4,8 +4,9 @@
 //! (`scene::settings`); this only says how to sweep them.
 
 use crate::scene::Scene;
-use crate::scene::overrides::{Overrides, Value};
+use crate::scene::overrides::Overrides;
 use crate::scene::settings;
+use crate::scene::settings::Value;
 
 /// What a series' images are compared with.
 #[derive(Debug, Clone, PartialEq)]

@@ -95,7 +95,8 @@ mod tests {
 
     use super::*;
     use crate::render::graph::Graph;
-    use crate::scene::overrides::{self, Overrides, Value};
+    use crate::scene::overrides::{self, Overrides};
+    use crate::scene::settings::Value;
     use crate::scene::settings::{self, Kind, SETTINGS};
 
     /// The values a setting is tried at: a toggle's two, a choice's every

@@ -48,7 +48,8 @@ mod tests {
     use std::collections::BTreeSet;
 
     use crate::render::passes::path_trace::testing::session;
-    use crate::scene::overrides::{Overrides, Value};
+    use crate::scene::overrides::Overrides;
+    use crate::scene::settings::Value;
 
     /// `quality.shadow_filter`: radius 0 is one tap per lookup, and each larger
     /// radius moves the shadow's edge further from the hard one (the image's

@@ -89,7 +89,7 @@ fn assert_finite(r: &FrameResult, key: &str) {
 }
 
 /// `volume.toml` at the 96×54 with `set` applied.
-fn volume_scene(set: &[(&str, crate::scene::overrides::Value)]) -> Loaded {
+fn volume_scene(set: &[(&str, crate::scene::settings::Value)]) -> Loaded {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/volume.toml");
     let overrides: Overrides = set.iter().map(|(k, v)| ((*k).to_owned(), v.clone())).collect();
     let mut loaded = crate::loaded::load_with(&path, &overrides).unwrap_or_else(|d| panic!("{d}"));
@@ -115,7 +115,7 @@ const ESTIMATORS_BOUND: f64 = 5e-4;
 /// estimators agree with each other; and every march ran every step.
 #[test]
 fn more_steps_converge_instead_of_drifting() {
-    use crate::scene::overrides::Value::{Int, Text};
+    use crate::scene::settings::Value::{Int, Text};
     let mut s = session(&volume_scene(&[]));
     let default_shadow = i64::from(crate::scene::Quality::default().volume_shadow_steps);
     for shadow in [default_shadow, 64] {

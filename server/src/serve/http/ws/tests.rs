@@ -8,7 +8,7 @@ use tokio_tungstenite::tungstenite;
 
 use super::super::testing::{Ws, connect, daemon_event_async, frame_images, next_json, next_message, start};
 use super::*;
-use crate::scene::overrides::Value;
+use crate::scene::settings::Value;
 use crate::serve::event::Event;
 use crate::serve::inbox::COMMAND_QUEUE;
 use crate::serve::shared::{EVENT_QUEUE, write};
