@@ -1,4 +1,6 @@
-//! The browser inspector in a real headless chromium, driven over WebDriver:
+//! The browser inspector in a real headless chromium, driven over WebDriver
+//! (this module holds the harness: chromium, `until`, `shown`; each topic
+//! adds a child module):
 //! open the page, break a shader on disk, see the error with file:line while
 //! the old frame stays, fix it, see it clear.
 
