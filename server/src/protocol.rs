@@ -9,7 +9,7 @@ use crate::diag::Diagnostic;
 use crate::render::frame::NanOrigin;
 use crate::render::pipelines::{PipelineSummary, Status as PipelineStatus};
 use crate::render::quads::PassQuads;
-use crate::render::session::{PassState, PassSummary};
+use crate::render::session::{DepthProjection, PassState, PassSummary};
 use crate::scene::overrides::{Control, Overrides};
 use crate::scene::settings::Value as OverrideValue;
 
@@ -66,6 +66,10 @@ pub struct OutputInfo {
     /// A buffer's dimensions, outermost first: `[["bin", 256]]`; `null`
     /// for a texture.
     pub shape: Option<Vec<(String, u32)>>,
+    /// What its values mean: `color`, `normal`, `depth`, `data` or `id`.
+    pub meaning: String,
+    /// A depth output's projection (near, far, reversed); `null` otherwise.
+    pub depth: Option<DepthProjection>,
     /// Kept across frames (a history resource).
     pub history: bool,
 }
@@ -113,6 +117,8 @@ impl PassInfo {
                     width: o.width,
                     height: o.height,
                     shape: o.tensor.map(|t| t.dims.iter().map(|(n, s)| ((*n).to_owned(), *s)).collect()),
+                    meaning: o.meaning.to_owned(),
+                    depth: o.depth,
                     history: o.history,
                 })
                 .collect(),

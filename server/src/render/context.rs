@@ -15,6 +15,11 @@ use super::scene_gpu::SceneGpu;
 use super::vertex_capture::{self, Vertices};
 use crate::gpu::pipeline::{self, Pipeline};
 
+/// What a cleared depth target holds: the far plane, as the pipelines'
+/// `Less` compare expects (reversed depth would clear to 0 and compare
+/// `Greater`). Viewers leave it out of depth's range.
+pub const DEPTH_CLEAR: f32 = 1.0;
+
 /// The depth target of a draw: one layer of a depth texture, cleared first
 /// or tested against what it holds.
 #[derive(Debug, Clone, Copy)]
@@ -314,14 +319,16 @@ impl<'a> PassContext<'a> {
         let depth_target = depth;
         // What the depth buffer holds before the pass, for quad statistics.
         let initial = match depth {
-            Some(d) if self.quads.is_some() => Some(if d.clear { PendingDepth::Clear(1.0) } else { self.copy_depth(d.texture, d.layer) }),
+            Some(d) if self.quads.is_some() => {
+                Some(if d.clear { PendingDepth::Clear(DEPTH_CLEAR) } else { self.copy_depth(d.texture, d.layer) })
+            }
             _ => None,
         };
         let depth_view = depth.map(|d| self.layer(d.texture, d.layer));
         let depth = depth.zip(depth_view.as_ref()).map(|(d, view)| wgpu::RenderPassDepthStencilAttachment {
             view,
             depth_ops: Some(wgpu::Operations {
-                load: if d.clear { wgpu::LoadOp::Clear(1.0) } else { wgpu::LoadOp::Load },
+                load: if d.clear { wgpu::LoadOp::Clear(DEPTH_CLEAR) } else { wgpu::LoadOp::Load },
                 store: wgpu::StoreOp::Store,
             }),
             stencil_ops: None,

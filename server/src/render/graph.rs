@@ -11,7 +11,7 @@
 use std::collections::BTreeSet;
 
 use super::context::PassContext;
-use super::resource::{Access, Handle, Lifetime, PipelineKey, ResourceDesc};
+use super::resource::{Access, Handle, Lifetime, Meaning, PipelineKey, ResourceDesc};
 
 /// What a pass does when the frame runs: bound to its resolved inputs.
 pub type Execute = Box<dyn Fn(&mut PassContext<'_>) + Send + Sync>;
@@ -31,6 +31,8 @@ pub struct Resource {
     /// `pass/output`, the name captures and the UI use.
     pub name: String,
     pub desc: ResourceDesc,
+    /// What its values mean, as the pass that creates it declares.
+    pub meaning: Meaning,
     pub lifetime: Lifetime,
     /// Derived from every access passes declare (plus COPY_SRC, so any
     /// resource can be captured).
@@ -104,17 +106,17 @@ impl PassBuilder<'_> {
         self.access(h, Access::Sampled)
     }
 
-    /// A new resource of this frame, named `pass/output`, first used as
-    /// `access`.
-    pub fn create(&mut self, output: &str, desc: impl Into<ResourceDesc>, access: Access) -> Handle {
-        let h = self.graph.resource(&self.node.name, output, desc.into(), Lifetime::Frame);
+    /// A new resource of this frame, named `pass/output`, holding values
+    /// that mean `meaning`, first used as `access`.
+    pub fn create(&mut self, output: &str, meaning: Meaning, desc: impl Into<ResourceDesc>, access: Access) -> Handle {
+        let h = self.graph.resource(&self.node.name, output, meaning, desc.into(), Lifetime::Frame);
         self.access(h, access)
     }
 
     /// A resource kept across frames under `pass/output`: this frame sees
     /// what the last one left (zeros when new or reset).
-    pub fn history(&mut self, output: &str, desc: impl Into<ResourceDesc>, access: Access) -> Handle {
-        let h = self.graph.resource(&self.node.name, output, desc.into(), Lifetime::History);
+    pub fn history(&mut self, output: &str, meaning: Meaning, desc: impl Into<ResourceDesc>, access: Access) -> Handle {
+        let h = self.graph.resource(&self.node.name, output, meaning, desc.into(), Lifetime::History);
         self.access(h, access)
     }
 
@@ -137,10 +139,11 @@ impl GraphBuilder {
         PassBuilder { graph: self, node }
     }
 
-    fn resource(&mut self, pass: &str, output: &str, desc: ResourceDesc, lifetime: Lifetime) -> Handle {
+    fn resource(&mut self, pass: &str, output: &str, meaning: Meaning, desc: ResourceDesc, lifetime: Lifetime) -> Handle {
         self.resources.push(Resource {
             name: format!("{pass}/{output}"),
             desc,
+            meaning,
             lifetime,
             texture_usage: wgpu::TextureUsages::COPY_SRC,
             buffer_usage: wgpu::BufferUsages::COPY_SRC,
@@ -233,15 +236,15 @@ mod tests {
         let mut g = GraphBuilder::new();
         let d = TextureDesc::d2(wgpu::TextureFormat::Rgba16Float, 4, 4);
         let mut p = g.pass("a", PassKind::Raster);
-        let a = p.create("out", d.clone(), Access::ColorTarget);
+        let a = p.create("out", Meaning::Color, d.clone(), Access::ColorTarget);
         p.execute(|_| {});
         let mut p = g.pass("debug", PassKind::Raster);
         p.sample(a);
-        p.create("out", d.clone(), Access::ColorTarget);
+        p.create("out", Meaning::Color, d.clone(), Access::ColorTarget);
         p.execute(|_| {});
         let mut p = g.pass("b", PassKind::Raster);
         p.sample(a);
-        let b = p.create("out", d, Access::ColorTarget);
+        let b = p.create("out", Meaning::Color, d, Access::ColorTarget);
         p.execute(|_| {});
         g.cull("volumes", "the scene has no participating media");
         g.output(b);
@@ -257,20 +260,20 @@ mod tests {
         let mut g = GraphBuilder::new();
         let d = TextureDesc::d2(wgpu::TextureFormat::Rgba16Float, 4, 4);
         let mut p = g.pass("render", PassKind::Raster);
-        let color = p.create("color", d, Access::ColorTarget);
+        let color = p.create("color", Meaning::Color, d, Access::ColorTarget);
         p.execute(|_| {});
         let mut p = g.pass("reduce", PassKind::Compute);
         p.sample(color);
-        let sum = p.create("sum", TensorLayout::new(&[("bin", 8)], Element::U32), Access::StorageWrite);
+        let sum = p.create("sum", Meaning::Data, TensorLayout::new(&[("bin", 8)], Element::U32), Access::StorageWrite);
         p.execute(|_| {});
         let mut p = g.pass("state", PassKind::Compute);
         p.access(sum, Access::StorageRead);
-        let state = p.history("state", TensorLayout::new(&[("v", 4)], Element::F32), Access::StorageWrite);
+        let state = p.history("state", Meaning::Data, TensorLayout::new(&[("v", 4)], Element::F32), Access::StorageWrite);
         p.execute(|_| {});
         // A pass nobody needs adds no usage.
         let mut p = g.pass("unused", PassKind::Copy);
         p.access(color, Access::CopySrc);
-        p.create("copy", TextureDesc::d2(wgpu::TextureFormat::Rgba16Float, 4, 4), Access::CopyDst);
+        p.create("copy", Meaning::Color, TextureDesc::d2(wgpu::TextureFormat::Rgba16Float, 4, 4), Access::CopyDst);
         p.execute(|_| {});
         g.output(state);
         let graph = g.build();

@@ -122,6 +122,45 @@ impl From<TensorLayout> for ResourceDesc {
     }
 }
 
+/// What a resource's values mean, declared by the pass that creates it, so
+/// that a viewer shows them by what they are rather than by a guess from
+/// the format: colour with sRGB encoding, normals remapped from [-1, 1],
+/// depth as one grey channel, data and ids as plain numbers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Meaning {
+    /// Linear radiance or reflectance, shown sRGB-encoded.
+    Color,
+    /// Unit vectors with components in [-1, 1].
+    Normal,
+    /// Depth as the depth test sees it, through `Projection`.
+    Depth(Projection),
+    /// Numbers that are not a colour (coverage, counts, parameters).
+    Data,
+    /// Identifiers (object, primitive): integers with no order.
+    Id,
+}
+
+impl Meaning {
+    /// Its protocol spelling.
+    pub fn name(self) -> &'static str {
+        match self {
+            Meaning::Color => "color",
+            Meaning::Normal => "normal",
+            Meaning::Depth(_) => "depth",
+            Meaning::Data => "data",
+            Meaning::Id => "id",
+        }
+    }
+}
+
+/// Which projection a depth resource was rendered through: the scene's
+/// camera (whose near and far linearise it) or another one (a light's).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Projection {
+    Camera,
+    Light,
+}
+
 /// How long a resource's contents live.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Lifetime {

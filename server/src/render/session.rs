@@ -16,11 +16,12 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::FrameOptions;
+use super::context::DEPTH_CLEAR;
 use super::frame::{self, FrameInputs, FrameResult, PendingFrame};
 use super::graph::{Graph, PassKind};
 use super::pipelines::{self, Compiled, Installed, PipelineCache, PipelineSummary, Status};
 use super::pool::ResourcePool;
-use super::resource::{Lifetime, PipelineKey, ResourceDesc, TensorLayout};
+use super::resource::{Lifetime, Meaning, PipelineKey, Projection, ResourceDesc, TensorLayout};
 use super::scene_gpu::SceneGpu;
 use super::vertex_capture::VertexCapture;
 use crate::denoise::network::Network;
@@ -29,7 +30,7 @@ use crate::gpu::Gpu;
 use crate::gpu::pipeline::{MESH_VERTICES, PipelineSpec, Stages};
 use crate::loaded::Loaded;
 use crate::mesh::MeshData;
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene};
 use crate::shader::{ComposeCache, Library};
 
 /// How a pass stands this frame.
@@ -60,6 +61,11 @@ pub struct OutputSummary {
     /// A buffer's tensor layout.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tensor: Option<TensorLayout>,
+    /// What its values mean: `color`, `normal`, `depth`, `data` or `id`.
+    pub meaning: &'static str,
+    /// For depth, how to read it as distance.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub depth: Option<DepthProjection>,
     /// Kept across frames.
     pub history: bool,
 }
@@ -80,6 +86,23 @@ pub struct PassSummary {
     pub writes: Vec<OutputSummary>,
     /// Diagnostics of its pipelines.
     pub diagnostics: usize,
+}
+
+/// How a depth output reads as distance: the near and far planes of the
+/// projection it went through (`None` for a light's, which varies by
+/// light), and whether depth is reversed (near at 1, cleared to 0).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DepthProjection {
+    pub near: Option<f32>,
+    pub far: Option<f32>,
+    pub reversed: bool,
+}
+
+impl DepthProjection {
+    fn of(projection: Projection, camera: &Camera) -> Self {
+        let planes = (projection == Projection::Camera).then_some((camera.near, camera.far));
+        DepthProjection { near: planes.map(|p| p.0), far: planes.map(|p| p.1), reversed: DEPTH_CLEAR == 0.0 }
+    }
 }
 
 /// Pipelines no longer used by the frame that are kept, in case a setting
@@ -446,7 +469,7 @@ impl Session {
                     reason: (status == PassState::Failed).then(|| "its pipeline has never built".to_owned()),
                     pipelines: p.pipelines.iter().map(PipelineKey::label).collect(),
                     reads: p.reads().map(|h| graph.resource(h).name.clone()).collect(),
-                    writes: p.writes().map(|h| output_summary(graph, h)).collect(),
+                    writes: p.writes().map(|h| output_summary(graph, h, &self.scene.camera)).collect(),
                     diagnostics: entries.iter().flatten().map(|e| e.diagnostics.len()).sum(),
                 }
             })
@@ -465,9 +488,14 @@ impl Session {
     }
 }
 
-fn output_summary(graph: &Graph, h: super::resource::Handle) -> OutputSummary {
+fn output_summary(graph: &Graph, h: super::resource::Handle, camera: &Camera) -> OutputSummary {
     let r = graph.resource(h);
     let history = r.lifetime == Lifetime::History;
+    let meaning = r.meaning.name();
+    let depth = match r.meaning {
+        Meaning::Depth(projection) => Some(DepthProjection::of(projection, camera)),
+        _ => None,
+    };
     match &r.desc {
         ResourceDesc::Texture(d) => OutputSummary {
             name: r.output().to_owned(),
@@ -476,6 +504,8 @@ fn output_summary(graph: &Graph, h: super::resource::Handle) -> OutputSummary {
             width: d.width,
             height: d.height,
             tensor: None,
+            meaning,
+            depth,
             history,
         },
         ResourceDesc::Buffer(t) => OutputSummary {
@@ -485,6 +515,8 @@ fn output_summary(graph: &Graph, h: super::resource::Handle) -> OutputSummary {
             width: t.len() as u32,
             height: 1,
             tensor: Some(t.clone()),
+            meaning,
+            depth,
             history,
         },
     }

@@ -6,7 +6,7 @@
 
 use crate::gpu::pipeline::{COMPUTE, Group, PipelineSpec, Stages, sizes, storage_rw, texture, uniform};
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Element, Handle, PipelineKey, TensorLayout};
+use crate::render::resource::{Access, Meaning, Element, Handle, PipelineKey, TensorLayout};
 use crate::scene::{Post, Scene};
 
 const SHADER: &str = "post/auto_exposure.wgsl";
@@ -54,7 +54,7 @@ pub fn auto_exposure(g: &mut GraphBuilder, scene: &Scene, hdr: Handle) -> Option
     let mut p = g.pass("exposure_histogram", PassKind::Compute);
     let key = p.pipeline(PipelineKey::new(&HISTOGRAM, &[]));
     p.sample(hdr);
-    let bins = p.create("histogram", TensorLayout::new(&[("bin", BINS)], Element::U32), Access::StorageWrite);
+    let bins = p.create("histogram", Meaning::Data, TensorLayout::new(&[("bin", BINS)], Element::U32), Access::StorageWrite);
     p.access(bins, Access::CopyDst);
     let post = scene.post.clone();
     p.execute(move |ctx| {
@@ -68,7 +68,7 @@ pub fn auto_exposure(g: &mut GraphBuilder, scene: &Scene, hdr: Handle) -> Option
     let mut p = g.pass("exposure_adapt", PassKind::Compute);
     let key = p.pipeline(PipelineKey::new(&ADAPT, &[]));
     p.access(bins, Access::StorageRead);
-    let state = p.history("state", TensorLayout::new(&[("field", STATE_FIELDS.len() as u32)], Element::F32), Access::StorageWrite);
+    let state = p.history("state", Meaning::Data, TensorLayout::new(&[("field", STATE_FIELDS.len() as u32)], Element::F32), Access::StorageWrite);
     let post = scene.post.clone();
     p.execute(move |ctx| {
         let m = ctx.uniform(&super::vec4_bytes(metering(&post, ctx.dt)));
@@ -120,7 +120,7 @@ mod tests {
             let mut session = Session::new(gpu, &root, lib, &loaded);
             let mut g = GraphBuilder::new();
             let mut p = g.pass("input", PassKind::Copy);
-            let hdr = p.create("color", TextureDesc::d2(HDR, W, H), Access::CopyDst);
+            let hdr = p.create("color", Meaning::Color, TextureDesc::d2(HDR, W, H), Access::CopyDst);
             let from = source.clone();
             p.execute(move |ctx| ctx.encoder.copy_texture_to_texture(from.as_image_copy(), ctx.texture(hdr).as_image_copy(), from.size()));
             let state = auto_exposure(&mut g, &scene, hdr).expect("auto exposure is on");

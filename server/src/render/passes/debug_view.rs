@@ -4,7 +4,7 @@ use super::gbuffer::GBuffer;
 use super::{TWO_TRIANGLES, fullscreen_key, vec4_bytes};
 use crate::gpu::pipeline::{FRAG, Group, LDR, PipelineSpec, Stages, depth_texture, sizes, texture, uniform};
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Handle, TextureDesc};
+use crate::render::resource::{Access, Meaning, Handle, TextureDesc};
 use crate::scene::{DebugView, Scene};
 
 /// The source is the depth buffer, linearised for display.
@@ -39,7 +39,7 @@ pub fn debug_view(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Hand
     let mut p = g.pass("debug_view", PassKind::Raster);
     let key = p.pipeline(fullscreen_key(&DEBUG_VIEW, scene, &[(DEBUG_DEPTH, scene.post.debug_view == DebugView::Depth)]));
     p.sample(source);
-    let color = p.create("color", TextureDesc::d2(LDR, scene.width, scene.height), Access::ColorTarget);
+    let color = p.create("color", Meaning::Color, TextureDesc::d2(LDR, scene.width, scene.height), Access::ColorTarget);
     p.execute(move |ctx| {
         let mut u = vec4_bytes([0.0, near, far, 0.0]);
         u[0..4].copy_from_slice(&mode.to_le_bytes());

@@ -25,7 +25,7 @@ use crate::gpu::pipeline::{COMPUTE, Group, PipelineSpec, Stages, sizes, storage,
 use crate::render::context::PassContext;
 use crate::render::denoise_weights::{blocks, fused_inputs};
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Element, Handle, PipelineKey, TensorLayout, TextureDesc};
+use crate::render::resource::{Access, Meaning, Element, Handle, PipelineKey, TensorLayout, TextureDesc};
 use crate::denoise::process::Mode;
 use crate::scene::Scene;
 use crate::scene::settings::DenoiseAt;
@@ -224,7 +224,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
     if let Some(s) = scale {
         p.access(s, Access::StorageRead);
     }
-    let input = p.create("tensor", layout(net.input), Access::StorageWrite);
+    let input = p.create("tensor", Meaning::Data, layout(net.input), Access::StorageWrite);
     tensors[net.input.0] = Some(input);
     let params = [w, h, pw, ph, channel_blocks(net.input), given, 0, 0];
     p.execute(schedule.wrap(move |ctx| {
@@ -260,7 +260,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
             break;
         };
         let mut p = g.pass(&name, PassKind::Compute);
-        let out = p.create("tensor", layout(dst), Access::StorageWrite);
+        let out = p.create("tensor", Meaning::Data, layout(dst), Access::StorageWrite);
         tensors[dst.0] = Some(out);
         let (ow, oh) = size(dst);
         match op {
@@ -272,7 +272,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
                 let a_handle = p.access(srcs[0], Access::StorageRead);
                 let b_handle = srcs.get(1).map(|&h| p.access(h, Access::StorageRead));
                 let overflow = f16.then(|| {
-                    let o = p.create("overflow", TensorLayout::new(&[("count", 1)], Element::U32), Access::StorageWrite);
+                    let o = p.create("overflow", Meaning::Data, TensorLayout::new(&[("count", 1)], Element::U32), Access::StorageWrite);
                     p.access(o, Access::CopyDst)
                 });
                 let u = LayerUniform {
@@ -353,7 +353,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
     if let Some(s) = scale {
         p.access(s, Access::StorageRead);
     }
-    let denoised = p.create("color", TextureDesc::d2(COLOR, w, h), Access::StorageWrite);
+    let denoised = p.create("color", Meaning::Color, TextureDesc::d2(COLOR, w, h), Access::StorageWrite);
     let params = [w, h, pw, given];
     p.execute(schedule.wrap(move |ctx| {
         let u = ctx.uniform(bytemuck::cast_slice(&params));
@@ -378,8 +378,8 @@ fn autoexposure(g: &mut GraphBuilder, color: Handle, w: u32, h: u32, schedule: S
     let scale_key = p.pipeline(PipelineKey::new(&AUTOEXPOSURE_SCALE, &[]));
     p.sample(color);
     let (bw, bh) = (w.div_ceil(AUTOEXPOSURE_BIN), h.div_ceil(AUTOEXPOSURE_BIN));
-    let bins = p.create("bins", TensorLayout::new(&[("y", bh), ("x", bw), ("luminance", 1)], Element::F32), Access::StorageWrite);
-    let scale = p.create("scale", TensorLayout::new(&[("value", 1)], Element::F32), Access::StorageWrite);
+    let bins = p.create("bins", Meaning::Data, TensorLayout::new(&[("y", bh), ("x", bw), ("luminance", 1)], Element::F32), Access::StorageWrite);
+    let scale = p.create("scale", Meaning::Data, TensorLayout::new(&[("value", 1)], Element::F32), Access::StorageWrite);
     p.execute(schedule.wrap(move |ctx| {
         let b = [("color", ctx.bind(color)), ("bins", ctx.bind(bins)), ("scale", ctx.bind(scale))];
         ctx.dispatch(&bins_key, &b, [bw, bh, 1]);

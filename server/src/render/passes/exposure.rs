@@ -5,7 +5,7 @@
 use super::{TWO_TRIANGLES, fullscreen_key, vec4_bytes};
 use crate::gpu::pipeline::{FRAG, Group, HDR, PipelineSpec, Stages, sizes, storage, texture, uniform};
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Handle, TextureDesc};
+use crate::render::resource::{Access, Meaning, Handle, TextureDesc};
 use crate::scene::Scene;
 
 /// Adds the adapted EV from the auto-exposure state buffer.
@@ -34,7 +34,7 @@ pub fn exposure(g: &mut GraphBuilder, scene: &Scene, hdr: Handle, adapted: Optio
     let key = p.pipeline(fullscreen_key(&EXPOSURE, scene, &[(AUTO_EXPOSURE, adapted.is_some())]));
     p.sample(hdr);
     let adapted = adapted.map(|h| p.access(h, Access::StorageRead));
-    let color = p.create("color", TextureDesc::d2(HDR, scene.width, scene.height), Access::ColorTarget);
+    let color = p.create("color", Meaning::Color, TextureDesc::d2(HDR, scene.width, scene.height), Access::ColorTarget);
     p.execute(move |ctx| {
         let u = ctx.uniform(&vec4_bytes([scale, 0.0, 0.0, 0.0]));
         let mut b = vec![("exposure", u.as_entire_binding()), ("hdr", ctx.bind(hdr))];

@@ -4,7 +4,7 @@ use super::VIEW;
 use crate::gpu::pipeline::{ALL, Depth, FRAG, Group, HDR, PipelineSpec, Stages, storage};
 use crate::render::context::DepthTarget;
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Handle, PipelineKey, TextureDesc};
+use crate::render::resource::{Access, Meaning, Handle, PipelineKey, TextureDesc};
 use crate::scene::Scene;
 
 pub static GBUFFER: PipelineSpec = PipelineSpec {
@@ -28,9 +28,9 @@ pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle) -> GBuffer {
     let key = p.pipeline(PipelineKey::new(&GBUFFER, &[]));
     p.access(depth, Access::DepthTest);
     let gb = GBuffer {
-        normal: p.create("normal", d.clone(), Access::ColorTarget),
-        albedo: p.create("albedo", d.clone(), Access::ColorTarget),
-        material: p.create("material", d, Access::ColorTarget),
+        normal: p.create("normal", Meaning::Normal, d.clone(), Access::ColorTarget),
+        albedo: p.create("albedo", Meaning::Color, d.clone(), Access::ColorTarget),
+        material: p.create("material", Meaning::Data, d, Access::ColorTarget),
     };
     let targets = [gb.normal, gb.albedo, gb.material];
     p.execute(move |ctx| {

@@ -10,7 +10,7 @@ use super::path_trace::COLOR;
 use crate::denoise::image::Image;
 use crate::gpu::pipeline::PipelineSpec;
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, TextureDesc};
+use crate::render::resource::{Access, Meaning, TextureDesc};
 
 pub const SPECS: &[&PipelineSpec] = &[];
 
@@ -28,9 +28,9 @@ pub fn images(g: &mut GraphBuilder, tile: Arc<TileImages>) -> Noisy {
     let (w, h) = (tile.color.width as u32, tile.color.height as u32);
     let mut p = g.pass("images", PassKind::Copy);
     let desc = TextureDesc::d2(COLOR, w, h);
-    let color = p.create("color", desc.clone(), Access::CopyDst);
-    let albedo = p.create("albedo", desc.clone(), Access::CopyDst);
-    let normal = p.create("normal", desc, Access::CopyDst);
+    let color = p.create("color", Meaning::Color, desc.clone(), Access::CopyDst);
+    let albedo = p.create("albedo", Meaning::Color, desc.clone(), Access::CopyDst);
+    let normal = p.create("normal", Meaning::Normal, desc, Access::CopyDst);
     p.execute(move |ctx| {
         for (image, target) in [(Some(&tile.color), color), (tile.albedo.as_ref(), albedo), (tile.normal.as_ref(), normal)] {
             let rows = rgba_rows(image, w as usize, h as usize);

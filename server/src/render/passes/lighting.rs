@@ -7,7 +7,7 @@ use super::gbuffer::GBuffer;
 use super::{LIGHTS, MEDIA, SHADOW_GROUP, SHADOWS, TWO_TRIANGLES, VIEW, fullscreen_key};
 use crate::gpu::pipeline::{Group, HDR, PipelineSpec, Stages, depth_texture, texture};
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Handle, TextureDesc};
+use crate::render::resource::{Access, Meaning, Handle, TextureDesc};
 use crate::scene::Scene;
 use crate::scene::settings::RectLights;
 
@@ -44,7 +44,7 @@ pub fn lighting(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle
     }
     let shadow_maps = shadows.map(|h| p.sample(h));
     let ltc = ltc.map(|t| t.map(|h| p.sample(h)));
-    let color = p.create("color", TextureDesc::d2(HDR, scene.width, scene.height), Access::ColorTarget);
+    let color = p.create("color", Meaning::Color, TextureDesc::d2(HDR, scene.width, scene.height), Access::ColorTarget);
     p.execute(move |ctx| {
         let s = ctx.scene;
         let mut b = vec![

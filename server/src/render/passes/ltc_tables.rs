@@ -5,7 +5,7 @@
 use crate::gpu::pipeline::PipelineSpec;
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::ltc;
-use crate::render::resource::{Access, Handle, TextureDesc};
+use crate::render::resource::{Access, Meaning, Handle, TextureDesc};
 use crate::scene::Scene;
 use crate::scene::settings::RectLights;
 
@@ -22,7 +22,7 @@ pub fn ltc_tables(g: &mut GraphBuilder, scene: &Scene) -> Option<[Handle; 2]> {
     }
     let d = TextureDesc::d2(ltc::FORMAT, ltc::SIZE, ltc::SIZE);
     let mut p = g.pass("ltc_tables", PassKind::Copy);
-    let out = [p.create("matrix", d.clone(), Access::CopyDst), p.create("amplitude", d, Access::CopyDst)];
+    let out = [p.create("matrix", Meaning::Data, d.clone(), Access::CopyDst), p.create("amplitude", Meaning::Data, d, Access::CopyDst)];
     p.execute(move |ctx| {
         let Some(tables) = &ctx.scene.ltc else { return };
         for (t, h) in tables.iter().zip(out) {

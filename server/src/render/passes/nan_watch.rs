@@ -5,7 +5,7 @@
 
 use crate::gpu::pipeline::{Group, PipelineSpec, Stages, storage_rw, texture};
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Element, Handle, PipelineKey, TensorLayout};
+use crate::render::resource::{Access, Meaning, Element, Handle, PipelineKey, TensorLayout};
 use crate::scene::Scene;
 
 pub static COUNT: PipelineSpec = PipelineSpec {
@@ -26,7 +26,7 @@ pub fn nan_watch(g: &mut GraphBuilder, scene: &Scene, hdr: Handle) -> Handle {
     let mut p = g.pass("nan_watch", PassKind::Compute);
     let key = p.pipeline(PipelineKey::new(&COUNT, &[]));
     p.sample(hdr);
-    let counts = p.create("counts", TensorLayout::new(&[("kind", 2)], Element::U32), Access::StorageWrite);
+    let counts = p.create("counts", Meaning::Data, TensorLayout::new(&[("kind", 2)], Element::U32), Access::StorageWrite);
     p.access(counts, Access::CopyDst);
     p.execute(move |ctx| {
         ctx.encoder.clear_buffer(ctx.buffer(counts), 0, None);

@@ -9,7 +9,7 @@
 use super::{LIGHTS, MEDIA, VIEW};
 use crate::gpu::pipeline::{COMPUTE, Group, HDR, PipelineSpec, Stages, sizes, storage, storage_rw, storage_texture, uniform};
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Element, Handle, PipelineKey, TensorLayout, TextureDesc};
+use crate::render::resource::{Access, Meaning, Element, Handle, PipelineKey, TensorLayout, TextureDesc};
 use crate::scene::{Renderer, Scene};
 
 /// The def that compiles the media code in: only scenes with media pay for it.
@@ -66,11 +66,11 @@ pub fn path_trace(g: &mut GraphBuilder, scene: &Scene) -> Option<Traced> {
     let (w, h) = (scene.width, scene.height);
     let mut p = g.pass("path_trace", PassKind::Compute);
     let key = p.pipeline(PipelineKey::new(&PATH_TRACE, &[(MEDIA_DEF, !scene.media.is_empty())]));
-    let accumulated = p.history("accumulated", TensorLayout::new(&[("pixel", w * h), ("channel", ACCUMULATED)], Element::F32), Access::StorageWrite);
-    let color = p.create("color", TextureDesc::d2(COLOR, w, h), Access::StorageWrite);
-    let albedo = p.create("albedo", TextureDesc::d2(HDR, w, h), Access::StorageWrite);
-    let normal = p.create("normal", TextureDesc::d2(HDR, w, h), Access::StorageWrite);
-    let samples = p.create("samples", TextureDesc::d2(SAMPLES, w, h), Access::StorageWrite);
+    let accumulated = p.history("accumulated", Meaning::Data, TensorLayout::new(&[("pixel", w * h), ("channel", ACCUMULATED)], Element::F32), Access::StorageWrite);
+    let color = p.create("color", Meaning::Color, TextureDesc::d2(COLOR, w, h), Access::StorageWrite);
+    let albedo = p.create("albedo", Meaning::Color, TextureDesc::d2(HDR, w, h), Access::StorageWrite);
+    let normal = p.create("normal", Meaning::Normal, TextureDesc::d2(HDR, w, h), Access::StorageWrite);
+    let samples = p.create("samples", Meaning::Data, TextureDesc::d2(SAMPLES, w, h), Access::StorageWrite);
     let params = [scene.quality.path_spp, scene.quality.path_bounces, 0, 0];
     let media = !scene.media.is_empty();
     p.execute(move |ctx| {

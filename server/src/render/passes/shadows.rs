@@ -4,7 +4,7 @@
 use crate::gpu::pipeline::{DEPTH, Depth, Group, PipelineSpec, Stages, VERT, sizes, storage, uniform};
 use crate::render::context::DepthTarget;
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Handle, PipelineKey, TextureDesc};
+use crate::render::resource::{Access, Handle, Meaning, PipelineKey, Projection, TextureDesc};
 use crate::render::scene_gpu::shadow_layout;
 use crate::scene::Scene;
 
@@ -31,7 +31,7 @@ pub fn shadows(g: &mut GraphBuilder, scene: &Scene) -> Option<Handle> {
     let size = scene.quality.shadow_map_size;
     let mut p = g.pass("shadows", PassKind::Raster);
     let key = p.pipeline(PipelineKey::new(&SHADOW, &[]));
-    let depth = p.create("depth", TextureDesc::array(DEPTH, size, size, layers), Access::DepthTarget);
+    let depth = p.create("depth", Meaning::Depth(Projection::Light), TextureDesc::array(DEPTH, size, size, layers), Access::DepthTarget);
     p.execute(move |ctx| {
         let s = ctx.scene;
         for (layer, m) in s.shadow_layers.iter().enumerate() {

@@ -3,7 +3,7 @@
 use super::{TWO_TRIANGLES, fullscreen_key, vec4_bytes};
 use crate::gpu::pipeline::{FRAG, Group, HDR, PipelineSpec, Stages, sizes, uniform};
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Handle, TextureDesc};
+use crate::render::resource::{Access, Meaning, Handle, TextureDesc};
 use crate::scene::Scene;
 
 pub static PATTERN: PipelineSpec = PipelineSpec {
@@ -19,7 +19,7 @@ pub fn test_pattern(g: &mut GraphBuilder, scene: &Scene) -> Handle {
     let (w, h) = (scene.width, scene.height);
     let mut p = g.pass("test_pattern", PassKind::Raster);
     let key = p.pipeline(fullscreen_key(&PATTERN, scene, &[]));
-    let color = p.create("color", TextureDesc::d2(HDR, w, h), Access::ColorTarget);
+    let color = p.create("color", Meaning::Color, TextureDesc::d2(HDR, w, h), Access::ColorTarget);
     p.execute(move |ctx| {
         let mut u = vec4_bytes([w as f32, h as f32, 0.0, 0.0]);
         u[12..16].copy_from_slice(&(ctx.frame as u32).to_le_bytes());

@@ -3,7 +3,7 @@
 use super::{TWO_TRIANGLES, fullscreen_key};
 use crate::gpu::pipeline::{Group, LDR, PipelineSpec, Stages, texture};
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Handle, TextureDesc};
+use crate::render::resource::{Access, Meaning, Handle, TextureDesc};
 use crate::scene::{Scene, Tonemap};
 
 pub const TONEMAP_REINHARD: &str = "TONEMAP_REINHARD";
@@ -21,7 +21,7 @@ pub fn tonemap(g: &mut GraphBuilder, scene: &Scene, hdr: Handle) -> Handle {
     let mut p = g.pass("tonemap", PassKind::Raster);
     let key = p.pipeline(fullscreen_key(&TONEMAP, scene, &[(TONEMAP_REINHARD, scene.post.tonemap == Tonemap::Reinhard)]));
     p.sample(hdr);
-    let color = p.create("color", TextureDesc::d2(LDR, scene.width, scene.height), Access::ColorTarget);
+    let color = p.create("color", Meaning::Color, TextureDesc::d2(LDR, scene.width, scene.height), Access::ColorTarget);
     p.execute(move |ctx| {
         let b = [("hdr", ctx.bind(hdr))];
         ctx.fullscreen(&key, &[color], &b);

@@ -7,7 +7,7 @@ use super::volume_shadows::{GRID_UNIFORM, VolumeGrid};
 use super::{LIGHTS, MEDIA, SHADOW_GROUP, SHADOWS, TWO_TRIANGLES, VIEW, fullscreen_key};
 use crate::gpu::pipeline::{FRAG, Group, HDR, PipelineSpec, Stages, depth_texture, sizes, storage, uniform};
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Handle, TextureDesc};
+use crate::render::resource::{Access, Meaning, Handle, TextureDesc};
 use crate::scene::{Estimator, Scene};
 
 /// The exact per-step in-scattering integral instead of the constant one.
@@ -51,8 +51,8 @@ pub fn volume_march(g: &mut GraphBuilder, scene: &Scene, depth: Handle, shadows:
     let shadow_maps = shadows.map(|h| p.sample(h));
     let cells = p.access(grid.cells, Access::StorageRead);
     let grid_params = grid.layout.uniform_bytes();
-    let scattered = p.create("scattered", TextureDesc::d2(HDR, w, h), Access::ColorTarget);
-    let transmittance = p.create("transmittance", TextureDesc::d2(HDR, w, h), Access::ColorTarget);
+    let scattered = p.create("scattered", Meaning::Color, TextureDesc::d2(HDR, w, h), Access::ColorTarget);
+    let transmittance = p.create("transmittance", Meaning::Data, TextureDesc::d2(HDR, w, h), Access::ColorTarget);
     p.execute(move |ctx| {
         let s = ctx.scene;
         let u = ctx.uniform(&grid_params);

@@ -11,7 +11,7 @@ use glam::Vec3;
 use super::{LIGHTS, MEDIA, VIEW};
 use crate::gpu::pipeline::{COMPUTE, FRAG, Group, PipelineSpec, Stages, storage_rw, uniform};
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Element, Handle, PipelineKey, TensorLayout};
+use crate::render::resource::{Access, Meaning, Element, Handle, PipelineKey, TensorLayout};
 use crate::render::scene_gpu::medium_bounds;
 use crate::scene::Scene;
 
@@ -102,7 +102,7 @@ pub fn volume_shadows(g: &mut GraphBuilder, scene: &Scene) -> Option<VolumeGrid>
     };
     let mut p = g.pass("volume_shadows", PassKind::Compute);
     let key = p.pipeline(PipelineKey::new(&VOLUME_SHADOWS, &[]));
-    let cells = p.create("transmittance", layout.tensor(), Access::StorageWrite);
+    let cells = p.create("transmittance", Meaning::Data, layout.tensor(), Access::StorageWrite);
     let params = layout.uniform_bytes();
     let [x, y, z] = layout.dims;
     let groups = [x.div_ceil(TILE), y.div_ceil(TILE), (z * layout.lights).div_ceil(TILE)];

@@ -7,7 +7,7 @@ use super::volume_march::Marched;
 use super::{TWO_TRIANGLES, VIEW, fullscreen_key};
 use crate::gpu::pipeline::{FRAG, Group, HDR, PipelineSpec, Stages, depth_texture, sizes, texture, uniform};
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Handle, TextureDesc};
+use crate::render::resource::{Access, Meaning, Handle, TextureDesc};
 use crate::scene::Scene;
 
 pub static COMPOSITE: PipelineSpec = PipelineSpec {
@@ -36,8 +36,8 @@ pub fn volumes(g: &mut GraphBuilder, scene: &Scene, color: Handle, depth: Handle
     p.sample(depth);
     p.sample(m.scattered);
     p.sample(m.transmittance);
-    let out = p.create("color", TextureDesc::d2(HDR, w, h), Access::ColorTarget);
-    let transmittance = p.create("transmittance", TextureDesc::d2(HDR, w, h), Access::ColorTarget);
+    let out = p.create("color", Meaning::Color, TextureDesc::d2(HDR, w, h), Access::ColorTarget);
+    let transmittance = p.create("transmittance", Meaning::Data, TextureDesc::d2(HDR, w, h), Access::ColorTarget);
     p.execute(move |ctx| {
         let params = ctx.uniform(bytemuck::cast_slice(&[m.scale, 0, 0, 0]));
         let b = [

@@ -103,9 +103,9 @@ fn gpu_session_with(net: Network, scene: Scene, sets: &[[Image; 3]]) -> (Session
     let mut g = GraphBuilder::new();
     let mut p = g.pass("source", PassKind::Copy);
     let (w32, h32) = (w as u32, h as u32);
-    let color = p.create("color", TextureDesc::d2(COLOR, w32, h32), Access::CopyDst);
-    let albedo = p.create("albedo", TextureDesc::d2(HDR, w32, h32), Access::CopyDst);
-    let normal = p.create("normal", TextureDesc::d2(HDR, w32, h32), Access::CopyDst);
+    let color = p.create("color", Meaning::Color, TextureDesc::d2(COLOR, w32, h32), Access::CopyDst);
+    let albedo = p.create("albedo", Meaning::Color, TextureDesc::d2(HDR, w32, h32), Access::CopyDst);
+    let normal = p.create("normal", Meaning::Normal, TextureDesc::d2(HDR, w32, h32), Access::CopyDst);
     p.execute(move |ctx| {
         let set = &sources[(ctx.frame as usize - 1) % sources.len()];
         for (from, to) in set.iter().zip([color, albedo, normal]) {
@@ -294,7 +294,7 @@ fn a_tensor_larger_than_the_device_binds_culls_the_denoiser_with_the_reason() {
     for (limit, denoised) in [(input - 4, false), (input, true)] {
         let mut g = GraphBuilder::new();
         let mut p = g.pass("source", PassKind::Copy);
-        let [color, albedo, normal] = ["color", "albedo", "normal"].map(|n| p.create(n, TextureDesc::d2(COLOR, 64, 48), Access::CopyDst));
+        let [color, albedo, normal] = [("color", Meaning::Color), ("albedo", Meaning::Color), ("normal", Meaning::Normal)].map(|(n, m)| p.create(n, m, TextureDesc::d2(COLOR, 64, 48), Access::CopyDst));
         p.execute(|_| {});
         let out = denoise(&mut g, &scene, Some(&net), &Noisy { color, albedo, normal }, Some(limit));
         assert_eq!(out != color, denoised, "limit {limit}");
@@ -321,7 +321,7 @@ fn the_denoise_switch_culls_the_denoiser_with_the_reason() {
         scene.quality.denoise = on;
         let mut g = GraphBuilder::new();
         let mut p = g.pass("source", PassKind::Copy);
-        let [color, albedo, normal] = ["color", "albedo", "normal"].map(|n| p.create(n, TextureDesc::d2(COLOR, 64, 48), Access::CopyDst));
+        let [color, albedo, normal] = [("color", Meaning::Color), ("albedo", Meaning::Color), ("normal", Meaning::Normal)].map(|(n, m)| p.create(n, m, TextureDesc::d2(COLOR, 64, 48), Access::CopyDst));
         p.execute(|_| {});
         let out = denoise(&mut g, &scene, Some(&net), &Noisy { color, albedo, normal }, None);
         assert_eq!(out == color, !on);
