@@ -239,8 +239,11 @@ const live = new LiveFrame($('frame'), $('frame-info'), $('frame-empty'), (frame
   state.shownFrame = frame;
 });
 
+/** The `writes[]` entry of /api/passes for `pass/output`, or undefined. */
+const outputInfo = (pass, output) => state.passes.find((p) => p.name === pass)?.writes?.find((w) => w.name === output);
+
 const passList = new PassList($('passes'), $('passes-total'), (pass, output) => {
-  const info = state.passes.find((p) => p.name === pass)?.writes?.find((w) => w.name === output);
+  const info = outputInfo(pass, output);
   if (info?.kind === 'buffer') {
     // Buffers are tensors, not images: the tensor view takes the
     // inspector's place until a texture is picked again.
@@ -270,6 +273,7 @@ const inspector = new Inspector({
   // The inspector streams exact floats of what it shows.
   subscribeOnly: streamF32('inspector'),
   awaitCapture,
+  outputInfo,
 });
 
 // The tensor view takes the inspector's place: one set of outputs for both.

@@ -18,6 +18,7 @@ import { tonemapSlot, draw } from './inspector_draw.js';
 import { keyOf, Loader, parseKey } from './inspector_loader.js';
 import { Readout } from './inspector_readout.js';
 import { bindPointer, View } from './inspector_view.js';
+import * as presets from './presets.js';
 import * as tex from './texture.js';
 import { $, el, errorText, formatMs } from './util.js';
 
@@ -31,6 +32,9 @@ export class Inspector {
    *   these outputs (as f32) to this page
    * @param {(pass: string, output: string) => Promise<boolean>}
    *   hooks.awaitCapture resolves true once the output has been captured
+   * @param {(pass: string, output: string) => object | null}
+   *   hooks.outputInfo the output's `writes[]` entry of /api/passes (its
+   *   meaning and depth projection pick its display preset)
    */
   constructor(hooks) {
     this.hooks = hooks;
@@ -52,10 +56,17 @@ export class Inspector {
     this.ovInf = $('overlay-inf');
     this.ovNeg = $('overlay-neg');
     this.srgbIn = $('srgb');
+    this.linearizeIn = $('linearize');
     this.liveIn = $('live');
     this.zoomEl = $('zoom-level');
 
     this.opts = tex.defaultOptions();
+    // The output whose display preset `opts` holds, the preset as applied
+    // (what the user's changes are measured against), and whether it was
+    // guessed from the format before the pass list said the meaning.
+    this.presetKey = null;
+    this.applied = null;
+    this.presetGuessed = false;
     this.target = null; // {pass, output}
     this.a = null; // slot: {key, pass, output, lastGood, data, width, height, frame, format, stats, canvas, image}
     this.b = null;
@@ -115,6 +126,7 @@ export class Inspector {
       this.diff = null;
       this.error = null;
       this.bError = null;
+      this.presetKey = null;
       this.draw();
       this.describe();
       this.refreshReadout();
@@ -177,6 +189,7 @@ export class Inspector {
       this.b = null;
       this.bError = rb ? rb.reason : null;
     }
+    this.usePreset();
     this.redisplay();
   }
 
@@ -218,6 +231,7 @@ export class Inspector {
         this.bError = null;
       }
     }
+    this.usePreset();
     this.redisplay();
   }
 
@@ -276,6 +290,7 @@ export class Inspector {
     this.minIn.value = String(this.opts.min);
     this.maxIn.value = String(this.opts.max);
     this.srgbIn.checked = this.opts.srgb;
+    this.linearizeIn.checked = this.opts.linearize;
     this.ovNan.checked = this.opts.overlayNan;
     this.ovInf.checked = this.opts.overlayInf;
     this.ovNeg.checked = this.opts.overlayNeg;
@@ -290,6 +305,7 @@ export class Inspector {
   bindControls() {
     const changed = () => {
       this.needsRebuild = true;
+      this.remember();
       this.requestFrame();
     };
     this.selA.addEventListener('change', () => {
@@ -336,13 +352,17 @@ export class Inspector {
       [this.ovInf, 'overlayInf'],
       [this.ovNeg, 'overlayNeg'],
       [this.srgbIn, 'srgb'],
+      [this.linearizeIn, 'linearize'],
     ]) {
       input.addEventListener('change', () => {
         this.opts[field] = input.checked;
         changed();
       });
     }
-    $('auto-fit').addEventListener('click', () => this.autoFit());
+    $('auto-fit').addEventListener('click', () => {
+      this.autoFit();
+      this.remember();
+    });
     $('reset-range').addEventListener('click', () => {
       Object.assign(this.opts, { exposure: 0, min: 0, max: 1 });
       this.syncControls();
@@ -366,12 +386,16 @@ export class Inspector {
   autoFit() {
     const slot = this.displayedSlot();
     if (!slot) return null;
-    const range = tex.finiteRange(slot.data, this.opts.channel);
+    const range = tex.finiteRange(this.shownData(slot), this.opts.channel, this.clearOf(slot));
     if (!range) {
       this.notice('auto-fit: no finite values in this channel');
       return null;
     }
     let { min, max } = range;
+    if (presets.formatInfo(slot.format).integer) {
+      min = Math.floor(min);
+      max = Math.ceil(max);
+    }
     if (min === max) {
       // A constant image: centre it in a unit-wide window.
       min -= 0.5;
@@ -387,6 +411,63 @@ export class Inspector {
   mode() {
     const m = this.selMode.value;
     return m === 'split' || m === 'diff' ? m : 'off';
+  }
+
+  // ---- display presets (presets.js) -----------------------------------
+
+  /**
+   * Shows a newly opened output by its preset: the one the user left on
+   * it, else the automatic one for its format and meaning. Chosen again
+   * once the pass list gives the meaning of an output first shown by a
+   * guess from its format, unless the user changed it meanwhile.
+   */
+  usePreset() {
+    const a = this.a;
+    if (!a || a.lastGood) return;
+    const output = this.hooks.outputInfo?.(a.pass, a.output) || null;
+    if (this.presetKey === a.key && !(this.presetGuessed && output)) return;
+    this.presetKey = a.key;
+    this.presetGuessed = !output;
+    const auto = presets.choosePreset({ format: a.format, meaning: output?.meaning, depth: output?.depth });
+    const options = presets.channelOptions(auto.info);
+    this.channelSel.replaceChildren(...options.map((o) => el('option', { value: o.value }, o.label)));
+    this.linearizeIn.closest('label').hidden = !presets.canLinearize(output?.depth);
+    for (const input of [this.minIn, this.maxIn]) input.step = auto.info.integer ? '1' : 'any';
+    const stored = presets.loadPreset(localStorage, a.key);
+    const usable = stored && options.some((o) => o.value === stored.channel) ? stored : null;
+    Object.assign(this.opts, usable || auto.opts);
+    this.syncControls();
+    if (!usable && auto.fit) this.autoFit();
+    this.applied = presets.pick(this.opts);
+    this.root.dataset.meaning = auto.meaning;
+  }
+
+  /** Keeps the display options of the output shown, once the user made them differ from its preset. */
+  remember() {
+    if (!this.presetKey || !this.applied || presets.samePreset(this.opts, this.applied)) return;
+    presets.savePreset(localStorage, this.presetKey, this.opts);
+    this.applied = presets.pick(this.opts);
+    this.presetGuessed = false;
+  }
+
+  /** A depth output's projection (`writes[].depth`), else null. */
+  depthOf(slot) {
+    const output = slot?.pass ? this.hooks.outputInfo?.(slot.pass, slot.output) : null;
+    return output?.meaning === 'depth' ? output.depth || { near: null, far: null, reversed: false } : null;
+  }
+
+  /** The floats `slot` is shown from: depth as view distance when linearised. */
+  shownData(slot) {
+    const depth = this.opts.linearize ? this.depthOf(slot) : null;
+    if (!presets.canLinearize(depth)) return slot.data;
+    if (slot.linear?.depth !== depth) slot.linear = { depth, data: presets.linearizeDepth(slot.data, depth) };
+    return slot.linear.data;
+  }
+
+  /** What auto-fit leaves out of `slot`: a depth output's clear value. */
+  clearOf(slot) {
+    const depth = this.depthOf(slot);
+    return depth ? { src: slot.data, value: presets.depthClear(depth) } : null;
   }
 
   // ---- rendering --------------------------------------------------------
@@ -413,11 +494,11 @@ export class Inspector {
   /** Tonemaps what the mode shows (computing the difference in diff mode). */
   rebuild() {
     const mode = this.mode();
-    if (this.a && mode !== 'diff') tonemapSlot(this.a, this.opts);
-    if (this.b && mode === 'split') tonemapSlot(this.b, this.opts);
+    if (this.a && mode !== 'diff') tonemapSlot(this.a, this.opts, this.shownData(this.a));
+    if (this.b && mode === 'split') tonemapSlot(this.b, this.opts, this.shownData(this.b));
     if (this.a && this.b && mode === 'diff') {
       const d = tex.difference(this.a.data, this.a.width, this.a.height, this.b.data, this.b.width, this.b.height);
-      this.diff = reuseCanvas({ key: 'diff', ...d }, this.diff);
+      this.diff = reuseCanvas({ key: 'diff', format: this.a.format, names: this.a.names, ...d }, this.diff);
       tonemapSlot(this.diff, this.opts);
     } else {
       this.diff = null;
@@ -624,7 +705,10 @@ export class Inspector {
 
 /** A slot: what was loaded, its statistics and the labels in `info`. */
 function makeSlot(loaded, info, prev) {
-  return reuseCanvas({ ...info, ...loaded, stats: tex.computeStats(loaded.data, loaded.width, loaded.height) }, prev);
+  const slot = { ...info, ...loaded, stats: tex.computeStats(loaded.data, loaded.width, loaded.height) };
+  // The names of the channels the format has: the readout shows only these.
+  slot.names = presets.formatInfo(slot.format).names;
+  return reuseCanvas(slot, prev);
 }
 
 /**

@@ -13,15 +13,18 @@ const GRID_MIN_SCALE = 16; // pixel grid from this zoom (CSS px per pixel)
 const VALUES_MIN_SCALE = 84; // values written inside pixels from this zoom
 const FONT = 'ui-monospace, SFMono-Regular, Menlo, Consolas, monospace';
 
-/** Tonemaps a slot's floats into its off-screen canvas (made on first use). */
-export function tonemapSlot(slot, opts) {
+/**
+ * Tonemaps a slot's floats (or `src`, what they are shown as: depth as
+ * distance) into its off-screen canvas (made on first use).
+ */
+export function tonemapSlot(slot, opts, src = slot.data) {
   if (!slot.canvas) {
     slot.canvas = document.createElement('canvas');
     slot.canvas.width = slot.width;
     slot.canvas.height = slot.height;
     slot.image = new ImageData(slot.width, slot.height);
   }
-  tex.tonemap(slot.data, slot.width, slot.height, opts, slot.image.data);
+  tex.tonemap(src, slot.width, slot.height, opts, slot.image.data);
   slot.canvas.getContext('2d').putImageData(slot.image, 0, 0);
 }
 
@@ -135,7 +138,7 @@ function drawValues(ctx, { scale, tx, ty }, { x0, y0, x1, y1 }, slotAt) {
       ctx.fillStyle = lum > 140 ? 'rgba(0,0,0,0.85)' : 'rgba(255,255,255,0.9)';
       const left = tx + x * scale + 3;
       const top = ty + y * scale + 3;
-      ['R', 'G', 'B', 'A'].forEach((c, k) => {
+      slot.names.forEach((c, k) => {
         const s = tex.formatF32(v[k]);
         ctx.fillText(`${c} ${s.length > 9 ? Number(v[k]).toPrecision(4) : s}`, left, top + k * (fontPx + 2));
       });

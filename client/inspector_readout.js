@@ -58,11 +58,14 @@ export class Readout {
     items.push(badge(s.inf, 'inf', 'Inf'));
     items.push(badge(s.negative, 'neg', 'negative'));
     const fmt = (x) => (Number.isFinite(x) ? tex.formatF32(Math.fround(x)) : '—');
+    // Only the channels the format has: the capture fills the others.
+    const names = a.names;
+    const shown = (values) => values.slice(0, names.length).map(fmt).join(' ');
     items.push(
       el(
         'span',
-        { class: 'stat range', title: 'finite min / max per channel (R G B A)' },
-        `min ${s.min.map(fmt).join(' ')}  max ${s.max.map(fmt).join(' ')}`,
+        { class: 'stat range', title: `finite min / max per channel (${names.join(' ')})` },
+        `min ${shown(s.min)}  max ${shown(s.max)}`,
       ),
     );
     this.stats.replaceChildren(...items);
@@ -90,7 +93,7 @@ function writeValues(node, { label, slot, p, compare, pinned = false }) {
   const parts = [];
   if (compare) parts.push(el('span', { class: 'ro-label' }, label));
   parts.push(el('span', { class: 'coord' }, `(${p.x}, ${p.y})`));
-  ['R', 'G', 'B', 'A'].forEach((c, i) =>
+  slot.names.forEach((c, i) =>
     parts.push(
       el(
         'span',

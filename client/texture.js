@@ -71,6 +71,9 @@ export function defaultOptions() {
     overlayNan: true,
     overlayInf: true,
     overlayNeg: false,
+    // Depth shown as view distance (presets.js); the tonemapper itself
+    // never reads it.
+    linearize: false,
   };
 }
 
@@ -168,17 +171,22 @@ export function tonemap(src, width, height, opts, out) {
 
 /**
  * Min and max of the finite values a channel mode displays, for auto-fit.
- * Null when there is no finite value at all.
+ * Null when there is no finite value at all. With `ignore` ({src, value}),
+ * pixels whose first channel in `ignore.src` is exactly `value` are left
+ * out: a depth buffer's clear value, which no surface wrote.
  */
-export function finiteRange(src, channel) {
+export function finiteRange(src, channel, ignore = null) {
   let min = Infinity;
   let max = -Infinity;
   const n = src.length;
   const c = { r: 0, g: 1, b: 2, a: 3 }[channel];
+  const skip = ignore ? ignore.src : null;
+  const skipped = ignore ? ignore.value : NaN;
   // `v > -Infinity && v < Infinity` holds exactly for finite v.
   if (c !== undefined || channel === 'luminance') {
     const lum = c === undefined;
     for (let i = 0; i < n; i += 4) {
+      if (skip && skip[i] === skipped) continue;
       const v = lum ? luminance(src[i], src[i + 1], src[i + 2]) : src[i + c];
       if (v > -Infinity && v < Infinity) {
         if (v < min) min = v;
@@ -187,6 +195,7 @@ export function finiteRange(src, channel) {
     }
   } else {
     for (let i = 0; i < n; i += 4) {
+      if (skip && skip[i] === skipped) continue;
       for (let k = i; k < i + 3; k++) {
         const v = src[k];
         if (v > -Infinity && v < Infinity) {
