@@ -534,6 +534,29 @@ mod tests {
         crate::loaded::load_with(&scenes, &Overrides::from([("post.two_triangles".to_owned(), Value::Bool(two_triangles))])).unwrap()
     }
 
+    /// Each output says what its pass declared it means; the camera's
+    /// depth carries the scene camera's planes, a light's shadow map none.
+    #[test]
+    fn outputs_carry_their_meaning_and_camera_depth_its_planes() {
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/minimal.toml");
+        let mut loaded = crate::loaded::load_with(&scenes, &Overrides::new()).unwrap();
+        (loaded.scene.camera.near, loaded.scene.camera.far) = (0.25, 40.0);
+        let graph = super::super::build_graph(&loaded.scene, None, FrameOptions::default());
+        let output = |name: &str| {
+            let h = graph.resources.iter().position(|r| r.name == name).unwrap_or_else(|| panic!("{name} in the graph"));
+            output_summary(&graph, super::super::resource::Handle(h), &loaded.scene.camera)
+        };
+        let meaning = |name: &str| (output(name).meaning, output(name).depth);
+        let planes = DepthProjection { near: Some(0.25), far: Some(40.0), reversed: false };
+        assert_eq!(meaning("depth_prepass/depth"), ("depth", Some(planes)));
+        let light = DepthProjection { near: None, far: None, reversed: false };
+        assert_eq!(meaning("shadows/depth"), ("depth", Some(light)));
+        assert_eq!(meaning("gbuffer/normal"), ("normal", None));
+        assert_eq!(meaning("gbuffer/albedo"), ("color", None));
+        assert_eq!(meaning("gbuffer/material"), ("data", None));
+        assert_eq!(meaning("tonemap/color"), ("color", None));
+    }
+
     /// With timestamp queries every pass has a time and they add up to the
     /// frame; without them only the frame's wall clock is known, and no
     /// pass is given a time it did not measure.
