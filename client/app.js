@@ -15,6 +15,7 @@
 //   #inspect-a, #channel (rgb|r|g|b|a|luminance), #exposure (EV), #range-min,
 //   #range-max, #auto-fit, #overlay-nan, #overlay-inf, #overlay-neg, #srgb,
 //   #compare-mode (off|split|diff), #compare-b (last_good | "pass/output"), #live
+//   #linearize (depth as distance), #inspector[data-meaning]: see presets.js
 //   #renderer-raster, #renderer-path, #path-samples, #path-difference,
 //                      #path-difference-stats: see path.js
 //   window.loupe       see the end of this file

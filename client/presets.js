@@ -13,7 +13,11 @@
 //
 // No DOM here (storage is passed in), so node tests cover the choice
 // (tests/client/presets.test.mjs); the browser test is
-// tests/e2e/browser/presets.rs.
+// tests/e2e/browser/presets.rs. Its hooks: #inspector[data-meaning] (the
+// meaning the open output is shown by), #linearize (the linear depth
+// toggle, hidden unless the output's planes are known), #channel's
+// options (the format's channels), the readout's .ch-name spans and
+// `window.loupe.state.inspector.options` (the preset applied).
 
 import { CHANNELS } from './texture.js';
 
