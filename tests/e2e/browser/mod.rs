@@ -4,6 +4,7 @@
 //! open the page, break a shader on disk, see the error with file:line while
 //! the old frame stays, fix it, see it clear.
 
+use std::os::unix::process::CommandExt;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -13,10 +14,15 @@ use loupe_tests::{Project, Server, reload, repo};
 const LIMIT: Duration = Duration::from_secs(60);
 const TONEMAP: &str = "shaders/post/tonemap.wgsl";
 
+/// chromedriver in a process group of its own, with the chromium it starts:
+/// dropping it kills the whole group. Killing chromedriver alone leaves its
+/// chromium running (re-parented to init), a browser per test that goes on
+/// using the CPU for the rest of the run.
 struct Driver(Child);
 
 impl Drop for Driver {
     fn drop(&mut self) {
+        let _ = Command::new("kill").args(["-KILL", "--", &format!("-{}", self.0.id())]).status();
         let _ = self.0.kill();
         let _ = self.0.wait();
     }
@@ -36,6 +42,7 @@ async fn browser_sized(width: u32, height: u32) -> (Driver, Client) {
     let driver = Driver(
         Command::new("chromedriver")
             .arg(format!("--port={port}"))
+            .process_group(0)
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
