@@ -10,6 +10,8 @@ use std::time::{Duration, Instant};
 use fantoccini::{Client, ClientBuilder, Locator};
 use loupe_tests::{Project, Server, reload, repo};
 
+mod timings;
+
 const LIMIT: Duration = Duration::from_secs(60);
 const TONEMAP: &str = "shaders/post/tonemap.wgsl";
 
