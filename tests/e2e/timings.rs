@@ -41,13 +41,14 @@ fn every_pass_time_names_its_clock_and_the_frame_adds_up() {
     p.write("scenes/auto.toml", AUTO_EXPOSURE);
     let s = Server::start(&p.root, &["--render", "continuous", "--fps", "4", "--scene", "scenes/auto.toml"]);
     let mut ws = s.ws();
-    let hello = ws.event("hello", LIMIT, |_| true);
-    let cpu_adapter = hello["status"]["cpu_adapter"].as_bool().unwrap();
     let ran = |f: &Value| f["passes"].as_array().is_some_and(|ps| ps.iter().any(|p| p["name"] == "exposure_histogram"));
     // The first frame runs while the last pipelines may still build: a
     // later one is a settled frame.
     ws.event("frame", LIMIT, ran);
     let frame = ws.event("frame", LIMIT, ran);
+    // Asked once the daemon has rendered: before, the status is not yet
+    // the adapter's.
+    let cpu_adapter = s.get_json("/api/status")["cpu_adapter"].as_bool().unwrap();
     let listed = s.get_json("/api/passes");
     let listed = listed.as_array().unwrap();
     let compute = |name: &str| listed.iter().any(|p| p["name"] == name && p["kind"] == "compute");

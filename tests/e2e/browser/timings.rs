@@ -16,10 +16,12 @@ async fn the_pass_list_shows_each_time_with_its_clock_and_the_frame_split() {
     let s = Server::start(&p.root, &["--render", "continuous", "--fps", "4", "--scene", "scenes/auto.toml"]);
     let (_driver, c) = browser().await;
     c.goto(&s.url("/")).await.unwrap();
-    let cpu_adapter = s.get_json("/api/status")["cpu_adapter"].as_bool().unwrap();
     until(&c, &s, "the histogram pass timed", "document.querySelector('#passes li[data-pass=\"exposure_histogram\"][data-timing]')").await;
     until(&c, &s, "the frame split in the Passes head", "document.querySelector('#passes-total').dataset.frameMs").await;
     until(&c, &s, "a frame rate", "document.querySelector('#fps').title.includes('delivered')").await;
+    // Asked once the daemon has rendered: before, the status is not yet
+    // the adapter's.
+    let cpu_adapter = s.get_json("/api/status")["cpu_adapter"].as_bool().unwrap();
 
     // Every row as the page shows it, beside the pass kinds the API lists.
     let rows = c
