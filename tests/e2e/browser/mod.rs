@@ -11,6 +11,8 @@ use std::time::{Duration, Instant};
 use fantoccini::{Client, ClientBuilder, Locator};
 use loupe_tests::{Project, Server, reload, repo};
 
+mod timings;
+
 const LIMIT: Duration = Duration::from_secs(60);
 const TONEMAP: &str = "shaders/post/tonemap.wgsl";
 
@@ -157,7 +159,7 @@ async fn page_shows_frame_and_errors_at_their_line_and_clears_them() {
     let alpha = c.execute("return window.loupe.valueAt(480, 270)[3];", vec![]).await.unwrap();
     assert_eq!(alpha, 1.0, "the streamed final image is opaque");
     let page = c.execute("const s = window.loupe.state; return [s.protocol, s.problems, document.querySelectorAll('#notices .notice:not([hidden])').length];", vec![]).await.unwrap();
-    assert_eq!(page, serde_json::json!([2, [], 0]), "the page speaks the server's protocol, without problems or notices");
+    assert_eq!(page, serde_json::json!([3, [], 0]), "the page speaks the server's protocol, without problems or notices");
 
     // Break the shader as vim saves it.
     let good = p.read(TONEMAP);
