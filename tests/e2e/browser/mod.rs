@@ -993,3 +993,4 @@ async fn the_docs_screenshot_of_the_inspector_is_regenerable() {
     let file = image::open(&committed).unwrap_or_else(|e| panic!("{} (LOUPE_BLESS=1 writes it): {e}", committed.display()));
     assert_eq!((file.width(), file.height()), (WIDTH, HEIGHT), "{} has the screenshot's size", committed.display());
 }
+mod readouts;
