@@ -323,3 +323,29 @@ pub fn depth_state(depth: crate::gpu::pipeline::Depth) -> DepthState {
         Depth::Equal => DepthState::new(Compare::LessEqual, false),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One triangle wound clockwise on screen over a 4×4 target, drawn by
+    /// a pipeline with `faces`.
+    fn replayed(faces: Faces) -> DrawReport {
+        let positions = vec![[-1.0, -1.0, 0.5, 1.0], [-1.0, 1.0, 0.5, 1.0], [1.0, -1.0, 0.5, 1.0]];
+        let draw = RecordedDraw { name: "tri".into(), positions, depth: None, faces };
+        let target = RecordedTarget { pass: "p".into(), width: 4, height: 4, depth: None, draws: vec![draw], fullscreen: None };
+        replay(&[target]).remove(0).draws.remove(0)
+    }
+
+    #[test]
+    fn a_draw_is_modelled_and_reported_with_its_pipelines_culling() {
+        let loupes = replayed(Faces::of(&crate::gpu::pipeline::primitive()));
+        assert_eq!((loupes.cull_mode, loupes.shaded.culled_triangles), (Some("none"), 0), "loupe's pipelines cull nothing");
+        let back = replayed(Faces { cull: Some(Face::Back), front_face: FrontFace::Ccw });
+        assert_eq!(
+            (back.cull_mode, back.shaded.culled_triangles, back.shaded.quads),
+            (Some("back"), 1, 0),
+            "a clockwise triangle is a back face"
+        );
+    }
+}
