@@ -7,9 +7,8 @@
 use fantoccini::actions::{InputSource, KeyAction, KeyActions};
 use fantoccini::key::Key;
 use fantoccini::{Client, Locator};
-use loupe_tests::{Project, Server};
 
-use super::{browser, until};
+use super::{browser, small_showcase, until};
 
 /// Presses and releases `key` on whatever has the focus, through WebDriver's
 /// key actions (real key events, not synthesized in the page).
@@ -20,24 +19,6 @@ async fn press(c: &Client, key: char) {
 
 async fn js(c: &Client, code: &str) -> serde_json::Value {
     c.execute(code, vec![]).await.unwrap()
-}
-
-/// The showcase at 320×180 with a 256² shadow map (the quad model of a
-/// debug build replays every shadow layer: small keeps it quick).
-fn small_showcase(name: &str) -> (Project, Server) {
-    let p = Project::copy_of_repo(name);
-    let small = p
-        .read("scenes/showcase.toml")
-        .replacen("width = 640", "width = 320", 1)
-        .replacen("height = 360", "height = 180", 1)
-        .replacen("shadow_map_size = 1024", "shadow_map_size = 256", 1);
-    assert!(
-        small.contains("width = 320") && small.contains("height = 180") && small.contains("= 256"),
-        "the showcase's settings moved: update this test"
-    );
-    p.write("scenes/small.toml", small);
-    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/small.toml"]);
-    (p, s)
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
