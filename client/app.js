@@ -35,6 +35,7 @@ import { ControlsPanel } from './controls.js';
 import { QuadView } from './quads.js';
 import { PathView } from './path.js';
 import { TradeoffsView } from './tradeoffs.js';
+import { bindShortcuts } from './shortcuts.js';
 import * as tex from './texture.js';
 import { fpsTitle } from './timings.js';
 import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
@@ -565,6 +566,10 @@ const quadView = new QuadView(
     fetchMap: api.quadMap,
   },
 );
+
+// ---- keyboard shortcuts (and the ? overlay) -------------------------------
+
+bindShortcuts(inspector);
 
 // ---- scene controls ------------------------------------------------------
 

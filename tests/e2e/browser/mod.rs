@@ -98,6 +98,24 @@ async fn shown(c: &Client) -> Shown {
     Shown { frame: n(0), pixels: n(1) << 32 | n(2), centre: [n(3) as u8, n(4) as u8, n(5) as u8] }
 }
 
+/// The showcase at 320×180 with a 256² shadow map (the quad model of a
+/// debug build replays every shadow layer: small keeps it quick).
+fn small_showcase(name: &str) -> (Project, Server) {
+    let p = Project::copy_of_repo(name);
+    let small = p
+        .read("scenes/showcase.toml")
+        .replacen("width = 640", "width = 320", 1)
+        .replacen("height = 360", "height = 180", 1)
+        .replacen("shadow_map_size = 1024", "shadow_map_size = 256", 1);
+    assert!(
+        small.contains("width = 320") && small.contains("height = 180") && small.contains("= 256"),
+        "the showcase's settings moved: update this test"
+    );
+    p.write("scenes/small.toml", small);
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/small.toml"]);
+    (p, s)
+}
+
 /// What to print about the server when a wait times out.
 trait Log {
     fn log(&self) -> String;
@@ -479,19 +497,7 @@ async fn a_nan_made_by_a_pass_is_named_live_and_opened_at_its_pixel() {
 /// both maps over its output, each with a legend.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn every_raster_pass_has_its_quad_table_and_maps() {
-    let p = Project::copy_of_repo("browser-quads");
-    // Small, with a small shadow map: the page reads every output whole.
-    let small = p
-        .read("scenes/showcase.toml")
-        .replacen("width = 640", "width = 320", 1)
-        .replacen("height = 360", "height = 180", 1)
-        .replacen("shadow_map_size = 1024", "shadow_map_size = 256", 1);
-    assert!(
-        small.contains("width = 320") && small.contains("height = 180") && small.contains("= 256"),
-        "the showcase's settings moved: update this test"
-    );
-    p.write("scenes/small.toml", small);
-    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/small.toml"]);
+    let (_p, s) = small_showcase("browser-quads");
     let (_driver, c) = browser().await;
     c.goto(&s.url("/")).await.unwrap();
     until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
@@ -1002,3 +1008,4 @@ async fn the_docs_screenshot_of_the_inspector_is_regenerable() {
     let file = image::open(&committed).unwrap_or_else(|e| panic!("{} (LOUPE_BLESS=1 writes it): {e}", committed.display()));
     assert_eq!((file.width(), file.height()), (WIDTH, HEIGHT), "{} has the screenshot's size", committed.display());
 }
+mod readouts;
