@@ -600,7 +600,8 @@ export class Inspector {
 
   refreshReadout() {
     const { pinned, hover } = this.view;
-    this.readout.values({ mode: this.mode(), a: this.a, b: this.b, diff: this.diff, p: pinned || hover, pinned: !!pinned });
+    const depthOf = (slot) => this.depthOf(slot);
+    this.readout.values({ mode: this.mode(), a: this.a, b: this.b, diff: this.diff, p: pinned || hover, pinned: !!pinned, depthOf });
     this.readout.overlayCount({ mode: this.mode(), overlay: this.overlay, p: pinned || hover });
   }
 

@@ -3,8 +3,10 @@
 // over A at that pixel, and the info line with A's size, format, frame and
 // statistics.
 //
-// Test hooks: #quad-value[data-kind][data-x][data-y][data-count].
+// Test hooks: #quad-value[data-kind][data-x][data-y][data-count];
+// #pixel-value .distance (a depth pixel's view distance).
 
+import { canLinearize, linearDepth } from './presets.js';
 import { countAt, countText } from './quads.js';
 import * as tex from './texture.js';
 import { $, el } from './util.js';
@@ -21,14 +23,15 @@ export class Readout {
 
   /**
    * Values of pixel `p` (or a hint without one) in A and, when comparing,
-   * in B and (diff mode) the difference.
+   * in B and (diff mode) the difference. `depthOf(slot)` is a depth
+   * output's projection (`writes[].depth`), whose planes add the distance.
    */
-  values({ mode, a, b, diff, p, pinned }) {
+  values({ mode, a, b, diff, p, pinned, depthOf = () => null }) {
     const compare = mode !== 'off';
-    writeValues(this.a, { label: 'A', slot: a, p, compare, pinned });
+    writeValues(this.a, { label: 'A', slot: a, p, compare, pinned, depth: depthOf(a) });
     this.b.hidden = !compare;
     this.diff.hidden = mode !== 'diff';
-    if (compare) writeValues(this.b, { label: 'B', slot: b, p, compare });
+    if (compare) writeValues(this.b, { label: 'B', slot: b, p, compare, depth: depthOf(b) });
     if (mode === 'diff') writeValues(this.diff, { label: '|A−B|', slot: diff, p, compare });
     this.a.classList.toggle('pinned', pinned);
   }
@@ -97,7 +100,7 @@ export class Readout {
   }
 }
 
-function writeValues(node, { label, slot, p, compare, pinned = false }) {
+function writeValues(node, { label, slot, p, compare, pinned = false, depth = null }) {
   for (const k of ['x', 'y', 'r', 'g', 'b', 'a']) delete node.dataset[k];
   const v = slot && p ? tex.pixel(slot.data, slot.width, slot.height, p.x, p.y) : null;
   if (!v) {
@@ -129,6 +132,11 @@ function writeValues(node, { label, slot, p, compare, pinned = false }) {
       ),
     ),
   );
+  // Depth through known planes also reads as the distance it stands for.
+  if (canLinearize(depth)) {
+    const title = 'view distance: near·far / (far − depth·(far − near))';
+    parts.push(el('span', { class: 'distance', title }, `distance ${tex.formatF32(Math.fround(linearDepth(v[0], depth)))}`));
+  }
   if (pinned) parts.push(el('span', { class: 'pin-tag', title: 'Esc or click again to unpin' }, 'pinned'));
   node.replaceChildren(...parts.flatMap((part, i) => (i ? [' ', part] : [part])));
 }

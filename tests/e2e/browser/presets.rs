@@ -22,6 +22,7 @@ const LOOK: &str = "const s = window.loupe.state.inspector;
       meaning: document.querySelector('#inspector').dataset.meaning,
       channels: [...document.querySelector('#channel').options].map((o) => o.textContent),
       readout: [...document.querySelectorAll('#pixel-value .ch-name')].map((e) => e.textContent),
+      distance: document.querySelector('#pixel-value .distance')?.textContent ?? null,
       range: document.querySelector('#stats .range').textContent,
       linearizeShown: !document.querySelector('#linearize').closest('label').hidden,
       value: window.loupe.valueAt(x, y),
@@ -88,6 +89,10 @@ async fn depth_and_normals_open_readable_and_keep_what_the_user_changed() {
         assert_eq!(d["meaning"], "depth", "{at}");
         assert_eq!(d["channels"], serde_json::json!(["depth"]), "{at}: the channel select has the format's one channel");
         assert_eq!(d["readout"], serde_json::json!(["depth"]), "{at}: the readout names only depth");
+        let raw = f(&d["value"][0]);
+        let distance: f64 = d["distance"].as_str().and_then(|t| t.strip_prefix("distance ")).map_or(f64::NAN, |t| t.parse().unwrap());
+        let want = near * far / (far - raw * (far - near));
+        assert!((distance - want).abs() < 1e-4 * want, "{at}: depth {raw} reads as distance {want}: {}", d["distance"]);
         assert_eq!(
             d["range"].as_str().unwrap().split_whitespace().count(),
             4,
@@ -122,6 +127,7 @@ async fn depth_and_normals_open_readable_and_keep_what_the_user_changed() {
         assert_eq!(n["meaning"], "normal", "{at}");
         assert_eq!(n["readout"], serde_json::json!(["R", "G", "B", "A"]), "{at}: Rgba16Float has four channels");
         assert_eq!(n["linearizeShown"], false, "{at}: only depth linearises");
+        assert_eq!(n["distance"], Value::Null, "{at}: only depth reads as distance");
         assert_eq!(floats(&n["value"]).len(), 4, "{at}: the hovered pixel has a value");
         let mut negative = 0;
         for g in n["grid"].as_array().unwrap() {
