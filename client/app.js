@@ -35,6 +35,7 @@ import { ControlsPanel } from './controls.js';
 import { QuadView } from './quads.js';
 import { PathView } from './path.js';
 import { TradeoffsView } from './tradeoffs.js';
+import { Layout } from './layout.js';
 import * as tex from './texture.js';
 import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
 
@@ -600,6 +601,10 @@ function applyControls(report) {
   pathView.setControls(report);
   tradeoffs.setControls(report);
 }
+
+// ---- layout: splitters, collapsing, remembered sizes ---------------------
+
+new Layout(document.querySelector('main'));
 
 // ---- start ---------------------------------------------------------------
 

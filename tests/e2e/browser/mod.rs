@@ -11,6 +11,8 @@ use fantoccini::{Client, ClientBuilder, Locator};
 use loupe_tests::{Project, Server, reload, repo};
 
 const LIMIT: Duration = Duration::from_secs(60);
+mod layout;
+
 const TONEMAP: &str = "shaders/post/tonemap.wgsl";
 
 struct Driver(Child);
@@ -674,14 +676,10 @@ async fn the_renderer_switch_counts_samples_and_measures_path_against_raster() {
     c.close().await.unwrap();
 }
 
-/// A denoiser tensor in the page: every denoiser tensor listed with its
-/// statistics, three picked channels as RGB equal to the values the server
-/// serves (each mapped from its own min…max), the value of every channel
-/// under the mouse exact, a grid cell and a histogram per channel.
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
-    let p = Project::copy_of_repo("browser-denoiser");
-    // Small, with few samples: lavapipe traces and denoises it in a few frames.
+/// Writes `scenes/small.toml`, the minimal scene small, path traced with
+/// few samples and denoised (lavapipe traces and denoises it in a few
+/// frames); returns its path for `--scene`.
+fn small_denoised_scene(p: &Project) -> String {
     let small = p.read("scenes/minimal.toml").replacen("width = 640", "width = 64", 1).replacen("height = 360", "height = 48", 1);
     assert!(
         small.contains("width = 64") && small.contains("height = 48") && !small.contains("[quality]"),
@@ -689,7 +687,37 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
     );
     // No weights named: the bundled LDR network for colour, albedo and normal.
     p.write("scenes/small.toml", small + "\n[quality]\nrenderer = \"path\"\npath_spp = 2\n\n[denoiser]\nmode = \"ldr\"\n");
-    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/small.toml"]);
+    "scenes/small.toml".to_owned()
+}
+
+/// Every tensor the denoiser's passes write (but their `overflow` counts),
+/// as "pass/output", in the order of `/api/passes`: the network's order.
+fn denoiser_tensors(s: &Server) -> Vec<String> {
+    s.get_json("/api/passes")
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["name"].as_str().unwrap().starts_with("denoise") && p["status"] == "ok")
+        .flat_map(|p| {
+            p["writes"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter(|w| w["kind"] == "buffer" && w["name"] != "overflow")
+                .map(|w| format!("{}/{}", p["name"].as_str().unwrap(), w["name"].as_str().unwrap()))
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// A denoiser tensor in the page: every denoiser tensor listed with its
+/// statistics, three picked channels as RGB equal to the values the server
+/// serves (each mapped from its own min…max), the value of every channel
+/// under the mouse exact, a grid cell and a histogram per channel.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
+    let p = Project::copy_of_repo("browser-denoiser");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", &small_denoised_scene(&p)]);
     let (_driver, c) = browser().await;
     c.goto(&s.url("/")).await.unwrap();
     until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
@@ -707,22 +735,7 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
     .await;
 
     // Every denoiser tensor the frame makes is listed.
-    let tensors: Vec<String> = s
-        .get_json("/api/passes")
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|p| p["name"].as_str().unwrap().starts_with("denoise") && p["status"] == "ok")
-        .flat_map(|p| {
-            p["writes"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .filter(|w| w["kind"] == "buffer" && w["name"] != "overflow")
-                .map(|w| format!("{}/{}", p["name"].as_str().unwrap(), w["name"].as_str().unwrap()))
-                .collect::<Vec<_>>()
-        })
-        .collect();
+    let tensors = denoiser_tensors(&s);
     assert!(tensors.len() > 10 && tensors.iter().any(|t| t == "denoise.pool1/tensor"), "{tensors:?}");
     until(&c, &s, "every denoiser tensor listed", &format!("document.querySelector('#tensor-list').dataset.count === '{}'", tensors.len()))
         .await;
