@@ -142,7 +142,7 @@ export class Layout {
   }
 
   size(panel, px) {
-    panel.style.flex = `${px} 1 0px`;
+    panel.style.flex = `${Math.round(px)} 1 0px`;
     panel.dataset.sized = '';
   }
 
@@ -186,7 +186,7 @@ export class Layout {
         return { y: 0, heights, above: panels.filter(before).at(-1), below: panels.find((p) => !before(p)) };
       },
       () => {
-        for (const p of open()) this.saved.sizes[p.id] = Math.round(p.getBoundingClientRect().height);
+        for (const p of open()) this.saved.sizes[p.id] = Number(p.style.flexGrow);
       },
     );
     splitter.addEventListener('dblclick', () => {
@@ -210,7 +210,8 @@ export class Layout {
       handle.setPointerCapture?.(e.pointerId);
       document.body.classList.add('dragging');
       const onMove = (ev) => move(ev, start);
-      const onUp = () => {
+      const onUp = (ev) => {
+        move(ev, start);
         handle.removeEventListener('pointermove', onMove);
         handle.removeEventListener('pointerup', onUp);
         handle.removeEventListener('pointercancel', onUp);

@@ -66,6 +66,17 @@ async fn browser_sized(width: u32, height: u32) -> (Driver, Client) {
     }
 }
 
+/// Chromium whose page (the viewport, which a screenshot shows) is
+/// width × height: the window is larger than the page by the browser's own
+/// bars, so it is grown by that much.
+async fn browser_with_page(width: u32, height: u32) -> (Driver, Client) {
+    let (driver, c) = browser_sized(width, height).await;
+    let inner = c.execute("return [window.innerWidth, window.innerHeight];", vec![]).await.unwrap();
+    let (w, h) = (inner[0].as_u64().unwrap() as u32, inner[1].as_u64().unwrap() as u32);
+    c.set_window_size(2 * width - w, 2 * height - h).await.unwrap();
+    (driver, c)
+}
+
 /// The image `#frame` shows, as drawn: its frame number, a hash of its
 /// RGBA8 pixels and its centre pixel.
 struct Shown {
@@ -975,12 +986,7 @@ async fn the_docs_screenshot_of_the_inspector_is_regenerable() {
     let committed = repo().join("docs/images/inspector.png");
     let p = Project::copy_of_repo("browser-screenshot");
     let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/showcase.toml"]);
-    let (_driver, c) = browser_sized(WIDTH, HEIGHT).await;
-    // The window is larger than the page by the browser's own bars: grow
-    // it by that much so that the page, which the screenshot shows, has the size.
-    let inner = c.execute("return [window.innerWidth, window.innerHeight];", vec![]).await.unwrap();
-    let (w, h) = (inner[0].as_u64().unwrap() as u32, inner[1].as_u64().unwrap() as u32);
-    c.set_window_size(2 * WIDTH - w, 2 * HEIGHT - h).await.unwrap();
+    let (_driver, c) = browser_with_page(WIDTH, HEIGHT).await;
     c.goto(&s.url("/")).await.unwrap();
     until(&c, &s, "a frame", "document.querySelector('#frame').complete && Number(document.querySelector('#frame').dataset.frame || 0)")
         .await;
