@@ -478,13 +478,10 @@ async fn a_nan_made_by_a_pass_is_named_live_and_opened_at_its_pixel() {
     c.close().await.unwrap();
 }
 
-/// Quad statistics in the page: with the toggle on, every raster pass of
-/// the showcase gets its totals in the pass list, its per-draw table and
-/// both maps over its output, each with a legend.
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn every_raster_pass_has_its_quad_table_and_maps() {
-    let p = Project::copy_of_repo("browser-quads");
-    // Small, with a small shadow map: the page reads every output whole.
+/// Writes `scenes/small_showcase.toml`, the showcase at 320×180 with a
+/// small shadow map (quick on lavapipe; the page reads every output whole);
+/// returns its path for `--scene`.
+fn small_showcase(p: &Project) -> String {
     let small = p
         .read("scenes/showcase.toml")
         .replacen("width = 640", "width = 320", 1)
@@ -494,8 +491,17 @@ async fn every_raster_pass_has_its_quad_table_and_maps() {
         small.contains("width = 320") && small.contains("height = 180") && small.contains("= 256"),
         "the showcase's settings moved: update this test"
     );
-    p.write("scenes/small.toml", small);
-    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/small.toml"]);
+    p.write("scenes/small_showcase.toml", small);
+    "scenes/small_showcase.toml".to_owned()
+}
+
+/// Quad statistics in the page: with the toggle on, every raster pass of
+/// the showcase gets its totals in the pass list, its per-draw table and
+/// both maps over its output, each with a legend.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_raster_pass_has_its_quad_table_and_maps() {
+    let p = Project::copy_of_repo("browser-quads");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", &small_showcase(&p)]);
     let (_driver, c) = browser().await;
     c.goto(&s.url("/")).await.unwrap();
     until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
