@@ -39,6 +39,10 @@ async fn showcase(c: &Client, s: &Server, size: &str) {
     // first capture is streamed was seen to get no quad report).
     c.find(fantoccini::Locator::Css("#quad-stats")).await.unwrap().click().await.unwrap();
     until(c, s, "the inspector streaming", "window.loupe.state.inspector.streamedLoads >= 1").await;
+    // The final output inspected by name, as the quad test does: its pass's
+    // quad table follows.
+    let shown = c.execute_async("window.loupe.inspect('tonemap', 'color').then(arguments[0]);", vec![]).await.unwrap();
+    assert_eq!(shown, true, "{size}: tonemap/color inspected");
     until(
         c,
         s,
