@@ -36,6 +36,7 @@ import { QuadView } from './quads.js';
 import { PathView } from './path.js';
 import { TradeoffsView } from './tradeoffs.js';
 import { bindShortcuts } from './shortcuts.js';
+import { Layout } from './layout.js';
 import * as tex from './texture.js';
 import { fpsTitle } from './timings.js';
 import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
@@ -604,6 +605,10 @@ function applyControls(report) {
   pathView.setControls(report);
   tradeoffs.setControls(report);
 }
+
+// ---- layout: splitters, collapsing, remembered sizes ---------------------
+
+new Layout(document.querySelector('main'));
 
 // ---- start ---------------------------------------------------------------
 

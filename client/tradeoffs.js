@@ -4,7 +4,8 @@
 // axes logarithmic, one line per series; a point equal to its reference
 // (no error to put on a log axis) sits hollow on the bottom edge. Hovering a point shows its
 // settings, figures and image; clicking it applies its settings as
-// overrides (one `set_override` per setting). The points whose settings
+// overrides (one `set_override` per setting). The tip floats beside the
+// point (layout.js `float`). The points whose settings
 // are the scene's current values are marked.
 //
 // Test hooks: #tradeoffs-panel, #tradeoffs-chart circle[data-series]
@@ -12,6 +13,7 @@
 // #tradeoffs-image, #tradeoffs-meta, #tradeoffs-empty.
 
 import { el } from './util.js';
+import { float } from './layout.js';
 
 const SVG = 'http://www.w3.org/2000/svg';
 const WIDTH = 520;
@@ -149,8 +151,11 @@ export class TradeoffsView {
       el('div', { class: 'tip-settings', text: settings.join(' · ') }),
       el('div', { class: 'tip-hint', text: `reference: ${series.reference} · click to apply` }),
     );
+    // A floating tip beside the point, inside the viewport; placed again
+    // once the image has its size.
+    this.image.onload = () => !this.tip.hidden && float(this.tip, circle);
     this.image.src = `/api/tradeoffs/${point.image}`;
-    this.tip.hidden = false;
+    float(this.tip, circle);
     this.tip.dataset.series = circle.dataset.series;
     this.tip.dataset.index = circle.dataset.index;
   }
