@@ -35,6 +35,7 @@ import { ControlsPanel } from './controls.js';
 import { QuadView } from './quads.js';
 import { PathView } from './path.js';
 import { TradeoffsView } from './tradeoffs.js';
+import { isBrowserNotice } from './browser_notices.js';
 import * as tex from './texture.js';
 import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
 
@@ -101,7 +102,9 @@ function recordProblem(message) {
 
 // Safety net: anything that escapes a handler is shown, not lost in the
 // console (handlers catch what they expect).
-window.addEventListener('error', (e) => recordProblem(`client error: ${e.message}`));
+window.addEventListener('error', (e) => {
+  if (!isBrowserNotice(e)) recordProblem(`client error: ${e.message}`);
+});
 window.addEventListener('unhandledrejection', (e) => {
   e.preventDefault();
   recordProblem(`client error: ${errorText(e.reason)}`);
@@ -471,6 +474,9 @@ function onEvent(ev) {
     case 'error':
       notify('server', `server: ${ev.message}`, 'error', 20000);
       break;
+    case 'scene_saved':
+      controls.saved(ev);
+      break;
     case 'nan':
       applyNan(ev.report);
       break;
@@ -591,9 +597,8 @@ const tradeoffs = new TradeoffsView(
     empty: $('tradeoffs-empty'),
     refresh: $('tradeoffs-refresh'),
   },
-  { send: (message) => conn.send(message), fetch: () => api.getJson('/api/tradeoffs') },
+  { send: (message) => conn.send(message), fetch: api.tradeoffs },
 );
-tradeoffs.load();
 
 function applyControls(report) {
   controls.apply(report);
@@ -610,6 +615,9 @@ conn = new Connection(wsUrl, {
     state.connections++;
     for (const key of [...notices.keys()]) if (key.startsWith('fetch:')) clearNotice(key);
     resyncAll();
+    // A restarted server may render another scene: whose results are
+    // current is its answer.
+    tradeoffs.load();
     // A restarted server has none of the old captures in memory.
     if (inspector.target) inspector.load();
   },
