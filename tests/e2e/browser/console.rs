@@ -13,7 +13,7 @@ use fantoccini::Client;
 use fantoccini::wd::WebDriverCompatibleCommand;
 use loupe_tests::{Project, Server};
 
-use super::{browser_logging, until};
+use super::{Driver, browser_logging, until};
 
 /// chromedriver's `POST /session/{id}/se/log` for the `browser` log.
 #[derive(Debug)]
@@ -45,13 +45,20 @@ async fn js(c: &Client, script: &str) -> serde_json::Value {
     c.execute(script, vec![]).await.unwrap_or_else(|e| panic!("{script}: {e}"))
 }
 
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn a_page_load_logs_no_failed_request_and_no_error() {
-    let p = Project::copy_of_repo("browser-console");
+/// A fresh copy of the repository served on minimal.toml, and a logging
+/// chromium at 1600×857 showing its first frame.
+async fn fresh_page(name: &str) -> (Project, Server, Driver, Client) {
+    let p = Project::copy_of_repo(name);
     let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/minimal.toml"]);
-    let (_driver, c) = browser_logging(1600, 857).await;
+    let (driver, c) = browser_logging(1600, 857).await;
     c.goto(&s.url("/")).await.unwrap();
     until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    (p, s, driver, c)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_page_load_logs_no_failed_request_and_no_error() {
+    let (_p, s, _driver, c) = fresh_page("browser-console").await;
     until(&c, &s, "the final output inspected", "window.loupe.state.inspector.loaded").await;
     until(&c, &s, "the pass list", "window.loupe.state.passes.some((p) => p.name === 'gbuffer')").await;
     until(&c, &s, "the tradeoffs panel answered", "!document.querySelector('#tradeoffs-empty').hidden").await;
@@ -92,11 +99,7 @@ async fn a_page_load_logs_no_failed_request_and_no_error() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn typed_entry_sets_an_override_a_save_names_its_file_and_the_renderer_comes_back_clean() {
-    let p = Project::copy_of_repo("browser-forms");
-    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/minimal.toml"]);
-    let (_driver, c) = browser_logging(1600, 857).await;
-    c.goto(&s.url("/")).await.unwrap();
-    until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    let (p, s, _driver, c) = fresh_page("browser-forms").await;
     let entry = "document.querySelector('#controls [data-entry=\"post.exposure_ev\"]')";
     until(&c, &s, "the exposure entry", entry).await;
     let range = js(&c, &format!("return {entry}.parentElement.querySelector('.range').textContent;")).await;
