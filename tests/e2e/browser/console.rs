@@ -2,7 +2,8 @@
 //! failed request and no error in the browser's console, states (nothing
 //! captured, no tradeoff results) included; a slider's typed entry sets
 //! an override and refuses what it cannot set; a save names its file; the
-//! renderer switched to path and back leaves no override.
+//! renderer switched to path and back leaves no override; tradeoff results
+//! show for their scene only, and stale ones are never ringed current.
 //!
 //! The console is read as chromium keeps it: `goog:loggingPrefs` asks
 //! chromedriver to keep every level (`super::browser_logging`), and its
@@ -151,5 +152,41 @@ async fn typed_entry_sets_an_override_a_save_names_its_file_and_the_renderer_com
 
     let log = browser_log(&c).await;
     assert!(!log.iter().any(|l| l.starts_with("SEVERE")), "the console has errors:\n{}", log.join("\n"));
+    c.close().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn tradeoff_results_are_shown_for_their_scene_only_and_stale_ones_never_ringed_current() {
+    let (p, s, _driver, c) = fresh_page("browser-tradeoffs-state").await;
+    until(&c, &s, "no results yet", "window.loupe.state.tradeoffs.state === 'not-written'").await;
+    // One point at minimal.toml's own shadow map size: it would be ringed
+    // were the results current.
+    let results = |scene: &str| {
+        serde_json::json!({
+            "scene": scene, "hash": "made-before-an-edit", "adapter": "test", "cpu_adapter": true, "timing": "serial",
+            "width": 32, "height": 18, "repeats": 1,
+            "series": [{ "name": "shadow_map_size", "setting": "quality.shadow_map_size", "with": {}, "reference": "the same passes",
+                "passes": ["shadows"], "points": [{ "value": 1024, "time_ms": 1.0, "time_range_ms": [1.0, 1.0], "time_ratio": 1.0,
+                "relative_mse": 0.01, "psnr_db": 30.0, "ssim": 0.9, "image": "points/0-1024.png" }] }]
+        })
+        .to_string()
+    };
+    std::fs::create_dir_all(p.path("tradeoffs")).unwrap();
+    let refresh = "document.querySelector('#tradeoffs-refresh').click(); return true;";
+
+    std::fs::write(p.path("tradeoffs/tradeoffs.json"), results("scenes/minimal.toml")).unwrap();
+    js(&c, refresh).await;
+    until(&c, &s, "stale results plotted", "window.loupe.state.tradeoffs.state === 'stale' && window.loupe.state.tradeoffs.points === 1")
+        .await;
+    assert_eq!(js(&c, "return JSON.stringify(window.loupe.state.tradeoffs.current);").await, "[]", "a stale point is not current");
+    let meta = js(&c, "return document.querySelector('#tradeoffs-meta').textContent;").await;
+    assert!(meta.as_str().is_some_and(|m| m.contains("stale")), "{meta}");
+
+    std::fs::write(p.path("tradeoffs/tradeoffs.json"), results("scenes/showcase.toml")).unwrap();
+    js(&c, refresh).await;
+    until(&c, &s, "another scene's results", "window.loupe.state.tradeoffs.state === 'other-scene'").await;
+    assert_eq!(js(&c, "return window.loupe.state.tradeoffs.points;").await, 0, "not plotted");
+    let empty = js(&c, "return document.querySelector('#tradeoffs-empty').textContent;").await;
+    assert!(empty.as_str().is_some_and(|t| t.starts_with("These results are for scenes/showcase.toml, not this one")), "{empty}");
     c.close().await.unwrap();
 }
