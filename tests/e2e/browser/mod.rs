@@ -11,6 +11,7 @@ use std::time::{Duration, Instant};
 use fantoccini::{Client, ClientBuilder, Locator};
 use loupe_tests::{Project, Server, reload, repo};
 
+mod console;
 mod layout;
 mod readouts;
 mod timings;
@@ -42,6 +43,17 @@ async fn browser() -> (Driver, Client) {
 
 /// Chromium with a window (and, headless, a page) of width × height.
 async fn browser_sized(width: u32, height: u32) -> (Driver, Client) {
+    browser_with(width, height, serde_json::json!({})).await
+}
+
+/// `browser_sized` that keeps the page's console (every level) for
+/// chromedriver's log endpoint: what `console::browser_log` reads.
+async fn browser_logging(width: u32, height: u32) -> (Driver, Client) {
+    browser_with(width, height, serde_json::json!({ "goog:loggingPrefs": { "browser": "ALL" } })).await
+}
+
+/// Chromium at width × height with `extra` capabilities.
+async fn browser_with(width: u32, height: u32, extra: serde_json::Value) -> (Driver, Client) {
     let port = free_port();
     let driver = Driver(
         Command::new("chromedriver")
@@ -61,6 +73,8 @@ async fn browser_sized(width: u32, height: u32) -> (Driver, Client) {
         }
     }))
     .unwrap();
+    let caps: serde_json::Map<String, serde_json::Value> =
+        caps.into_iter().chain(serde_json::from_value::<serde_json::Map<_, _>>(extra).expect("capabilities are an object")).collect();
     let start = Instant::now();
     loop {
         match ClientBuilder::new(hyper_util::client::legacy::connect::HttpConnector::new())
