@@ -428,7 +428,8 @@ export class Inspector {
     this.selMode.value = 'diff';
     this.root.dataset.compare = 'diff';
     this.compareTools.set({ scale: 'p99', emitters: true });
-    this.compareChanged();
+    this.compareTools.setReference(true);
+    // Inspecting loads A, and B is taken from the page once A lands.
     return this.inspect(pass, output);
   }
 

@@ -7,7 +7,7 @@
 use fantoccini::{Client, Locator};
 use loupe_tests::{Capture, Project, Server};
 
-use super::{browser, until};
+use super::{browser, number_after, until};
 
 /// The small minimal scene with a rect light the camera sees beside the
 /// knot: the raster draws no rect light, so its pixels are the emitters.
@@ -98,16 +98,9 @@ fn assert_stats(got: &serde_json::Value, want: &Stats, what: &str) {
     );
     assert_eq!(g(4) as usize, want.pixels, "{what}: pixels counted {got}");
     let text = got[5].as_str().unwrap();
-    let number = |after: &str| -> f64 {
-        text.split(after)
-            .nth(1)
-            .and_then(|t| t.split_whitespace().next())
-            .and_then(|v| v.parse().ok())
-            .unwrap_or_else(|| panic!("{what}: no number after {after:?} in {text:?}"))
-    };
     // Three significant digits shown: within half a unit of the third.
     for (label, value) in [("median ", 100.0 * want.median), ("p95 ", 100.0 * want.p95), ("mean relative ", 100.0 * want.relative)] {
-        assert!((number(label) - value).abs() <= 0.0051 * value.abs(), "{what}: {label}in {text:?}, want {value}");
+        assert!((number_after(text, label) - value).abs() <= 0.0051 * value.abs(), "{what}: {label}in {text:?}, want {value}");
     }
 }
 

@@ -111,6 +111,15 @@ impl Log for Dead {
     }
 }
 
+/// The number right after `label` in a text the page shows.
+fn number_after(text: &str, label: &str) -> f64 {
+    text.split(label)
+        .nth(1)
+        .and_then(|t| t.split_whitespace().next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no number after {label:?} in {text:?}"))
+}
+
 /// Polls a JS expression until it is truthy; returns its value.
 async fn until(c: &Client, server: &impl Log, what: &str, js: &str) -> serde_json::Value {
     let start = Instant::now();
@@ -632,13 +641,7 @@ async fn the_renderer_switch_counts_samples_and_measures_path_against_raster() {
     let (rmse, relative) = ((squares / (3.0 * pixels)).sqrt(), relative / pixels);
     assert!(rmse > 0.0, "the path tracer and the raster differ");
     let text = shown[0].as_str().unwrap();
-    let number = |after: &str| -> f64 {
-        text.split(after)
-            .nth(1)
-            .and_then(|t| t.split_whitespace().next())
-            .and_then(|v| v.parse().ok())
-            .unwrap_or_else(|| panic!("no number after {after:?} in {text:?}"))
-    };
+    let number = |after: &str| number_after(text, after);
     let close = |got: f64, want: f64, tolerance: f64| (got - want).abs() <= tolerance * want.abs();
     // Three significant digits shown: within half a unit of the third.
     assert!(
