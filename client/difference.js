@@ -1,8 +1,9 @@
 // The numbers of a difference view, with no DOM so node can test them:
 // per-pixel errors of an image against a reference, the masks that leave
 // pixels out of them (background, emitters), their statistics (median, p95,
-// mean relative error, RMSE), the scale a difference is shown with, and the
-// path tracer's samples per second and time to its target.
+// mean relative error, RMSE), the scale a difference is shown with and its
+// heat map, and the path tracer's samples per second and time to its
+// target.
 //
 // Images are RGBA f32, row-major (the `.f32` capture layout); a mask is a
 // Uint8Array with 1 where a pixel is left out.
@@ -127,6 +128,43 @@ export function unionMask(masks) {
   for (const m of present) for (let i = 0; i < out.length; i++) out[i] |= m[i];
   return out;
 }
+
+/** The heat map's colours (inferno), from no difference to the scale's
+ * top and beyond: none of them is the masked grey or the NaN magenta. */
+export const RAMP = [
+  [0, 0, 4],
+  [87, 16, 110],
+  [188, 55, 84],
+  [249, 142, 9],
+  [252, 255, 164],
+];
+/** Pixels non-finite in either image, as the inspector's NaN overlay. */
+const NON_FINITE = [255, 0, 255];
+
+/**
+ * Writes into display RGBA8 `out` the per-pixel mean over RGB of `diff`
+ * (|A − B| as RGBA f32) on RAMP from 0 to `top`; `top` and above share
+ * its last colour, non-finite pixels are magenta.
+ */
+export function heatMap(diff, top, out) {
+  const last = RAMP.length - 1;
+  for (let i = 0; 4 * i < diff.length; i++) {
+    const v = (diff[4 * i] + diff[4 * i + 1] + diff[4 * i + 2]) / 3;
+    let color = NON_FINITE;
+    if (Number.isFinite(v)) {
+      const x = top > 0 ? Math.min(v / top, 1) * last : 0;
+      const k = Math.min(Math.floor(x), last - 1);
+      const f = x - k;
+      color = RAMP[k].map((a, c) => a + f * (RAMP[k + 1][c] - a));
+    }
+    out.set(color, 4 * i);
+    out[4 * i + 3] = 255;
+  }
+  return out;
+}
+
+/** A CSS gradient of RAMP, for a legend. */
+export const RAMP_CSS = `linear-gradient(90deg, ${RAMP.map((c, i) => `rgb(${c.join(',')}) ${(100 * i) / (RAMP.length - 1)}%`).join(', ')})`;
 
 /** The grey masked pixels are painted with in a displayed difference. */
 export const MASKED_RGB = [48, 48, 48];

@@ -419,15 +419,16 @@ export class Inspector {
   }
 
   /**
-   * Compares `pass/output` with the raster reference as |A − B|, at the
-   * 99th percentile scale, emitters masked: what the path panel opens.
+   * Compares `pass/output` with the raster reference as |A − B|, a heat
+   * map at the 99th percentile scale, emitters masked: what the path
+   * panel opens.
    */
   compareWithReference(pass, output) {
     this.ensureOption(this.selB, REFERENCE);
     this.selB.value = REFERENCE;
     this.selMode.value = 'diff';
     this.root.dataset.compare = 'diff';
-    this.compareTools.set({ scale: 'p99', emitters: true });
+    this.compareTools.set({ scale: 'p99', heat: true, emitters: true });
     this.compareTools.setReference(true);
     // Inspecting loads A, and B is taken from the page once A lands.
     return this.inspect(pass, output);

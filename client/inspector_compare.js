@@ -1,18 +1,19 @@
 // The inspector's compare tools: the display scale of |A − B| (the
 // toolbar's min/max range, a percentile of the differences, or a fixed
-// value, the value in use shown), the masks that leave the background or
+// value, the value in use shown), a heat map of it (the mean over RGB on a
+// colour ramp, with its legend), the masks that leave the background or
 // the emitters out when B is the page's raster reference, and the
 // statistics of A against B (median, p95, mean relative error, RMSE) in
 // the status line. The numbers are difference.js's.
 //
 // Test hooks: #diff-scale (range | p99 | p95 | fixed), #diff-scale-value
-// (the top of the scale in use), #mask-emitters, #mask-background,
+// (the top of the scale in use), #diff-heat, #diff-legend, #mask-emitters, #mask-background,
 // #compare-stats[data-median][data-p95][data-relative][data-rmse]
 // [data-pixels][data-masked].
 
-import { compareStats, paintMask, scaleTop, statsText, statsTitle } from './difference.js';
+import { compareStats, fmt, heatMap, paintMask, RAMP_CSS, scaleTop, statsText, statsTitle } from './difference.js';
 import { tonemapSlot } from './inspector_draw.js';
-import { $ } from './util.js';
+import { $, el } from './util.js';
 
 /** The B option of the page's raster reference. */
 export const REFERENCE = 'raster_reference';
@@ -25,6 +26,8 @@ export class CompareTools {
   constructor(changed) {
     this.scaleSel = $('diff-scale');
     this.scaleIn = $('diff-scale-value');
+    this.heatIn = $('diff-heat');
+    this.legend = $('diff-legend');
     this.maskIns = { emitters: $('mask-emitters'), background: $('mask-background') };
     this.statsEl = $('compare-stats');
     this.top = null; // the top of the scale in use, null with the range
@@ -37,13 +40,14 @@ export class CompareTools {
       this.scaleIn.classList.toggle('invalid', !ok);
       if (ok) changed();
     });
-    for (const input of Object.values(this.maskIns)) input.addEventListener('change', changed);
+    for (const input of [...Object.values(this.maskIns), this.heatIn]) input.addEventListener('change', changed);
     this.showScaleInput();
   }
 
-  /** Sets the scale ('range' | 'p99' | 'p95' | 'fixed') and masks given. */
-  set({ scale, emitters, background }) {
+  /** Sets the scale ('range' | 'p99' | 'p95' | 'fixed'), heat map and masks given. */
+  set({ scale, heat, emitters, background }) {
     if (scale) this.scaleSel.value = scale;
+    if (heat !== undefined) this.heatIn.checked = heat;
     if (emitters !== undefined) this.maskIns.emitters.checked = emitters;
     if (background !== undefined) this.maskIns.background.checked = background;
     this.showScaleInput();
@@ -72,7 +76,8 @@ export class CompareTools {
 
   /**
    * Tonemaps |A − B| into its canvas: from 0 to the scale's top (or with
-   * the toolbar's range), the masked pixels in grey.
+   * the toolbar's range), on the heat ramp when chosen, the masked pixels
+   * in grey.
    */
   showDiff(diff, opts, mask) {
     const choice = this.scaleSel.value;
@@ -87,11 +92,18 @@ export class CompareTools {
       // A zero top (no difference at all) shows black rather than dividing by zero.
       tonemapSlot(diff, { ...opts, exposure: 0, min: 0, max: this.top > 0 ? this.top : 1 });
     }
+    const heatTop = this.top ?? opts.max;
+    if (this.heatIn.checked) heatMap(diff.data, heatTop, diff.image.data);
+    this.legend.hidden = !this.heatIn.checked;
+    this.legend.replaceChildren(
+      el('span', { class: 'num' }, '0'),
+      el('i', { class: 'ramp', style: `background: ${RAMP_CSS}` }),
+      el('span', { class: 'num' }, fmt(heatTop)),
+    );
+    this.legend.title = '|A − B|, the mean over RGB; larger differences share the top colour, magenta is not finite';
     this.scaleSel.title = this.top === null ? 'the toolbar min/max range' : `0 … ${this.top}: larger differences share the top colour`;
-    if (m) {
-      paintMask(diff.image.data, m);
-      diff.canvas.getContext('2d').putImageData(diff.image, 0, 0);
-    }
+    if (m) paintMask(diff.image.data, m);
+    if (m || this.heatIn.checked) diff.canvas.getContext('2d').putImageData(diff.image, 0, 0);
   }
 
   /**
@@ -117,6 +129,6 @@ export class CompareTools {
   }
 
   snapshot() {
-    return { scale: this.scaleSel.value, scaleTop: this.top, masks: this.maskChoice() };
+    return { scale: this.scaleSel.value, scaleTop: this.top, heat: this.heatIn.checked, masks: this.maskChoice() };
   }
 }

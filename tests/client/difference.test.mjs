@@ -9,6 +9,10 @@ import {
   compareStats,
   emitterMask,
   formatDuration,
+  heatMap,
+  MASKED_RGB,
+  paintMask,
+  RAMP,
   quantile,
   RELATIVE_EPSILON,
   SampleRate,
@@ -88,6 +92,20 @@ test('the scale is a percentile of the unmasked per-pixel mean differences, or f
   assert.equal(scaleTop(diff, 101, 1, { kind: 'percentile', value: 99 }, mask), 50);
   assert.equal(scaleTop(diff, 101, 1, { kind: 'fixed', value: 0.25 }), 0.25);
   assert.equal(scaleTop(image([[NaN, 0, 0]]), 1, 1, { kind: 'percentile', value: 99 }), 0);
+});
+
+test('the heat map puts 0 at the ramp foot, the top and above at its head, non-finite in magenta; masks paint grey', () => {
+  const diff = image([[0, 0, 0], [2, 2, 2], [9, 9, 9], [NaN, 0, 0], [0.5, 0.5, 0.5]]);
+  const out = heatMap(diff, 2, new Uint8ClampedArray(5 * 4));
+  const px = (i) => [...out.slice(4 * i, 4 * i + 4)];
+  assert.deepEqual(px(0), [...RAMP[0], 255]);
+  assert.deepEqual(px(1), [...RAMP[RAMP.length - 1], 255]);
+  assert.deepEqual(px(2), [...RAMP[RAMP.length - 1], 255]);
+  assert.deepEqual(px(3), [255, 0, 255, 255]);
+  assert.deepEqual(px(4), [...RAMP[1], 255], 'a quarter of the top is the second of five stops');
+  paintMask(out, new Uint8Array([0, 1, 0, 0, 0]));
+  assert.deepEqual(px(1), [...MASKED_RGB, 255]);
+  assert.ok(!RAMP.some((c) => c.join() === MASKED_RGB.join()), 'the masked grey is no ramp colour');
 });
 
 test('samples per second count from the first change seen, and the time to the target follows', () => {

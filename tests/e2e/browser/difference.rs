@@ -232,6 +232,23 @@ async fn the_path_raster_difference_opens_in_the_inspector_with_values_statistic
     assert!((top[2].as_f64().unwrap() - want.top99).abs() <= 1e-6 * want.top99, "scale top {top}, want {}", want.top99);
     assert!((top[1].as_f64().unwrap() - want.top99).abs() <= 1e-3 * want.top99, "scale shown {top}, want {}", want.top99);
 
+    // Shown as a heat map, its legend up to the scale's top, an emitter in the masked grey.
+    let e = (0..96 * 54).find(|&i| emitter(i)).unwrap();
+    let look = c
+        .execute(
+            &format!(
+                "return [window.loupe.displayedAt({}, {}, 'diff'), window.loupe.state.inspector.compare.heat, document.querySelector('#diff-legend').hidden, document.querySelector('#diff-legend').textContent];",
+                e % 96,
+                e / 96
+            ),
+            vec![],
+        )
+        .await
+        .unwrap();
+    assert_eq!(look[0], serde_json::json!([48, 48, 48, 255]), "a masked pixel is grey: {look}");
+    assert_eq!((look[1].as_bool(), look[2].as_bool()), (Some(true), Some(false)), "{look}");
+    assert!(look[3].as_str().unwrap().starts_with('0'), "the legend runs from 0: {look}");
+
     // A mask more changes them; none gives the whole image.
     c.find(Locator::Css("#mask-background")).await.unwrap().click().await.unwrap();
     let both = stats(&traced, &raster, |i| emitter(i) || background(i));
