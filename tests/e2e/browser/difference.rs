@@ -249,6 +249,19 @@ async fn the_path_raster_difference_opens_in_the_inspector_with_values_statistic
     assert_eq!((look[1].as_bool(), look[2].as_bool()), (Some(true), Some(false)), "{look}");
     assert!(look[3].as_str().unwrap().starts_with('0'), "the legend runs from 0: {look}");
 
+    // A fixed scale is the value typed.
+    let fixed = c
+        .execute(
+            "const sel = document.querySelector('#diff-scale'); sel.value = 'fixed'; sel.dispatchEvent(new Event('change'));
+             const v = document.querySelector('#diff-scale-value'); v.value = '0.5'; v.dispatchEvent(new Event('input'));
+             return true;",
+            vec![],
+        )
+        .await
+        .unwrap();
+    assert_eq!(fixed, true);
+    until(&c, &s, "the fixed scale", "window.loupe.state.inspector.compare.scaleTop === 0.5").await;
+
     // A mask more changes them; none gives the whole image.
     c.find(Locator::Css("#mask-background")).await.unwrap().click().await.unwrap();
     let both = stats(&traced, &raster, |i| emitter(i) || background(i));
@@ -262,5 +275,27 @@ async fn the_path_raster_difference_opens_in_the_inspector_with_values_statistic
     until(&c, &s, "no mask", &format!("Number(document.querySelector('#compare-stats').dataset.pixels) === {}", all.pixels)).await;
     assert_stats(&shown(&c, "#compare-stats").await, &all, "no mask");
     assert!(all.p95 > want.p95 && all.relative > want.relative, "the emitters dominate the unmasked figures");
+
+    // Split: A on the left, the raster reference on the right, read out alike.
+    c.execute(
+        "const m = document.querySelector('#compare-mode'); m.value = 'split'; m.dispatchEvent(new Event('change')); return true;",
+        vec![],
+    )
+    .await
+    .unwrap();
+    until(&c, &s, "the split view", "(i => i.compare.mode === 'split' && i.compare.loaded)(window.loupe.state.inspector)").await;
+    let split = c
+        .execute(
+            &format!(
+                "window.loupe.hover({x}, {y}); const d = document.querySelector('#pixel-value-b').dataset;
+                 return [[d.r, d.g, d.b].map(Number), window.loupe.state.inspector.compare.bLabel, window.loupe.state.problems];"
+            ),
+            vec![],
+        )
+        .await
+        .unwrap();
+    assert_eq!(floats(&split[0]), raster.data[i..i + 3], "B in the split view is the raster pixel");
+    assert!(split[1].as_str().unwrap().starts_with("raster reference · frame "), "{split}");
+    assert_eq!(split[2], serde_json::json!([]), "no client problems on the way");
     c.close().await.unwrap();
 }
