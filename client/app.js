@@ -38,11 +38,13 @@ import { ControlsPanel } from './controls.js';
 import { QuadView } from './quads.js';
 import { PathView, TRACED } from './path.js';
 import { TradeoffsView } from './tradeoffs.js';
+import { bindShortcuts } from './shortcuts.js';
 import * as tex from './texture.js';
+import { fpsTitle } from './timings.js';
 import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
 
 /** The protocol version this client speaks (protocol.rs `VERSION`). */
-const PROTOCOL = 2;
+const PROTOCOL = 3;
 /** How long the inspector waits for a newly subscribed output's capture. */
 const CAPTURE_WAIT_MS = 4000;
 
@@ -55,8 +57,7 @@ const state = {
   shownFrame: null, // frame number of the image in #frame
   nan: null, // the newest NaN report (`/api/nan`)
   fps: 0,
-  totalMs: null,
-  timing: '',
+  frameSplit: null, // the newest `frame` event: its wall time and how it splits (timings.js)
   passes: [],
   pipelines: [],
   diagnostics: [],
@@ -202,7 +203,7 @@ function showFps() {
     header.fps.textContent = 'idle';
   }
   header.fps.title = [
-    state.totalMs !== null ? `last frame: ${formatMs(state.totalMs)} ms ${state.timing}` : null,
+    fpsTitle(state.fps, state.frameSplit) || null,
     state.dropped.frames ? `${state.dropped.frames} frame(s) skipped while this tab was busy` : null,
     state.dropped.events ? `${state.dropped.events} event(s) missed while this tab was busy` : null,
   ]
@@ -435,8 +436,7 @@ function onEvent(ev) {
       break;
     case 'frame':
       state.frame = ev.frame;
-      state.totalMs = Number.isFinite(ev.total_ms) ? ev.total_ms : null;
-      state.timing = ev.timing || '';
+      state.frameSplit = ev;
       header.frame.textContent = String(ev.frame);
       countFrame();
       passList.updateTimings(ev);
@@ -573,6 +573,10 @@ const quadView = new QuadView(
     fetchMap: api.quadMap,
   },
 );
+
+// ---- keyboard shortcuts (and the ? overlay) -------------------------------
+
+bindShortcuts(inspector);
 
 // ---- scene controls ------------------------------------------------------
 

@@ -106,7 +106,6 @@ export class Inspector {
       },
       draw: () => this.draw(),
       fit: () => this.fit(),
-      actualSize: () => this.actualSize(),
     });
     this.resize();
     new ResizeObserver(() => this.resize()).observe(this.wrap);
@@ -513,7 +512,8 @@ export class Inspector {
   }
 
   /**
-   * Lays a map over A (quad statistics): {width, height, rgba} or null.
+   * Lays a map over A (quad statistics): {width, height, rgba, kind,
+   * values (the counts, read under the cursor)} or null.
    * Shown only without a compare, at A's scale, from A's top-left corner.
    */
   setOverlay(map) {
@@ -523,8 +523,9 @@ export class Inspector {
       canvas.width = map.width;
       canvas.height = map.height;
       canvas.getContext('2d').putImageData(new ImageData(map.rgba, map.width, map.height), 0, 0);
-      this.overlay = { canvas, width: map.width, height: map.height, kind: map.kind };
+      this.overlay = { canvas, width: map.width, height: map.height, kind: map.kind, values: map.values };
     }
+    this.refreshReadout();
     this.draw();
   }
 
@@ -563,6 +564,13 @@ export class Inspector {
     this.draw();
   }
 
+  /** Zooms by `factor` about the centre of the view. */
+  zoomBy(factor) {
+    const { w, h } = this.cssSize();
+    this.view.zoomAt(this.view.scale * factor, w / 2, h / 2);
+    this.draw();
+  }
+
   /** One image pixel per device pixel, about the centre. */
   actualSize() {
     const { w, h, dpr } = this.cssSize();
@@ -598,6 +606,7 @@ export class Inspector {
   refreshReadout() {
     const { pinned, hover } = this.view;
     this.readout.values({ mode: this.mode(), a: this.a, b: this.b, diff: this.diff, p: pinned || hover, pinned: !!pinned });
+    this.readout.overlayCount({ mode: this.mode(), overlay: this.overlay, p: pinned || hover });
   }
 
   describe() {

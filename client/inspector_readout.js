@@ -1,7 +1,11 @@
 // The text beside the inspected image: the exact values of the hovered or
-// pinned pixel in A, B and their difference, and the info line with A's
-// size, format, frame and statistics.
+// pinned pixel in A, B and their difference, the count of the quad map laid
+// over A at that pixel, and the info line with A's size, format, frame and
+// statistics.
+//
+// Test hooks: #quad-value[data-kind][data-x][data-y][data-count].
 
+import { countAt, countText } from './quads.js';
 import * as tex from './texture.js';
 import { $, el } from './util.js';
 
@@ -10,6 +14,7 @@ export class Readout {
     this.a = $('pixel-value');
     this.b = $('pixel-value-b');
     this.diff = $('pixel-value-diff');
+    this.count = $('quad-value');
     this.info = $('image-info');
     this.stats = $('stats');
   }
@@ -26,6 +31,26 @@ export class Readout {
     if (compare) writeValues(this.b, { label: 'B', slot: b, p, compare });
     if (mode === 'diff') writeValues(this.diff, { label: '|A−B|', slot: diff, p, compare });
     this.a.classList.toggle('pinned', pinned);
+  }
+
+  /**
+   * The count of quad map `overlay` ({kind, values, width, height} or
+   * null) at pixel `p`; hidden without a map or while comparing (the map
+   * is drawn only over A alone).
+   */
+  overlayCount({ mode, overlay, p }) {
+    const node = this.count;
+    for (const k of ['kind', 'x', 'y', 'count']) delete node.dataset[k];
+    node.hidden = !overlay || mode !== 'off';
+    if (node.hidden) return;
+    node.dataset.kind = overlay.kind;
+    const n = p ? countAt(overlay, p.x, p.y) : null;
+    if (n === null) {
+      node.replaceChildren(el('span', { class: 'muted' }, `${overlay.kind === 'overdraw' ? 'quad overdraw' : 'helper lanes'}: hover the image to read the count`));
+      return;
+    }
+    Object.assign(node.dataset, { x: String(p.x), y: String(p.y), count: String(n) });
+    node.replaceChildren(el('span', { class: 'coord' }, `(${p.x}, ${p.y})`), ' ', el('span', { class: 'quad-count' }, countText(overlay.kind, n)));
   }
 
   /**

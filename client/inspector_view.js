@@ -75,7 +75,8 @@ export class View {
 
 /**
  * Wheel zooms, drag pans (or moves the divider), a click pins a pixel,
- * arrows step the pinned pixel; `f` or a double click fits, `1` is 1:1.
+ * arrows step the pinned pixel, Esc unpins; a double click fits (the
+ * other keys are shortcuts.js's).
  *
  * @param {HTMLCanvasElement} canvas
  * @param {View} view
@@ -87,7 +88,6 @@ export class View {
  * @param {() => void} host.selected the pinned pixel changed
  * @param {() => void} host.draw the view changed
  * @param {() => void} host.fit
- * @param {() => void} host.actualSize
  */
 export function bindPointer(canvas, view, host) {
   const local = (e) => {
@@ -147,9 +147,8 @@ export function bindPointer(canvas, view, host) {
   });
   canvas.addEventListener('dblclick', () => host.fit());
   canvas.addEventListener('keydown', (e) => {
-    if (e.key === 'f') host.fit();
-    else if (e.key === '1') host.actualSize();
-    else if (e.key === 'Escape') {
+    // f, 1 and the other inspector keys are document-wide (shortcuts.js).
+    if (e.key === 'Escape') {
       view.pinned = null;
       host.selected();
     } else if (e.key.startsWith('Arrow') && view.pinned) {

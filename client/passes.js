@@ -1,9 +1,15 @@
 // The pass list: one row per render-graph node with its status, why it is
 // culled or failed, and its time as a bar on a frame timeline (each bar
 // starts where the previous pass ended, so the list reads as a Gantt chart
-// of the frame).
+// of the frame). Each time shows its clock (GPU, wall) or "n/a" with the
+// reason as its title (timings.js); the head's total splits the frame's
+// wall time into the passes' sum and the rest.
+//
+// Test hooks: li[data-timing=gpu|wall|none], .pass-time .ms, .pass-time
+// .timing; the total's data-frame-ms, data-passes-ms, data-unattributed-ms.
 
 import { el, formatMs, plural } from './util.js';
+import { frameTotal, hasSplit, passTime } from './timings.js';
 
 const STATUS_TEXT = { ok: 'ok', stale: 'stale', failed: 'failed', culled: 'culled' };
 const STATUS_HELP = {
@@ -26,10 +32,11 @@ export class PassList {
     this.passes = [];
     this.pipelines = new Map();
     this.selected = null;
-    /** Newest time per pass: frame events update it between pass lists. */
+    /** Newest time per pass ({time_ms, timing, timing_reason}): frame
+     * events update it between pass lists. */
     this.times = new Map();
-    this.timing = '';
-    this.totalMs = null;
+    /** The newest frame event carrying the frame's split, or null. */
+    this.split = null;
     this.key = null;
   }
 
@@ -49,13 +56,9 @@ export class PassList {
    */
   set(passes) {
     this.passes = Array.isArray(passes) ? passes : [];
-    for (const p of this.passes) {
-      if (Number.isFinite(p.time_ms)) this.times.set(p.name, p.time_ms);
-      // A list published between frames has no times: keep the last
-      // frame's for passes that still render.
-      else if (p.status !== 'ok' && p.status !== 'stale') this.times.delete(p.name);
-    }
-    const key = JSON.stringify(this.passes.map(({ time_ms, timing, ...rest }) => rest));
+    // The server's list carries the newest frame's times (or why not).
+    for (const p of this.passes) this.times.set(p.name, p);
+    const key = JSON.stringify(this.passes.map(({ time_ms, timing, timing_reason, ...rest }) => rest));
     if (key === this.key) {
       this.layoutBars();
       return false;
@@ -90,9 +93,8 @@ export class PassList {
   /** A `frame` event: new times without a new pass list. */
   updateTimings(frame) {
     if (!Array.isArray(frame.passes)) return;
-    for (const t of frame.passes) this.times.set(t.name, t.time_ms);
-    if (frame.timing) this.timing = frame.timing;
-    this.totalMs = Number.isFinite(frame.total_ms) ? frame.total_ms : null;
+    for (const t of frame.passes) this.times.set(t.name, t);
+    this.split = hasSplit(frame) ? frame : null;
     this.layoutBars();
   }
 
@@ -160,13 +162,7 @@ export class PassList {
         pass.diagnostics > 0
           ? el('span', { class: 'pass-diag', title: plural(pass.diagnostics, 'diagnostic') }, `⚠ ${pass.diagnostics}`)
           : null,
-        el(
-          'span',
-          { class: 'pass-time' },
-          el('span', { class: 'ms' }, '—'),
-          ' ms ',
-          el('span', { class: 'timing' }, pass.timing || ''),
-        ),
+        el('span', { class: 'pass-time' }, el('span', { class: 'ms' }, '—'), ' ', el('span', { class: 'timing' })),
       ),
       el('div', { class: 'pass-bar' }, el('div', { class: 'pass-bar-fill' })),
       pass.reason ? el('div', { class: 'pass-reason' }, pass.reason) : null,
@@ -199,26 +195,32 @@ export class PassList {
     return li;
   }
 
+  /** The figure a row's bar has: its measured time, or null. */
+  figure(li) {
+    const t = this.times.get(li.dataset.pass);
+    return li.dataset.status !== 'culled' && passTime(t).kind !== 'none' ? t.time_ms : null;
+  }
+
   /** Positions the bars on the frame timeline and fills in the times. */
   layoutBars() {
     const rows = [...this.list.querySelectorAll('li.pass')];
-    let sum = 0;
-    for (const li of rows) {
-      const t = this.times.get(li.dataset.pass);
-      if (Number.isFinite(t) && li.dataset.status !== 'culled') sum += t;
-    }
-    const total = Math.max(sum, this.totalMs ?? 0);
+    const sum = rows.reduce((s, li) => s + (this.figure(li) ?? 0), 0);
+    // The timeline is the frame's wall time: what no pass accounts for
+    // is the space after the last bar.
+    const total = Math.max(sum, this.split?.frame_ms ?? 0);
     let start = 0;
     for (const li of rows) {
-      const t = this.times.get(li.dataset.pass);
-      const culled = li.dataset.status === 'culled';
+      const t = this.figure(li);
+      const shown = passTime(li.dataset.status === 'culled' ? null : this.times.get(li.dataset.pass));
       const ms = li.querySelector('.pass-time .ms');
-      const timing = li.querySelector('.pass-time .timing');
+      const clock = li.querySelector('.pass-time .timing');
       const fill = li.querySelector('.pass-bar-fill');
-      const has = Number.isFinite(t) && !culled;
-      ms.textContent = has ? formatMs(t) : '—';
-      if (this.timing && timing) timing.textContent = this.timing;
-      if (has && total > 0) {
+      li.dataset.timing = shown.kind;
+      ms.textContent = shown.ms;
+      ms.title = shown.title;
+      clock.textContent = shown.clock;
+      clock.title = shown.title;
+      if (t !== null && total > 0) {
         fill.style.left = `${(start / total) * 100}%`;
         fill.style.width = `${(t / total) * 100}%`;
         fill.title = `${formatMs(t)} ms · ${((t / total) * 100).toFixed(1)}% of the frame`;
@@ -228,6 +230,12 @@ export class PassList {
         fill.title = '';
       }
     }
-    this.totalEl.textContent = total > 0 ? `${formatMs(total)} ms${this.timing ? ` ${this.timing}` : ''}` : '';
+    const head = frameTotal(this.split);
+    this.totalEl.textContent = head.text;
+    this.totalEl.title = head.title;
+    for (const [key, k] of [['frameMs', 'frame_ms'], ['passesMs', 'passes_ms'], ['unattributedMs', 'unattributed_ms']]) {
+      if (this.split) this.totalEl.dataset[key] = String(this.split[k]);
+      else delete this.totalEl.dataset[key];
+    }
   }
 }

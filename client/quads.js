@@ -5,28 +5,39 @@
 // with the adapter's own fragment-shader count beside the model's, the pass
 // totals in the pass list, and two inspector overlays: quad overdraw (quads
 // launched over each 2×2 block) and helper lanes (times each pixel ran as a
-// helper), each with its legend.
+// helper), each with its legend; under the cursor (or the pinned pixel)
+// the inspector reads the map's own count (`countAt`, `countText`).
+//
+// The maps' colours are steps of matplotlib's plasma ramp: saturated,
+// lightness rising with the count, no white, grey or black step, so a
+// count never reads as a plain albedo (a white ball, a grey floor). The
+// top step ("5+", "3+") is hatched, plasma's two ends in diagonal stripes:
+// no flat surface looks like it. The same count has the same colour in
+// both maps.
 //
 // Test hooks: #quad-stats (toggle), #quad-panel[data-pass] with
-// table#quad-table tr[data-draw] cells td[data-key], #quad-overlay
-// (none|overdraw|helpers), #quad-legend, #passes li .pass-quads.
+// table#quad-table tr[data-draw] cells td[data-key] (td[data-key=cull_mode]
+// states each draw's culling), #quad-overlay (none|overdraw|helpers),
+// #quad-legend .legend-item[data-hatched], #passes li .pass-quads.
 
 import { el } from './util.js';
 
-/** Overdraw colours by quads launched over a block: 1, 2, 3, 4, 5+. */
-const OVERDRAW = [
-  [40, 110, 255],
-  [40, 200, 90],
-  [240, 220, 40],
-  [255, 140, 30],
-  [230, 40, 40],
+/** Solid steps for counts 1, 2, 3, 4: plasma at 1/8, 3/8, 5/8 and 7/8. */
+const STEPS = [
+  [76, 2, 161],
+  [169, 35, 149],
+  [230, 108, 92],
+  [253, 197, 39],
 ];
-/** Helper-lane colours by times a pixel ran as a helper: 1, 2, 3+. */
-const HELPERS = [
-  [255, 60, 220],
-  [255, 150, 40],
-  [255, 255, 255],
+/** The top step's stripes: plasma at 1 and at 0. */
+const HATCH = [
+  [240, 249, 33],
+  [13, 8, 135],
 ];
+/** Steps per map: counts below the last are solid, the last is "n+". */
+const STEP_COUNT = { overdraw: 5, helpers: 3 };
+/** Width of a hatch stripe, in image pixels. */
+const STRIPE = 2;
 const KEYS = ['triangles', 'culled_triangles', 'pixels', 'quads', 'helper_lanes', 'quad_efficiency'];
 
 /** A figure as the table shows it: efficiency in percent, counts grouped. */
@@ -35,18 +46,50 @@ export function fmt(v, key = '') {
   return key === 'quad_efficiency' ? `${(v * 100).toFixed(1)} %` : Number(v).toLocaleString('en-US');
 }
 
-/** An RGBA8 overlay of a one-channel count map, with its legend rows. */
-export function paintMap(values, kind) {
-  const ramp = kind === 'overdraw' ? OVERDRAW : HELPERS;
+/** The colour of count `n` (≥ 1) at image pixel (x, y) in a `kind` map. */
+export function countColor(n, kind, x, y) {
+  const top = STEP_COUNT[kind];
+  if (n < top) return STEPS[n - 1];
+  return HATCH[Math.floor((x + y) / STRIPE) % 2];
+}
+
+/**
+ * An RGBA8 overlay of a one-channel count map {values, width}, with its
+ * legend rows {color (CSS), label, hatched}.
+ */
+export function paintMap({ values, width }, kind) {
   const rgba = new Uint8ClampedArray(values.length * 4);
   for (let i = 0; i < values.length; i++) {
     const n = values[i];
     if (!(n >= 1)) continue; // 0 (and nothing) stays transparent
-    const c = ramp[Math.min(n, ramp.length) - 1];
+    const c = countColor(n, kind, i % width, Math.floor(i / width));
     rgba.set([c[0], c[1], c[2], 190], i * 4);
   }
-  const legend = ramp.map((c, i) => ({ color: `rgb(${c.join(',')})`, label: `${i + 1}${i === ramp.length - 1 ? '+' : ''}` }));
+  const top = STEP_COUNT[kind];
+  const rgb = (c) => `rgb(${c.join(',')})`;
+  const legend = STEPS.slice(0, top - 1).map((c, i) => ({ color: rgb(c), label: String(i + 1), hatched: false }));
+  const [a, b] = HATCH.map(rgb);
+  legend.push({ color: `repeating-linear-gradient(45deg, ${a} 0 3px, ${b} 3px 6px)`, label: `${top}+`, hatched: true });
   return { rgba, legend };
+}
+
+/** The count a map {values, width, height} holds at pixel (x, y), or null outside it. */
+export function countAt(map, x, y) {
+  if (!map || !(x >= 0 && y >= 0 && x < map.width && y < map.height)) return null;
+  return map.values[y * map.width + x];
+}
+
+/** The readout line of count `n` in a `kind` map. */
+export function countText(kind, n) {
+  return kind === 'overdraw'
+    ? `quad overdraw ${n} · quads launched over this pixel's 2×2 block`
+    : `helper lanes ${n} · times this pixel ran as a helper lane`;
+}
+
+/** A draw's culling as the table states it, from its `cull_mode`. */
+export function cullingText(mode) {
+  if (mode === null || mode === undefined) return '—';
+  return mode === 'none' ? 'off (cull_mode none)' : `on (cull_mode ${mode})`;
 }
 
 export class QuadView {
@@ -112,7 +155,13 @@ export class QuadView {
       return;
     }
     const row = (name, s, cls) =>
-      el('tr', { dataset: { draw: name }, class: cls || '' }, el('th', {}, name), KEYS.map((k) => el('td', { dataset: { key: k, value: s[k] ?? '' } }, fmt(s[k], k))));
+      el(
+        'tr',
+        { dataset: { draw: name }, class: cls || '' },
+        el('th', {}, name),
+        KEYS.map((k) => el('td', { dataset: { key: k, value: s[k] ?? '' } }, fmt(s[k], k))),
+        el('td', { dataset: { key: 'cull_mode', value: s.cull_mode ?? '' } }, cullingText(s.cull_mode)),
+      );
     const rows = [];
     for (const d of p.draws) {
       rows.push(row(d.name, d));
@@ -129,7 +178,7 @@ export class QuadView {
       el(
         'table',
         { id: 'quad-table' },
-        el('thead', {}, el('tr', {}, el('th', {}, 'draw'), KEYS.map((k) => el('th', {}, k.replace('_', ' '))))),
+        el('thead', {}, el('tr', {}, el('th', {}, 'draw'), KEYS.map((k) => el('th', {}, k.replace('_', ' '))), el('th', { title: "the face the draw's pipeline culls; culled triangles counts face culling only where it is on" }, 'culling'))),
         el('tbody', {}, rows),
       ),
       el('div', { class: 'quad-cross', id: 'quad-cross' }, cross),
@@ -151,11 +200,13 @@ export class QuadView {
     this.overlayKey = key;
     const map = await this.hooks.fetchMap(p.pass, kind);
     if (this.overlayKey !== key) return; // a newer request won
-    const { rgba, legend } = paintMap(map.values, kind);
-    this.hooks.inspector.setOverlay({ width: map.width, height: map.height, rgba, kind });
+    const { rgba, legend } = paintMap(map, kind);
+    this.hooks.inspector.setOverlay({ width: map.width, height: map.height, rgba, kind, values: map.values });
     this.els.legend.replaceChildren(
       el('span', { class: 'legend-title' }, kind === 'overdraw' ? 'quads per 2×2 block' : 'helper-lane runs per pixel'),
-      ...legend.map((l) => el('span', { class: 'legend-item' }, el('i', { class: 'swatch', style: `background:${l.color}` }), l.label)),
+      ...legend.map((l) =>
+        el('span', { class: 'legend-item', dataset: { hatched: String(l.hatched) } }, el('i', { class: 'swatch', style: `background:${l.color}` }), l.label),
+      ),
     );
   }
 }

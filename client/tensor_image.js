@@ -3,13 +3,17 @@
 // images, one channel through a colour map, or a histogram per channel.
 // Activations have no natural range, so each shown channel is mapped from
 // its own range (min/max, or the 1st–99th percentiles, which ignore the
-// few extreme values that would flatten the rest) to 0…255.
+// few extreme values that would flatten the rest) to 0…255. A channel
+// whose every value is the same (a dead ReLU channel, all zero) has no
+// range: the grid and the histograms label it "constant = v" rather than
+// show a flat grey that reads like data.
 //
 // Test hooks: #tensor-image[data-view], #tensor-view, #tensor-fit,
 // #tensor-r/#tensor-g/#tensor-b, #tensor-cmap-channel,
 // #tensor-rgb (canvas, data-ranges = JSON [[lo, hi] per R, G, B]),
 // #tensor-cmap (canvas, data-range), #tensor-grid canvas[data-channel],
-// #tensor-histograms canvas[data-channel][data-bins],
+// #tensor-histograms canvas[data-channel][data-bins], and in both
+// figure[data-constant] (the value) with its figcaption for a constant channel,
 // #tensor-pixel[data-x][data-y][data-values = JSON, one per channel].
 
 import { $, el } from './util.js';
@@ -19,6 +23,22 @@ const BINS = 64;
  * even stride through the image): sorting every value of every channel of
  * a full-size activation would stall the page. */
 const PERCENTILE_SAMPLES = 1 << 16;
+
+/**
+ * The value every pixel of channel `ch` holds in `data` ([y, x, channel]
+ * with `channels` channels), or null when two differ or one is not finite.
+ */
+export function constantValue(data, channels, ch) {
+  const first = data[ch];
+  if (!Number.isFinite(first)) return null;
+  for (let i = ch + channels; i < data.length; i += channels) if (data[i] !== first) return null;
+  return first;
+}
+
+/** A channel's caption: its name, and its value when it is constant (or null). */
+export function channelCaption(ch, constant) {
+  return constant === null ? `c${ch}` : `c${ch} constant = ${fmt(constant)}`;
+}
 
 /** Whether a layout is an image: [y, x, channel]. */
 export function isImage(layout) {
@@ -132,7 +152,7 @@ export class TensorImage {
       const range = this.range(ch);
       canvas.dataset.range = JSON.stringify(range);
       this.paint(canvas, (i, out) => out.fill(toByte(this.data[i * this.c + ch], range), 0, 3));
-      return el('figure', {}, canvas, el('figcaption', { text: `c${ch}` }));
+      return this.figure(ch, canvas, null);
     });
     this.grid.replaceChildren(...cells);
   }
@@ -151,9 +171,17 @@ export class TensorImage {
       const top = Math.max(1, ...counts);
       g.fillStyle = '#7fb8ff';
       counts.forEach((n, b) => g.fillRect(b * 2, 40 - (n / top) * 40, 2, (n / top) * 40));
-      return el('figure', {}, canvas, el('figcaption', { text: `c${ch} ${fmt(lo)} … ${fmt(hi)}` }));
+      return this.figure(ch, canvas, `${fmt(lo)} … ${fmt(hi)}`);
     });
     this.histograms.replaceChildren(...cells);
+  }
+
+  /** A grid or histogram cell: `canvas` captioned with channel `ch`, and `range` unless it is constant. */
+  figure(ch, canvas, range) {
+    const constant = constantValue(this.data, this.c, ch);
+    const caption = constant === null && range ? `${channelCaption(ch, null)} ${range}` : channelCaption(ch, constant);
+    const dataset = constant === null ? {} : { constant: String(constant) };
+    return el('figure', { dataset, class: constant === null ? '' : 'constant' }, canvas, el('figcaption', { text: caption }));
   }
 
   /** Fills `canvas` (one canvas pixel per tensor pixel) with `pixel(i, rgba)`. */

@@ -13,7 +13,7 @@ use crate::render::session::{PassState, PassSummary};
 use crate::scene::overrides::{Control, Overrides};
 use crate::scene::settings::Value as OverrideValue;
 
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 /// `GET /api/status`
 #[derive(Debug, Clone, Serialize, Default)]
@@ -82,15 +82,14 @@ pub struct PassInfo {
     pub pipelines: Vec<String>,
     pub reads: Vec<String>,
     pub writes: Vec<OutputInfo>,
-    /// Milliseconds of the last frame; `timing` says how it was measured.
-    pub time_ms: Option<f64>,
-    /// `gpu` (timestamp queries) or `cpu` (wall clock around submit+wait).
-    pub timing: String,
+    /// The last frame's time for this pass, or why there is none.
+    #[serde(flatten)]
+    pub time: PassTime,
     pub diagnostics: usize,
 }
 
 impl PassInfo {
-    pub fn new(p: PassSummary, time_ms: Option<f64>, timing: &str) -> Self {
+    pub fn new(p: PassSummary, time: PassTime) -> Self {
         PassInfo {
             name: p.name,
             kind: p.kind.map(|k| format!("{k:?}").to_lowercase()),
@@ -116,8 +115,7 @@ impl PassInfo {
                     history: o.history,
                 })
                 .collect(),
-            time_ms,
-            timing: timing.to_owned(),
+            time,
             diagnostics: p.diagnostics,
         }
     }
@@ -125,7 +123,7 @@ impl PassInfo {
     /// The same pass without its per-frame time: what a `passes` event
     /// announces a change of (times travel in `frame` events).
     pub fn shape(&self) -> PassInfo {
-        PassInfo { time_ms: None, ..self.clone() }
+        PassInfo { time: PassTime::default(), ..self.clone() }
     }
 }
 
@@ -198,11 +196,13 @@ pub enum ServerEvent {
     },
     /// `reload`: the newest reload this frame is the first to show;
     /// `reloads`: every one of them (several can finish between frames).
+    /// `frame_ms` = `passes_ms` + `unattributed_ms` (see `FrameTimes`).
     Frame {
         frame: u64,
         passes: Vec<PassTiming>,
-        total_ms: f64,
-        timing: String,
+        frame_ms: f64,
+        passes_ms: f64,
+        unattributed_ms: f64,
         reload: Option<u64>,
         reloads: Vec<u64>,
     },
@@ -298,7 +298,40 @@ pub struct ControlsReport {
 #[derive(Debug, Clone, Serialize)]
 pub struct PassTiming {
     pub name: String,
-    pub time_ms: f64,
+    #[serde(flatten)]
+    pub time: PassTime,
+}
+
+/// The clock a pass's time was measured by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Clock {
+    /// The adapter's timestamp queries around the pass.
+    Gpu,
+    /// The pass submitted alone and waited for: recording, execution and
+    /// the copies of its captured outputs.
+    Wall,
+}
+
+/// A pass's time as shown: a figure with its clock, or none with the
+/// reason. Never a figure known to be wrong.
+#[derive(Debug, Clone, PartialEq, Serialize, Default)]
+pub struct PassTime {
+    pub time_ms: Option<f64>,
+    /// `null` exactly when `time_ms` is.
+    pub timing: Option<Clock>,
+    /// Why there is no figure; `null` when there is one.
+    pub timing_reason: Option<String>,
+}
+
+impl PassTime {
+    pub fn measured(ms: f64, clock: Clock) -> Self {
+        PassTime { time_ms: Some(ms), timing: Some(clock), timing_reason: None }
+    }
+
+    pub fn none(reason: impl Into<String>) -> Self {
+        PassTime { time_ms: None, timing: None, timing_reason: Some(reason.into()) }
+    }
 }
 
 /// How a subscribed output is streamed as binary messages.

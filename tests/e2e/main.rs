@@ -10,4 +10,5 @@ mod protocol;
 mod recipe;
 mod render;
 mod serve;
+mod timings;
 mod tradeoffs;

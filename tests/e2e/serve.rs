@@ -108,7 +108,7 @@ fn api_shapes() {
     let s = Server::start(&p.root, &["--render", "on-change"]);
     s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
     let st = s.get_json("/api/status");
-    assert_eq!(st["protocol"], 2);
+    assert_eq!(st["protocol"], 3);
     assert!(st["adapter"].as_str().is_some_and(|a| !a.is_empty()));
     let passes = s.get_json("/api/passes");
     let names: Vec<&str> = passes.as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap()).collect();
@@ -158,7 +158,7 @@ fn websocket_streams_subscribed_outputs_per_client_and_announces_passes_only_on_
     let s = Server::start(&p.root, &["--render", "continuous", "--fps", "10"]);
     let mut ws = s.ws();
     let hello = ws.event("hello", LIMIT, |_| true);
-    assert_eq!(hello["protocol"], 2);
+    assert_eq!(hello["protocol"], 3);
     let other = s.ws(); // a second client that subscribes to nothing
 
     // Every client gets the final output as a `frame` image.

@@ -40,6 +40,14 @@ pub enum Stages {
     },
 }
 
+/// The primitive state of every render pipeline: triangle lists,
+/// counter-clockwise front faces, and no face culled (planes and open
+/// meshes are visible from both sides). Quad statistics model and report
+/// each draw's culling from here.
+pub fn primitive() -> wgpu::PrimitiveState {
+    wgpu::PrimitiveState { cull_mode: None, front_face: wgpu::FrontFace::Ccw, ..Default::default() }
+}
+
 /// The slope-scaled bias of `Depth::Biased` (shadow maps).
 pub const SHADOW_BIAS: wgpu::DepthBiasState = wgpu::DepthBiasState { constant: 2, slope_scale: 2.0, clamp: 0.0 };
 
@@ -330,7 +338,7 @@ pub fn create(
                     compilation_options: Default::default(),
                     targets: &color_targets(targets),
                 }),
-                primitive: wgpu::PrimitiveState::default(),
+                primitive: primitive(),
                 depth_stencil: None,
                 multisample: wgpu::MultisampleState::default(),
                 multiview_mask: None,
@@ -354,8 +362,7 @@ pub fn create(
                     compilation_options: Default::default(),
                     targets: &targets,
                 }),
-                // Planes and open meshes are visible from both sides.
-                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                primitive: primitive(),
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH,
                     depth_write_enabled: Some(depth != Depth::Equal),

@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use wgpu::util::DeviceExt;
 
-use super::quads::{PendingDepth, PendingDraw, PendingTarget, QuadRecorder, depth_state};
+use super::quads::{Faces, PendingDepth, PendingDraw, PendingTarget, QuadRecorder, depth_state};
 use super::readback::copy_texture;
 use super::resource::{Handle, Physical, PipelineKey};
 use super::scene_gpu::SceneGpu;
@@ -266,10 +266,11 @@ impl<'a> PassContext<'a> {
             return None;
         };
         let layout = key.spec.layout(&key.defs);
+        let faces = Faces::of(&pipeline::primitive());
         let mut out = Vec::new();
         for (name, draw) in draws {
             match capture.record(self.device, self.encoder, &layout, bindings, draw) {
-                Ok(positions) => out.push(PendingDraw { name: name.clone(), positions, depth }),
+                Ok(positions) => out.push(PendingDraw { name: name.clone(), positions, depth, faces }),
                 Err(e) => {
                     log::warn!("quad statistics of `{}`: {e}", self.pass);
                     return None;

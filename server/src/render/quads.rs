@@ -13,7 +13,7 @@ use serde::Serialize;
 use super::readback::{Readback, Rows};
 use super::resource::PipelineKey;
 use super::vertex_capture::{PendingPositions, VertexCapture};
-use crate::quads::{self, Compare, DepthState, Draw, DrawStats, FrontFace, QuadMaps};
+use crate::quads::{self, Compare, DepthState, Draw, DrawStats, Face, FrontFace, QuadMaps};
 
 /// What a frame records for quad statistics while it is recorded: the
 /// vertex captures of its pipelines, and the render passes drawn so far.
@@ -45,6 +45,39 @@ pub struct PendingDraw {
     pub name: String,
     pub positions: PendingPositions,
     pub depth: Option<DepthState>,
+    pub faces: Faces,
+}
+
+/// The face culling of a draw's pipeline, as the model takes it: wgpu's
+/// `PrimitiveState::cull_mode` and `front_face`.
+#[derive(Debug, Clone, Copy)]
+pub struct Faces {
+    pub cull: Option<Face>,
+    pub front_face: FrontFace,
+}
+
+impl Faces {
+    /// The culling of a pipeline created with `primitive`.
+    pub fn of(primitive: &wgpu::PrimitiveState) -> Faces {
+        let cull = primitive.cull_mode.map(|f| match f {
+            wgpu::Face::Front => Face::Front,
+            wgpu::Face::Back => Face::Back,
+        });
+        let front_face = match primitive.front_face {
+            wgpu::FrontFace::Ccw => FrontFace::Ccw,
+            wgpu::FrontFace::Cw => FrontFace::Cw,
+        };
+        Faces { cull, front_face }
+    }
+
+    /// The cull mode as reports name it: `none`, `back` or `front`.
+    pub fn cull_mode(self) -> &'static str {
+        match self.cull {
+            None => "none",
+            Some(Face::Back) => "back",
+            Some(Face::Front) => "front",
+        }
+    }
 }
 
 impl PendingTarget {
@@ -82,7 +115,7 @@ impl PendingTarget {
         let mut draws = Vec::new();
         for d in self.draws {
             let positions = d.positions.read().map_err(|e| log::warn!("quad statistics of `{}`: {e}", self.pass)).ok()?;
-            draws.push(RecordedDraw { name: d.name, positions, depth: d.depth });
+            draws.push(RecordedDraw { name: d.name, positions, depth: d.depth, faces: d.faces });
         }
         Some(RecordedTarget { pass: self.pass, width: self.width, height: self.height, depth, draws, fullscreen: self.fullscreen })
     }
@@ -115,12 +148,13 @@ pub enum InitialDepth {
 }
 
 /// One draw: its name in the report, its positions (one per vertex
-/// invocation, in index order: every three make a triangle) and its depth
-/// state.
+/// invocation, in index order: every three make a triangle), its depth
+/// state and its pipeline's face culling.
 pub struct RecordedDraw {
     pub name: String,
     pub positions: Vec<[f32; 4]>,
     pub depth: Option<DepthState>,
+    pub faces: Faces,
 }
 
 /// One draw's figures as reports and the API show them: the keys of what
@@ -129,6 +163,9 @@ pub struct RecordedDraw {
 #[derive(Debug, Clone, Serialize)]
 pub struct DrawReport {
     pub name: String,
+    /// The face the draw's pipeline culls (`none`, `back` or `front`); for
+    /// a total, the mode its draws share, `null` when they differ.
+    pub cull_mode: Option<&'static str>,
     #[serde(flatten)]
     pub shaded: quads::QuadStats,
     /// Before the depth test; `null` when the pipeline tests no depth.
@@ -136,8 +173,14 @@ pub struct DrawReport {
 }
 
 impl DrawReport {
-    fn new(name: &str, s: &DrawStats) -> Self {
-        DrawReport { name: name.to_owned(), shaded: s.shaded_or_rasterized(), rasterized: s.shaded.map(|_| s.rasterized) }
+    fn new(name: &str, cull_mode: Option<&'static str>, s: &DrawStats) -> Self {
+        DrawReport { name: name.to_owned(), cull_mode, shaded: s.shaded_or_rasterized(), rasterized: s.shaded.map(|_| s.rasterized) }
+    }
+
+    /// The draws summed, named `total`.
+    fn total(draws: &[DrawReport], s: &DrawStats) -> Self {
+        let shared = draws.iter().map(|d| d.cull_mode).reduce(|a, b| if a == b { a } else { None }).flatten();
+        DrawReport::new("total", shared, s)
     }
 }
 
@@ -194,20 +237,24 @@ pub fn replay(targets: &[RecordedTarget]) -> Vec<PassQuads> {
         let Some((draws, maps)) = replay_target(t).map_err(|e| log::warn!("quad statistics of `{}`: {e}", t.pass)).ok() else { continue };
         let what_if = t.fullscreen.and_then(|two| fullscreen_what_if(t.width, t.height, !two).ok());
         let total: DrawStats = draws.iter().map(|(_, s)| *s).sum();
+        let reports = draws.iter().zip(&t.draws).map(|((n, s), d)| DrawReport::new(n, Some(d.faces.cull_mode()), s));
         match out.last_mut().filter(|p| p.pass == t.pass) {
             Some(p) => {
-                p.draws.extend(draws.iter().map(|(n, s)| DrawReport::new(n, s)));
+                p.draws.extend(reports);
                 let sum = total + stats_of(&p.quads);
-                p.quads = DrawReport::new("total", &sum);
+                p.quads = DrawReport::total(&p.draws, &sum);
                 Arc::make_mut(&mut p.maps).push(maps);
             }
-            None => out.push(PassQuads {
-                pass: t.pass.clone(),
-                draws: draws.iter().map(|(n, s)| DrawReport::new(n, s)).collect(),
-                quads: DrawReport::new("total", &total),
-                what_if,
-                maps: Arc::new(vec![maps]),
-            }),
+            None => {
+                let draws: Vec<DrawReport> = reports.collect();
+                out.push(PassQuads {
+                    pass: t.pass.clone(),
+                    quads: DrawReport::total(&draws, &total),
+                    draws,
+                    what_if,
+                    maps: Arc::new(vec![maps]),
+                });
+            }
         }
     }
     out
@@ -230,7 +277,14 @@ fn replay_target(t: &RecordedTarget) -> Result<(Vec<(String, DrawStats)>, QuadMa
     }
     let mut draws = Vec::new();
     for d in &t.draws {
-        let stats = pass.draw(&Draw { positions: &d.positions, depth: d.depth, front_face: FrontFace::Ccw, ..Draw::default() })?;
+        let faces = d.faces;
+        let stats = pass.draw(&Draw {
+            positions: &d.positions,
+            depth: d.depth,
+            cull: faces.cull,
+            front_face: faces.front_face,
+            ..Draw::default()
+        })?;
         draws.push((d.name.clone(), stats));
     }
     Ok((draws, pass.finish().1))
@@ -267,5 +321,31 @@ pub fn depth_state(depth: crate::gpu::pipeline::Depth) -> DepthState {
             ..DepthState::new(Compare::Less, true)
         },
         Depth::Equal => DepthState::new(Compare::LessEqual, false),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One triangle wound clockwise on screen over a 4×4 target, drawn by
+    /// a pipeline with `faces`.
+    fn replayed(faces: Faces) -> DrawReport {
+        let positions = vec![[-1.0, -1.0, 0.5, 1.0], [-1.0, 1.0, 0.5, 1.0], [1.0, -1.0, 0.5, 1.0]];
+        let draw = RecordedDraw { name: "tri".into(), positions, depth: None, faces };
+        let target = RecordedTarget { pass: "p".into(), width: 4, height: 4, depth: None, draws: vec![draw], fullscreen: None };
+        replay(&[target]).remove(0).draws.remove(0)
+    }
+
+    #[test]
+    fn a_draw_is_modelled_and_reported_with_its_pipelines_culling() {
+        let loupes = replayed(Faces::of(&crate::gpu::pipeline::primitive()));
+        assert_eq!((loupes.cull_mode, loupes.shaded.culled_triangles), (Some("none"), 0), "loupe's pipelines cull nothing");
+        let back = replayed(Faces { cull: Some(Face::Back), front_face: FrontFace::Ccw });
+        assert_eq!(
+            (back.cull_mode, back.shaded.culled_triangles, back.shaded.quads),
+            (Some("back"), 1, 0),
+            "a clockwise triangle is a back face"
+        );
     }
 }

@@ -163,6 +163,11 @@ impl Session {
         self.serial = on;
     }
 
+    /// Whether frames are timed pass by pass by the wall clock.
+    pub fn serial(&self) -> bool {
+        self.serial
+    }
+
     pub fn gpu(&self) -> &Gpu {
         &self.gpu
     }

@@ -4,6 +4,7 @@
 //! open the page, break a shader on disk, see the error with file:line while
 //! the old frame stays, fix it, see it clear.
 
+use std::os::unix::process::CommandExt;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -11,14 +12,20 @@ use fantoccini::{Client, ClientBuilder, Locator};
 use loupe_tests::{Project, Server, reload, repo};
 
 mod difference;
+mod timings;
 
 const LIMIT: Duration = Duration::from_secs(60);
 const TONEMAP: &str = "shaders/post/tonemap.wgsl";
 
+/// chromedriver in a process group of its own, with the chromium it starts:
+/// dropping it kills the whole group. Killing chromedriver alone leaves its
+/// chromium running (re-parented to init), a browser per test that goes on
+/// using the CPU for the rest of the run.
 struct Driver(Child);
 
 impl Drop for Driver {
     fn drop(&mut self) {
+        let _ = Command::new("kill").args(["-KILL", "--", &format!("-{}", self.0.id())]).status();
         let _ = self.0.kill();
         let _ = self.0.wait();
     }
@@ -38,6 +45,7 @@ async fn browser_sized(width: u32, height: u32) -> (Driver, Client) {
     let driver = Driver(
         Command::new("chromedriver")
             .arg(format!("--port={port}"))
+            .process_group(0)
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
@@ -89,6 +97,24 @@ async fn shown(c: &Client) -> Shown {
     let n = |i: usize| v[i].as_u64().unwrap_or_else(|| panic!("#frame: {v}"));
     assert!(n(2) > 0, "an image is shown");
     Shown { frame: n(0), pixels: n(1) << 32 | n(2), centre: [n(3) as u8, n(4) as u8, n(5) as u8] }
+}
+
+/// The showcase at 320×180 with a 256² shadow map (the quad model of a
+/// debug build replays every shadow layer: small keeps it quick).
+fn small_showcase(name: &str) -> (Project, Server) {
+    let p = Project::copy_of_repo(name);
+    let small = p
+        .read("scenes/showcase.toml")
+        .replacen("width = 640", "width = 320", 1)
+        .replacen("height = 360", "height = 180", 1)
+        .replacen("shadow_map_size = 1024", "shadow_map_size = 256", 1);
+    assert!(
+        small.contains("width = 320") && small.contains("height = 180") && small.contains("= 256"),
+        "the showcase's settings moved: update this test"
+    );
+    p.write("scenes/small.toml", small);
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/small.toml"]);
+    (p, s)
 }
 
 /// What to print about the server when a wait times out.
@@ -161,7 +187,7 @@ async fn page_shows_frame_and_errors_at_their_line_and_clears_them() {
     let alpha = c.execute("return window.loupe.valueAt(480, 270)[3];", vec![]).await.unwrap();
     assert_eq!(alpha, 1.0, "the streamed final image is opaque");
     let page = c.execute("const s = window.loupe.state; return [s.protocol, s.problems, document.querySelectorAll('#notices .notice:not([hidden])').length];", vec![]).await.unwrap();
-    assert_eq!(page, serde_json::json!([2, [], 0]), "the page speaks the server's protocol, without problems or notices");
+    assert_eq!(page, serde_json::json!([3, [], 0]), "the page speaks the server's protocol, without problems or notices");
 
     // Break the shader as vim saves it.
     let good = p.read(TONEMAP);
@@ -481,19 +507,7 @@ async fn a_nan_made_by_a_pass_is_named_live_and_opened_at_its_pixel() {
 /// both maps over its output, each with a legend.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn every_raster_pass_has_its_quad_table_and_maps() {
-    let p = Project::copy_of_repo("browser-quads");
-    // Small, with a small shadow map: the page reads every output whole.
-    let small = p
-        .read("scenes/showcase.toml")
-        .replacen("width = 640", "width = 320", 1)
-        .replacen("height = 360", "height = 180", 1)
-        .replacen("shadow_map_size = 1024", "shadow_map_size = 256", 1);
-    assert!(
-        small.contains("width = 320") && small.contains("height = 180") && small.contains("= 256"),
-        "the showcase's settings moved: update this test"
-    );
-    p.write("scenes/small.toml", small);
-    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/small.toml"]);
+    let (_p, s) = small_showcase("browser-quads");
     let (_driver, c) = browser().await;
     c.goto(&s.url("/")).await.unwrap();
     until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
@@ -1000,3 +1014,4 @@ async fn the_docs_screenshot_of_the_inspector_is_regenerable() {
     let file = image::open(&committed).unwrap_or_else(|e| panic!("{} (LOUPE_BLESS=1 writes it): {e}", committed.display()));
     assert_eq!((file.width(), file.height()), (WIDTH, HEIGHT), "{} has the screenshot's size", committed.display());
 }
+mod readouts;

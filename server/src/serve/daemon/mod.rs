@@ -10,13 +10,15 @@
 //! reload state machine (which compile installs, when a reload is done and
 //! which frame shows it); `publish` writes snapshots and sends events;
 //! `device` handles a lost device; `gpu_errors` locates a frame's
-//! uncaptured wgpu errors; `nan` decides when to trace a NaN/Inf.
+//! uncaptured wgpu errors; `nan` decides when to trace a NaN/Inf;
+//! `timing` decides which pass times are shown, and by which clock.
 
 mod device;
 mod gpu_errors;
 mod nan;
 mod publish;
 mod reload;
+mod timing;
 
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::path::{Path, PathBuf};
@@ -114,9 +116,8 @@ pub struct Daemon {
     gpu_error_files: BTreeMap<String, Vec<String>>,
     /// The pass list last announced in a `passes` event, without times.
     announced_passes: Option<Vec<PassInfo>>,
-    /// The newest frame's per-pass times and how they were measured.
-    last_timings: Vec<(String, f64)>,
-    last_timing: String,
+    /// The newest frame's pass times, as shown.
+    last_times: timing::FrameTimes,
     device_resets: u32,
     /// The debug API asked for the device to be destroyed; its loss is on
     /// its way.
@@ -156,11 +157,13 @@ impl Daemon {
             .thread_name(|i| format!("loupe-compile-{i}"))
             .build()
             .expect("compile worker threads");
-        let timing = if gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) { "gpu" } else { "cpu" };
+        let wall_clock = timing::wall_clock_needed(gpu.is_cpu(), gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY));
         config.watch_files.set(&loaded.files);
+        let mut session =
+            Session::new(gpu, &config.shader_root, lib, &loaded).with_options(FrameOptions { nan_watch: true, ..FrameOptions::default() });
+        session.set_serial(wall_clock);
         Daemon {
-            session: Session::new(gpu, &config.shader_root, lib, &loaded)
-                .with_options(FrameOptions { nan_watch: true, ..FrameOptions::default() }),
+            session,
             config,
             // Files whose names are not UTF-8 are left out, each with its warning.
             file_errors: unnamed.into_iter().filter_map(|d| Some((d.file()?.to_owned(), d))).collect(),
@@ -182,8 +185,7 @@ impl Daemon {
             gpu_errors: Vec::new(),
             gpu_error_files: BTreeMap::new(),
             announced_passes: None,
-            last_timings: Vec::new(),
-            last_timing: timing.to_owned(),
+            last_times: timing::FrameTimes::default(),
             device_resets: 0,
             destroy_requested: false,
             last_frame: None,

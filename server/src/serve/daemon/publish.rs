@@ -8,7 +8,7 @@ use std::sync::Arc;
 use super::{Daemon, InFlight, RenderMode};
 use crate::diag::{Diagnostic, Severity, display_path};
 use crate::protocol::{
-    self, ControlsReport, PassInfo, PassQuadReport, PassStatus, PassTiming, QuadReport, ReloadTimings, ServerEvent, Status,
+    self, ControlsReport, PassInfo, PassQuadReport, PassStatus, PassTime, PassTiming, QuadReport, ReloadTimings, ServerEvent, Status,
 };
 use crate::render::frame::FrameResult;
 use crate::render::passes;
@@ -33,7 +33,13 @@ impl Daemon {
             self.follow_nan(&result, trace);
         }
         let render_ms = started.elapsed().as_secs_f64() * 1e3;
-        let total = result.total_ms;
+        let graph = self.session.graph();
+        let kind_of = |name: &str| graph.passes.iter().find(|p| p.name == name).map(|p| p.kind);
+        let times = super::timing::attribute(&result.timings, result.timing, kind_of, render_ms);
+        if times.unbracketed && !self.session.serial() {
+            log::warn!("the adapter's timestamps do not bracket compute work: passes are timed by the wall clock from now on");
+            self.session.set_serial(true);
+        }
         let mut images = None;
         if clean {
             let mut captures = (*shared::read(&self.shared.captures)).clone();
@@ -55,20 +61,21 @@ impl Daemon {
         if clean && !result.quads.is_empty() {
             self.publish_quads(result.frame, result.quads, &result.fragment_invocations);
         }
-        self.last_timings = result.timings;
-        self.last_timing = result.timing.to_owned();
+        self.last_times = times;
         for r in &reloads {
             let timings = ReloadTimings { render_ms, ..r.timings };
             self.shared.publish(ServerEvent::ReloadSucceeded { id: r.id, files: r.files.clone(), pipelines: r.pipelines.clone(), timings });
         }
         self.publish_passes();
-        let passes: Vec<PassTiming> = self.last_timings.iter().map(|(n, t)| PassTiming { name: n.clone(), time_ms: *t }).collect();
+        let t = &self.last_times;
+        let passes: Vec<PassTiming> = t.passes.iter().map(|(n, time)| PassTiming { name: n.clone(), time: time.clone() }).collect();
         let ids: Vec<u64> = reloads.iter().map(|r| r.id).collect();
         self.shared.publish(ServerEvent::Frame {
             frame: result.frame,
             passes,
-            total_ms: total,
-            timing: result.timing.to_owned(),
+            frame_ms: t.frame_ms,
+            passes_ms: t.passes_ms,
+            unattributed_ms: t.unattributed_ms,
             reload: ids.last().copied(),
             reloads: ids,
         });
@@ -101,10 +108,12 @@ impl Daemon {
             .passes()
             .into_iter()
             .map(|p| {
-                let time_ms = (p.status != PassState::Culled)
-                    .then(|| self.last_timings.iter().find(|(n, _)| *n == p.name).map(|(_, t)| *t))
-                    .flatten();
-                PassInfo::new(p, time_ms, &self.last_timing)
+                let time = match (p.status, self.last_times.of(&p.name)) {
+                    (PassState::Culled, _) => PassTime::none("not run: culled"),
+                    (_, Some(t)) => t.clone(),
+                    (_, None) => PassTime::none("no frame has run it yet"),
+                };
+                PassInfo::new(p, time)
             })
             .collect();
         shared::write(&self.shared.passes, passes.clone());
