@@ -1,15 +1,24 @@
 // HTTP side of the protocol (PROTOCOL.md). Every function throws an
-// `ApiError` with a readable message; callers decide how to show it.
+// `ApiError` with a readable message; callers decide how to show it. A
+// documented state (204 + X-Loupe-State, PROTOCOL.md "States": an output
+// not captured yet, no tradeoff results yet) is thrown as an ApiError with
+// `state` set, so a caller that wants data never reads an empty body.
 
 import { encodePath } from './util.js';
 
 export class ApiError extends Error {
-  constructor(message, { status = 0, url = '' } = {}) {
+  constructor(message, { status = 0, url = '', state = null } = {}) {
     super(message);
     this.name = 'ApiError';
     /** HTTP status, or 0 when the server could not be reached. */
     this.status = status;
     this.url = url;
+    /** The server's X-Loupe-State for a 204, else null. */
+    this.state = state;
+  }
+  /** The output exists but no frame has captured it yet. */
+  get notCaptured() {
+    return this.state === 'not-captured';
   }
   get notFound() {
     return this.status === 404;
@@ -42,6 +51,10 @@ async function request(url, accept) {
     const msg = `${url}: ${response.status} ${response.statusText}${detail ? ` — ${detail}` : ''}`;
     throw new ApiError(msg, { status: response.status, url });
   }
+  if (response.status === 204) {
+    const state = response.headers.get('X-Loupe-State') ?? 'no-content';
+    throw new ApiError(`${url}: ${state}`, { status: 204, url, state });
+  }
   return response;
 }
 
@@ -71,6 +84,22 @@ export const pipelines = () => getJson('/api/pipelines').then(unwrap('pipelines'
 export const diagnostics = () => getJson('/api/diagnostics').then(unwrap('diagnostics'));
 export const captures = () => getJson('/api/captures').then(unwrap('captures'));
 export const source = (path) => getText(`/api/sources/${encodePath(path)}`);
+
+/**
+ * The newest tradeoff results: `{state, results}`, `state` being whose
+ * they are (`current`, `stale` or `other-scene`, from X-Loupe-State).
+ * None written yet throws an ApiError with `state` `not-written`.
+ */
+export async function tradeoffs() {
+  const url = '/api/tradeoffs';
+  const response = await request(url, 'application/json');
+  const state = response.headers.get('X-Loupe-State') ?? 'current';
+  try {
+    return { state, results: await response.json() };
+  } catch (err) {
+    throw new ApiError(`${url}: invalid JSON (${err.message})`, { status: response.status, url });
+  }
+}
 
 /** Lists may come bare or wrapped in an object (`{diagnostics: [...]}`). */
 function unwrap(key) {

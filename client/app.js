@@ -39,6 +39,8 @@ import { QuadView } from './quads.js';
 import { PathView, TRACED } from './path.js';
 import { TradeoffsView } from './tradeoffs.js';
 import { bindShortcuts } from './shortcuts.js';
+import { Layout } from './layout.js';
+import { isBrowserNotice } from './browser_notices.js';
 import * as tex from './texture.js';
 import { fpsTitle } from './timings.js';
 import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
@@ -105,7 +107,9 @@ function recordProblem(message) {
 
 // Safety net: anything that escapes a handler is shown, not lost in the
 // console (handlers catch what they expect).
-window.addEventListener('error', (e) => recordProblem(`client error: ${e.message}`));
+window.addEventListener('error', (e) => {
+  if (!isBrowserNotice(e)) recordProblem(`client error: ${e.message}`);
+});
 window.addEventListener('unhandledrejection', (e) => {
   e.preventDefault();
   recordProblem(`client error: ${errorText(e.reason)}`);
@@ -478,6 +482,9 @@ function onEvent(ev) {
     case 'error':
       notify('server', `server: ${ev.message}`, 'error', 20000);
       break;
+    case 'scene_saved':
+      controls.saved(ev);
+      break;
     case 'nan':
       applyNan(ev.report);
       break;
@@ -605,15 +612,18 @@ const tradeoffs = new TradeoffsView(
     empty: $('tradeoffs-empty'),
     refresh: $('tradeoffs-refresh'),
   },
-  { send: (message) => conn.send(message), fetch: () => api.getJson('/api/tradeoffs') },
+  { send: (message) => conn.send(message), fetch: api.tradeoffs },
 );
-tradeoffs.load();
 
 function applyControls(report) {
   controls.apply(report);
   pathView.setControls(report);
   tradeoffs.setControls(report);
 }
+
+// ---- layout: splitters, collapsing, remembered sizes ---------------------
+
+new Layout(document.querySelector('main'));
 
 // ---- start ---------------------------------------------------------------
 
@@ -624,6 +634,9 @@ conn = new Connection(wsUrl, {
     state.connections++;
     for (const key of [...notices.keys()]) if (key.startsWith('fetch:')) clearNotice(key);
     resyncAll();
+    // A restarted server may render another scene: whose results are
+    // current is its answer.
+    tradeoffs.load();
     // A restarted server has none of the old captures in memory.
     if (inspector.target) inspector.load();
   },

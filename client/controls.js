@@ -3,12 +3,18 @@
 // touched); "save to file" writes the overrides into the scene file, keeping
 // its comments and layout; "reset" drops them.
 //
-// Each row's title lists the render passes the control affects.
+// Each row's title lists the render passes the control affects. A slider
+// has a typed entry beside it, with its range: a value typed in range is
+// sent as the override (Enter or leaving the field); anything else gets an
+// inline message and sends nothing (numeric_entry.js reads it). A save
+// answers with the file it wrote, or the file and why not (`scene_saved`).
 //
 // Test hooks: #controls [data-path] inputs (data-overridden when set),
-// #save-scene, #reset-overrides, #overrides-count.
+// #controls [data-entry] typed entries and their .entry-error messages,
+// #save-scene, #save-status, #reset-overrides, #overrides-count.
 
 import { el } from './util.js';
+import { parseEntry, rangeText } from './numeric_entry.js';
 
 export class ControlsPanel {
   /** `send(message)` sends a WebSocket message. */
@@ -20,7 +26,12 @@ export class ControlsPanel {
     this.save = root.querySelector('#save-scene');
     this.reset = root.querySelector('#reset-overrides');
     this.count = root.querySelector('#overrides-count');
-    this.save.addEventListener('click', () => this.send({ type: 'save_scene' }));
+    this.status = el('div', { id: 'save-status', role: 'status', hidden: true });
+    this.form.before(this.status);
+    this.save.addEventListener('click', () => {
+      this.status.hidden = true;
+      this.send({ type: 'save_scene' });
+    });
     this.reset.addEventListener('click', () => this.send({ type: 'clear_overrides' }));
   }
 
@@ -44,12 +55,33 @@ export class ControlsPanel {
       const input = this.form.querySelector(`[data-path="${CSS.escape(c.path)}"]`);
       if (!input) continue;
       input.toggleAttribute('data-overridden', c.path in overrides);
+      const entry = input.parentElement.querySelector('[data-entry]');
+      if (entry && document.activeElement !== entry) entry.value = String(c.value);
       if (document.activeElement === input) continue;
       if (c.kind === 'toggle') input.checked = Boolean(c.value);
       else input.value = String(c.value);
-      const out = input.parentElement.querySelector('output');
-      if (out) out.textContent = String(c.value);
     }
+  }
+
+  /** A `scene_saved` event: the file written, or the file and why not. */
+  saved({ file, error }) {
+    this.status.hidden = false;
+    this.status.className = error ? 'error' : 'ok';
+    this.status.textContent = error ? `could not save ${file}: ${error}` : `saved to ${file}`;
+  }
+
+  /** The typed entry beside slider `c`, sending through `send`. */
+  entry(c, send) {
+    const entry = el('input', { type: 'text', inputmode: 'decimal', class: 'num entry', 'data-entry': c.path, 'aria-label': `${c.label}, ${rangeText(c)}` });
+    const message = el('span', { class: 'entry-error', role: 'alert', hidden: true });
+    entry.addEventListener('change', () => {
+      const read = parseEntry(entry.value, c);
+      message.hidden = read.error === undefined;
+      message.textContent = read.error ?? '';
+      entry.toggleAttribute('aria-invalid', read.error !== undefined);
+      if (read.error === undefined) send(read.value);
+    });
+    return [entry, el('span', { class: 'range', text: rangeText(c) }), message];
   }
 
   row(c) {
@@ -60,7 +92,7 @@ export class ControlsPanel {
       input = el('input', { type: 'range', min: c.min, max: c.max, step: c.step, 'data-path': c.path });
       input.addEventListener('change', () => send(integer ? Math.round(Number(input.value)) : Number(input.value)));
       input.addEventListener('input', () => {
-        input.parentElement.querySelector('output').textContent = input.value;
+        input.parentElement.querySelector('[data-entry]').value = input.value;
       });
     } else if (c.kind === 'toggle') {
       input = el('input', { type: 'checkbox', 'data-path': c.path });
@@ -71,6 +103,6 @@ export class ControlsPanel {
     }
     // The passes a control changes, on hover: what to watch in the pass list.
     const affects = Array.isArray(c.affects) && c.affects.length ? `affects: ${c.affects.join(', ')}` : null;
-    return el('label', { class: 'control', title: affects }, el('span', { class: 'control-label', text: c.label }), input, c.kind === 'slider' ? el('output', { class: 'num' }) : null);
+    return el('label', { class: 'control', title: affects }, el('span', { class: 'control-label', text: c.label }), input, c.kind === 'slider' ? this.entry(c, send) : null);
   }
 }

@@ -628,8 +628,10 @@ export class Inspector {
     } else if (this.error && !this.a) {
       kind = 'error';
       const what = keyOf(this.target.pass, this.target.output);
-      text = this.error.notFound
-        ? `No capture of ${what} (404). The pass may be culled or failed, or it has not rendered yet.`
+      text = this.error.notCaptured
+        ? `No capture of ${what} yet. The pass may be culled or failed, or it has not rendered yet.`
+        : this.error.notFound
+        ? `${what} is not an output of the frame graph (404).`
         : `Could not load ${what}: ${errorText(this.error)}`;
     } else if (!this.a && this.loader.waiting) {
       text = `Waiting for the server to capture ${this.loader.waiting}…`;
@@ -644,8 +646,8 @@ export class Inspector {
     if (this.error && this.a) notes.push(`refresh failed, showing the last data: ${errorText(this.error)}`);
     if (this.bError) {
       notes.push(
-        this.bError.notFound && this.compareSpec()?.lastGood
-          ? 'B: no previous good version of this output yet (404)'
+        this.bError.notCaptured && this.compareSpec()?.lastGood
+          ? 'B: no previous good version of this output yet'
           : `B: ${errorText(this.bError)}`,
       );
     }

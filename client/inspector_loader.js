@@ -84,8 +84,8 @@ export class Loader {
       return await get();
     } catch (err) {
       // Not captured yet: a new subscription shows up a frame or two
-      // later. Wait for it once, then give up with the 404.
-      if (spec.lastGood || !(err instanceof api.ApiError) || !err.notFound || !this.hooks.awaitCapture) throw err;
+      // later. Wait for it once, then give up with that state.
+      if (spec.lastGood || !(err instanceof api.ApiError) || !err.notCaptured || !this.hooks.awaitCapture) throw err;
       const key = keyOf(spec.pass, spec.output);
       this.waiting = key;
       this.host.changed();

@@ -97,7 +97,7 @@ export class TensorView {
       this.render();
       await this.list.refresh();
     } catch (err) {
-      if (err instanceof api.ApiError && err.notFound) {
+      if (err instanceof api.ApiError && err.notCaptured) {
         // Not captured yet: the subscription makes the next frame capture
         // it; look again shortly.
         this.shape.textContent = 'waiting for a frame that captures it…';

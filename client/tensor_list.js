@@ -3,7 +3,8 @@
 // layout and statistics (over all channels, from the server's per-channel
 // ones), its NaN / Inf counts and, with f16 storage, how many values its
 // layer stored as Inf for being beyond f16's range (the pass's `overflow`
-// buffer). Clicking a row opens that tensor.
+// buffer). Rows are in network order (the order of `/api/passes`), under a
+// sticky header. Clicking a row opens that tensor.
 //
 // Test hooks: #tensor-list[data-count], rows tr[data-key="pass/output"].
 
@@ -51,14 +52,16 @@ export class TensorList {
   async refresh() {
     if (!this.on) return;
     const all = await api.getJson('/api/tensors');
-    const mine = new Set(this.wanted().map((w) => `${w.pass}/${w.output}`));
-    const found = new Map(all.filter((t) => mine.has(`${t.pass}/${t.output}`)).map((t) => [`${t.pass}/${t.output}`, t]));
-    const rows = [...found.values()]
-      .filter((t) => t.output !== 'overflow')
+    const found = new Map(all.map((t) => [`${t.pass}/${t.output}`, t]));
+    // In network order: the pass list's (graph) order, not the server's
+    // alphabetical one.
+    const rows = this.wanted()
+      .map((w) => found.get(`${w.pass}/${w.output}`))
+      .filter((t) => t && t.output !== 'overflow')
       .map((t) => this.row(t, found.get(`${t.pass}/overflow`)));
     this.root.dataset.count = String(rows.length);
     const head = ['tensor', 'shape', 'layout', 'min', 'max', 'mean', 'NaN', 'Inf', 'f16 overflow'];
-    this.root.replaceChildren(el('table', {}, el('tr', {}, ...head.map((h) => el('th', { text: h }))), ...rows));
+    this.root.replaceChildren(el('table', {}, el('thead', {}, el('tr', {}, ...head.map((h) => el('th', { text: h })))), el('tbody', {}, ...rows)));
   }
 
   row(t, overflow) {

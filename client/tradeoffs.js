@@ -4,19 +4,28 @@
 // axes logarithmic, one line per series; a point equal to its reference
 // (no error to put on a log axis) sits hollow on the bottom edge. Hovering a point shows its
 // settings, figures and image; clicking it applies its settings as
-// overrides (one `set_override` per setting). The points whose settings
+// overrides (one `set_override` per setting). The tip floats beside the
+// point (layout.js `float`). The points whose settings
 // are the scene's current values are marked.
+//
+// Whose results they are is the server's answer (X-Loupe-State, by the
+// scene and a hash of the scene file and shader sources they measured):
+// `current` ones are plotted and marked; `stale` ones (this scene, changed
+// since) are plotted, said to be stale and never marked current;
+// `other-scene` ones are not plotted, only named.
 //
 // Test hooks: #tradeoffs-panel, #tradeoffs-chart circle[data-series]
 // [data-index][data-current], #tradeoffs-tip, #tradeoffs-text,
-// #tradeoffs-image, #tradeoffs-meta, #tradeoffs-empty.
+// #tradeoffs-image, #tradeoffs-meta, #tradeoffs-empty; snapshot().state.
 
 import { el } from './util.js';
+import { float } from './layout.js';
 
 const SVG = 'http://www.w3.org/2000/svg';
 const WIDTH = 520;
 const HEIGHT = 300;
 const PAD = { left: 52, right: 12, top: 12, bottom: 36 };
+const RUN = 'run `loupe bench tradeoffs --scene <this scene>` in the project';
 const COLORS = ['#4e9fff', '#ff6b6b', '#51cf66', '#fcc419', '#cc5de8', '#ff922b', '#22b8cf', '#adb5bd', '#94d82d', '#f783ac', '#748ffc', '#e8590c'];
 
 function svg(tag, attrs = {}, text = null) {
@@ -41,13 +50,16 @@ function decades(values) {
 
 export class TradeoffsView {
   /**
-   * `hooks.send(message)`: a WebSocket command; `hooks.fetch()`: the
-   * results (rejects with the API's error when there are none).
+   * `hooks.send(message)`: a WebSocket command; `hooks.fetch()`: `{state,
+   * results}` (api.tradeoffs: rejects with state `not-written` when there
+   * are none).
    */
   constructor(elements, hooks) {
     Object.assign(this, elements);
     this.hooks = hooks;
     this.results = null;
+    /** The server's word on whose the results are (null: none loaded). */
+    this.state = null;
     /** Current value of each control, by path, as JSON. */
     this.current = new Map();
     this.refresh.addEventListener('click', () => this.load());
@@ -55,14 +67,19 @@ export class TradeoffsView {
   }
 
   async load() {
+    let message = null;
     try {
-      this.results = await this.hooks.fetch();
-      this.empty.hidden = true;
+      const { state, results } = await this.hooks.fetch();
+      this.state = state;
+      this.results = state === 'other-scene' ? null : results;
+      if (state === 'other-scene') message = `These results are for ${results?.scene ?? 'another scene'}, not this one: ${RUN}.`;
     } catch (e) {
+      this.state = e?.state ?? null;
       this.results = null;
-      this.empty.hidden = false;
-      this.empty.textContent = e?.message ?? String(e);
+      message = e?.state === 'not-written' ? `No results yet: ${RUN}.` : (e?.message ?? String(e));
     }
+    this.empty.hidden = message === null;
+    this.empty.textContent = message ?? '';
     this.render();
   }
 
@@ -74,6 +91,7 @@ export class TradeoffsView {
   }
 
   isCurrent(series, point) {
+    if (this.state !== 'current') return false;
     return Object.entries(pointOverrides(series, point)).every(([path, v]) => this.current.get(path) === JSON.stringify(v));
   }
 
@@ -95,7 +113,9 @@ export class TradeoffsView {
       this.meta.textContent = '';
       return;
     }
-    this.meta.textContent = `${r.scene} · ${r.width}×${r.height} · ${r.adapter} (${r.timing} timing)`;
+    const stale = this.state === 'stale' ? ' · stale: the scene file or a shader changed since; run the sweep again' : '';
+    this.meta.textContent = `${r.scene} · ${r.width}×${r.height} · ${r.adapter} (${r.timing} timing)${stale}`;
+    this.meta.classList.toggle('stale', stale !== '');
     const plotted = (p) => p.time_ms > 0;
     const all = r.series.flatMap((s) => s.points.filter(plotted));
     const [x0, x1] = decades(all.map((p) => p.time_ms));
@@ -149,8 +169,11 @@ export class TradeoffsView {
       el('div', { class: 'tip-settings', text: settings.join(' · ') }),
       el('div', { class: 'tip-hint', text: `reference: ${series.reference} · click to apply` }),
     );
+    // A floating tip beside the point, inside the viewport; placed again
+    // once the image has its size.
+    this.image.onload = () => !this.tip.hidden && float(this.tip, circle);
     this.image.src = `/api/tradeoffs/${point.image}`;
-    this.tip.hidden = false;
+    float(this.tip, circle);
     this.tip.dataset.series = circle.dataset.series;
     this.tip.dataset.index = circle.dataset.index;
   }
@@ -168,6 +191,7 @@ export class TradeoffsView {
   snapshot() {
     const circles = [...this.chart.querySelectorAll('circle[data-series]')];
     return {
+      state: this.state,
       loaded: this.results !== null,
       points: circles.length,
       current: circles.filter((c) => c.dataset.current === 'true').map((c) => [Number(c.dataset.series), Number(c.dataset.index)]),

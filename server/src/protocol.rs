@@ -231,6 +231,12 @@ pub enum ServerEvent {
     /// The scene's live controls and the overrides set on top of the file
     /// (also `GET /api/controls`), after any change to either.
     Controls(ControlsReport),
+    /// A `save_scene` (or `POST /api/scene/save`) was carried out: the
+    /// overrides were written into `file`, or `error` says why not.
+    SceneSaved {
+        file: String,
+        error: Option<String>,
+    },
     /// A traced frame's NaN report (also `GET /api/nan`); `null` once a
     /// later frame is clean again.
     Nan {

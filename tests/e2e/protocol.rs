@@ -63,6 +63,8 @@ fn every_documented_message_has_every_documented_key() {
     seen.until(&mut ws, "error", |_| true);
     ws.send(json!({ "type": "set_override", "path": "post.exposure_ev", "value": 0.5 }));
     seen.until(&mut ws, "controls", |_| true);
+    ws.send(json!({ "type": "save_scene" }));
+    seen.until(&mut ws, "scene_saved", |_| true);
 
     // A broken save and its mend: reload_started, reload_failed with a
     // located diagnostic, diagnostics, passes (stale, then ok),

@@ -145,6 +145,35 @@ fn api_shapes() {
     assert_eq!(s.get_json("/api/status")["device_resets"], 0);
 }
 
+/// What exists but has nothing yet is a documented state (204 and
+/// `X-Loupe-State`), not a 404: an output no frame captured, a last good
+/// version no reload made, tradeoff results not written; tradeoff results
+/// say whose they are. Unknown names stay 404.
+#[test]
+fn states_are_answered_as_states_and_unknown_names_as_404() {
+    let p = Project::copy_of_repo("serve-states");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/minimal.toml"]);
+    s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
+    let state = |path: &str| s.get_state(path);
+    let not_captured = (204, Some("not-captured".to_owned()));
+    assert_eq!(state("/api/captures/gbuffer/normal.f32"), not_captured, "written by the graph, not subscribed to");
+    assert_eq!(state("/api/captures/tonemap/color.png?version=last_good"), not_captured, "no reload replaced it yet");
+    assert_eq!(state("/api/captures/gbuffer/nope.f32"), (404, None));
+    assert_eq!(state("/api/captures/nope/normal.f32"), (404, None));
+    assert_eq!(state("/api/tensors/gbuffer/nope.f32"), (404, None));
+    assert_eq!(state("/api/captures/tonemap/color.f32"), (200, None), "the final output is captured");
+
+    assert_eq!(state("/api/tradeoffs"), (204, Some("not-written".to_owned())));
+    std::fs::create_dir_all(p.path("tradeoffs")).unwrap();
+    let results = |json: &str| {
+        std::fs::write(p.path("tradeoffs/tradeoffs.json"), json).unwrap();
+        state("/api/tradeoffs")
+    };
+    let said = |v: &str| (200, Some(v.to_owned()));
+    assert_eq!(results(r#"{"scene":"scenes/minimal.toml","hash":"0","series":[]}"#), said("stale"));
+    assert_eq!(results(r#"{"scene":"scenes/showcase.toml","hash":"0","series":[]}"#), said("other-scene"));
+}
+
 fn image_kind(m: &Msg) -> Option<(String, serde_json::Value)> {
     match m {
         Msg::Image(h, _) => Some((h["kind"].as_str().unwrap_or("").to_owned(), h.clone())),

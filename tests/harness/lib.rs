@@ -324,6 +324,13 @@ impl Server {
         self.answer(&format!("GET {path}"), agent().get(&self.url(path)).call())
     }
 
+    /// GET a path; returns status and its `X-Loupe-State` (PROTOCOL.md,
+    /// "States"), if any.
+    pub fn get_state(&self, path: &str) -> (u16, Option<String>) {
+        let resp = agent().get(&self.url(path)).call().unwrap_or_else(|e| panic!("GET {path}: {e}\n{}", self.log()));
+        (resp.status().as_u16(), resp.headers().get("x-loupe-state").and_then(|v| v.to_str().ok()).map(str::to_owned))
+    }
+
     pub fn get_json(&self, path: &str) -> serde_json::Value {
         let (status, body) = self.get(path);
         assert_eq!(status, 200, "GET {path}: {}\n{}", String::from_utf8_lossy(&body), self.log());

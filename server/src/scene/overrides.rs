@@ -76,9 +76,7 @@ fn set(table: &mut Table, path: &[Seg], value: &Value) -> Result<(), String> {
                 if let (TomlValue::Float(_), Value::Int(i)) = (&*old, value) {
                     new = (*i as f64).into();
                 }
-                // Keep the comment after the value and the spacing around it.
-                *new.decor_mut() = old.decor().clone();
-                *old = new;
+                replace(old, new);
             }
             Some(_) => return Err(format!("`{key}` is a table, not a value")),
             None => {
@@ -94,9 +92,7 @@ fn set(table: &mut Table, path: &[Seg], value: &Value) -> Result<(), String> {
         }
         (Some(Seg::Index(i)), Some(Item::Value(TomlValue::Array(a)))) if rest.len() == 1 => {
             let slot = a.get_mut(*i).ok_or_else(|| format!("`{key}` has no element {i}"))?;
-            let mut new = toml_value(value);
-            *new.decor_mut() = slot.decor().clone();
-            *slot = new;
+            replace(slot, toml_value(value));
             Ok(())
         }
         (Some(Seg::Key(_)), Some(Item::Table(t))) => set(t, rest, value),
@@ -109,6 +105,42 @@ fn set(table: &mut Table, path: &[Seg], value: &Value) -> Result<(), String> {
         }
         _ => Err(format!("`{key}` does not have that shape")),
     }
+}
+
+/// Puts `new` in `old`'s place with `old`'s comment and spacing. A
+/// trailing comment keeps its column: the spaces before it shrink or grow
+/// by what the value's width changed (one stays, however long the value).
+fn replace(old: &mut TomlValue, mut new: TomlValue) {
+    let width = |v: &TomlValue| {
+        let mut bare = v.clone();
+        bare.decor_mut().clear();
+        bare.to_string().chars().count() as isize
+    };
+    let grown = width(&new) - width(old);
+    let mut decor = old.decor().clone();
+    if let Some(suffix) = decor.suffix().and_then(|s| s.as_str()) {
+        let rest = suffix.trim_start_matches(' ');
+        if rest.starts_with('#') {
+            let spaces = (suffix.len() - rest.len()) as isize;
+            decor.set_suffix(format!("{}{rest}", " ".repeat((spaces - grown).max(1) as usize)));
+        }
+    }
+    *new.decor_mut() = decor;
+    *old = new;
+}
+
+/// `overrides` less those equal to the file's own value (`file`: the
+/// controls of the scene the file alone gives): a control set back to what
+/// the file says leaves nothing unsaved. Numbers are compared as the scene
+/// holds them (f32), so `1` equals `1.0` and a slider's `0.30000000000000004`
+/// equals `0.3`.
+pub fn without_file_values(mut overrides: Overrides, file: &[Control]) -> Overrides {
+    let same = |a: &Value, b: &Value| match (settings::number(a), settings::number(b)) {
+        (Some(x), Some(y)) => x as f32 == y as f32,
+        _ => a == b,
+    };
+    overrides.retain(|path, v| !file.iter().any(|c| c.path == *path && same(&c.value, v)));
+    overrides
 }
 
 /// One live control the browser shows for the current scene.
@@ -203,6 +235,35 @@ mod tests {
         let s = crate::scene::parse("s.toml", &out).unwrap();
         assert_eq!(s.post.exposure_ev, 2.0);
         assert_eq!(s.quality.volume_steps, 12);
+    }
+
+    #[test]
+    fn trailing_comments_keep_their_column() {
+        let text = "[post]\nexposure_ev = 0.0    # stops\nbloom = 0.04 # tight\n[camera]\nposition = [0.0, 1.0,  2.0] # eye\n";
+        let mut o = Overrides::new();
+        o.insert("post.exposure_ev".into(), Value::Float(-12.5));
+        o.insert("post.bloom".into(), Value::Float(1.0));
+        let out = apply(text, &o).unwrap();
+        let column = |out: &str, key: &str| out.lines().find(|l| l.starts_with(key)).and_then(|l| l.find('#'));
+        assert_eq!(column(&out, "exposure_ev"), column(text, "exposure_ev"), "{out}");
+        assert!(out.contains("exposure_ev = -12.5  # stops\n"), "{out}");
+        assert_eq!(column(&out, "bloom"), column(text, "bloom"), "a shorter value pads: {out}");
+        assert!(out.contains("bloom = 1.0  # tight\n"), "{out}");
+        o.insert("post.exposure_ev".into(), Value::Float(-12.345678));
+        assert!(apply(text, &o).unwrap().contains("exposure_ev = -12.345678 # stops\n"), "one space stays");
+    }
+
+    #[test]
+    fn an_override_equal_to_the_file_is_dropped() {
+        let s = crate::scene::parse("s.toml", TEXT).unwrap();
+        let file = controls(&s, crate::render::passes::affected);
+        let mut o = Overrides::new();
+        o.insert("post.exposure_ev".into(), Value::Int(0));
+        o.insert("post.tonemap".into(), Value::Text("aces".into()));
+        o.insert("lights[0].intensity".into(), Value::Float(5.000000000000001));
+        o.insert("post.two_triangles".into(), Value::Bool(true));
+        let kept = without_file_values(o, &file);
+        assert_eq!(kept.keys().collect::<Vec<_>>(), ["post.two_triangles"]);
     }
 
     #[test]

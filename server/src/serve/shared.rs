@@ -47,6 +47,9 @@ pub struct Shared {
     pub debug_api: bool,
     /// Where `loupe bench tradeoffs` wrote its results (`/api/tradeoffs`).
     pub tradeoffs: PathBuf,
+    /// The scene and sources being rendered, as `loupe bench tradeoffs`
+    /// hashes them: which results are this scene's, and current.
+    pub measured: RwLock<crate::tradeoffs::Provenance>,
     pub controls: RwLock<ControlsReport>,
 }
 
@@ -105,6 +108,7 @@ impl Shared {
             source_roots,
             debug_api,
             tradeoffs,
+            measured: RwLock::new(Default::default()),
             controls: RwLock::new(ControlsReport::default()),
         })
     }

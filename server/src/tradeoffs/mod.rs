@@ -4,7 +4,10 @@
 //! frames after warm-up) and its image compared with the series'
 //! reference (`metric`). References are cached on disk, keyed by the scene
 //! file, the overrides, the size and the shaders' hashes. `report` writes
-//! `tradeoffs.json`, a Markdown table and an SVG plot.
+//! `tradeoffs.json`, a Markdown table and an SVG plot, which carries the
+//! scene and a hash of what was measured ([`Provenance`]) so `loupe serve`
+//! can tell results of this scene and these sources from older or other
+//! ones.
 
 pub mod metric;
 pub mod report;
@@ -23,6 +26,7 @@ use crate::render::session::Session;
 use crate::scene::overrides::Overrides;
 use crate::scene::settings;
 use crate::scene::settings::Value;
+use crate::shader::library::Library;
 use metric::Rgba;
 use sweep::{Reference, Series};
 
@@ -73,9 +77,34 @@ pub struct SeriesReport {
     pub points: Vec<Point>,
 }
 
+/// What a sweep measured: the scene (as diagnostics name it) and a hash
+/// of the scene file's bytes and of every shader source's content (names
+/// left out, so a run from another directory hashes the same). Overrides
+/// (`--set`) and the size are not in it: they are in the results.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Provenance {
+    pub scene: String,
+    pub hash: String,
+}
+
+impl Provenance {
+    pub fn new(scene: &Path, text: &[u8], lib: &Library) -> Self {
+        let mut sources: Vec<&blake3::Hash> = lib.files().map(|f| &f.hash).collect();
+        sources.sort_by_key(|h| *h.as_bytes());
+        let mut h = blake3::Hasher::new();
+        h.update(blake3::hash(text).as_bytes());
+        for s in sources {
+            h.update(s.as_bytes());
+        }
+        Provenance { scene: crate::diag::display_path(scene), hash: h.finalize().to_hex()[..32].to_owned() }
+    }
+}
+
 #[derive(Debug, Serialize)]
 pub struct Report {
     pub scene: String,
+    /// [`Provenance::hash`].
+    pub hash: String,
     pub adapter: String,
     pub cpu_adapter: bool,
     /// `serial` (each pass submitted alone, wall clock) or `gpu` (timestamps).
@@ -103,12 +132,13 @@ pub fn run(job: &Job, out: &Path) -> Result<Report, OfflineError> {
     let mut session = crate::offline::prepare(&base)?;
     let serial = session.gpu().is_cpu();
     let text = std::fs::read(&job.scene).map_err(|e| OfflineError::Io(format!("cannot read {}: {e}", job.scene.display())))?;
+    let measured = Provenance::new(&job.scene, &text, session.library());
     let all = sweep::series(session.scene(), job.reference_spp);
     let images = out.join("points");
     std::fs::create_dir_all(&images).map_err(|e| OfflineError::Io(format!("cannot create {}: {e}", images.display())))?;
     let mut reports = Vec::new();
     for (i, series) in all.iter().enumerate() {
-        let reference = reference(&mut session, job, &text, series)?;
+        let reference = reference(&mut session, job, &measured, series)?;
         let mut points = Vec::new();
         let mut passes = Vec::new();
         for value in &series.values {
@@ -149,7 +179,8 @@ pub fn run(job: &Job, out: &Path) -> Result<Report, OfflineError> {
         });
     }
     Ok(Report {
-        scene: crate::diag::display_path(&job.scene),
+        scene: measured.scene,
+        hash: measured.hash,
         adapter: session.gpu().adapter_name(),
         cpu_adapter: serial,
         timing: if serial { "serial" } else { "gpu" }.into(),
@@ -214,15 +245,11 @@ fn finish(session: &mut Session, names: &BTreeSet<String>, mut each: impl FnMut(
 }
 
 /// The series' reference images, from the cache or rendered (and cached).
-fn reference(session: &mut Session, job: &Job, text: &[u8], series: &Series) -> Result<Images, OfflineError> {
+fn reference(session: &mut Session, job: &Job, measured: &Provenance, series: &Series) -> Result<Images, OfflineError> {
     let overrides = series.reference_overrides();
     let mut key = blake3::Hasher::new();
-    key.update(text);
+    key.update(measured.hash.as_bytes());
     key.update(format!("{:?} {:?}", merged(job, &overrides), job.size).as_bytes());
-    for f in session.library().files() {
-        key.update(f.display.as_bytes());
-        key.update(f.hash.as_bytes());
-    }
     let path = job.cache.join(format!("{}.bin", &key.finalize().to_hex()[..32]));
     if let Some(cached) = read_cached(&path) {
         return Ok(cached);

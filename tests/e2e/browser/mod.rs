@@ -11,7 +11,10 @@ use std::time::{Duration, Instant};
 use fantoccini::{Client, ClientBuilder, Locator};
 use loupe_tests::{Project, Server, reload, repo};
 
+mod console;
 mod difference;
+mod layout;
+mod readouts;
 mod timings;
 
 const LIMIT: Duration = Duration::from_secs(60);
@@ -41,6 +44,17 @@ async fn browser() -> (Driver, Client) {
 
 /// Chromium with a window (and, headless, a page) of width × height.
 async fn browser_sized(width: u32, height: u32) -> (Driver, Client) {
+    browser_with(width, height, serde_json::json!({})).await
+}
+
+/// `browser_sized` that keeps the page's console (every level) for
+/// chromedriver's log endpoint: what `console::browser_log` reads.
+async fn browser_logging(width: u32, height: u32) -> (Driver, Client) {
+    browser_with(width, height, serde_json::json!({ "goog:loggingPrefs": { "browser": "ALL" } })).await
+}
+
+/// Chromium at width × height with `extra` capabilities.
+async fn browser_with(width: u32, height: u32, extra: serde_json::Value) -> (Driver, Client) {
     let port = free_port();
     let driver = Driver(
         Command::new("chromedriver")
@@ -60,6 +74,8 @@ async fn browser_sized(width: u32, height: u32) -> (Driver, Client) {
         }
     }))
     .unwrap();
+    let caps: serde_json::Map<String, serde_json::Value> =
+        caps.into_iter().chain(serde_json::from_value::<serde_json::Map<_, _>>(extra).expect("capabilities are an object")).collect();
     let start = Instant::now();
     loop {
         match ClientBuilder::new(hyper_util::client::legacy::connect::HttpConnector::new())
@@ -72,6 +88,17 @@ async fn browser_sized(width: u32, height: u32) -> (Driver, Client) {
             Err(_) => tokio::time::sleep(Duration::from_millis(200)).await,
         }
     }
+}
+
+/// Chromium whose page (the viewport, which a screenshot shows) is
+/// width × height: the window is larger than the page by the browser's own
+/// bars, so it is grown by that much.
+async fn browser_with_page(width: u32, height: u32) -> (Driver, Client) {
+    let (driver, c) = browser_sized(width, height).await;
+    let inner = c.execute("return [window.innerWidth, window.innerHeight];", vec![]).await.unwrap();
+    let (w, h) = (inner[0].as_u64().unwrap() as u32, inner[1].as_u64().unwrap() as u32);
+    c.set_window_size(2 * width - w, 2 * height - h).await.unwrap();
+    (driver, c)
 }
 
 /// The image `#frame` shows, as drawn: its frame number, a hash of its
@@ -103,6 +130,14 @@ async fn shown(c: &Client) -> Shown {
 /// debug build replays every shadow layer: small keeps it quick).
 fn small_showcase(name: &str) -> (Project, Server) {
     let p = Project::copy_of_repo(name);
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", &small_showcase_scene(&p)]);
+    (p, s)
+}
+
+/// Writes `scenes/small_showcase.toml`, the showcase at 320×180 with a
+/// small shadow map (quick on lavapipe; the page reads every output whole);
+/// returns its path for `--scene`.
+fn small_showcase_scene(p: &Project) -> String {
     let small = p
         .read("scenes/showcase.toml")
         .replacen("width = 640", "width = 320", 1)
@@ -112,9 +147,8 @@ fn small_showcase(name: &str) -> (Project, Server) {
         small.contains("width = 320") && small.contains("height = 180") && small.contains("= 256"),
         "the showcase's settings moved: update this test"
     );
-    p.write("scenes/small.toml", small);
-    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/small.toml"]);
-    (p, s)
+    p.write("scenes/small_showcase.toml", small);
+    "scenes/small_showcase.toml".to_owned()
 }
 
 /// What to print about the server when a wait times out.
@@ -695,14 +729,10 @@ async fn the_renderer_switch_counts_samples_and_measures_path_against_raster() {
     c.close().await.unwrap();
 }
 
-/// A denoiser tensor in the page: every denoiser tensor listed with its
-/// statistics, three picked channels as RGB equal to the values the server
-/// serves (each mapped from its own min…max), the value of every channel
-/// under the mouse exact, a grid cell and a histogram per channel.
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
-    let p = Project::copy_of_repo("browser-denoiser");
-    // Small, with few samples: lavapipe traces and denoises it in a few frames.
+/// Writes `scenes/small.toml`, the minimal scene small, path traced with
+/// few samples and denoised (lavapipe traces and denoises it in a few
+/// frames); returns its path for `--scene`.
+fn small_denoised_scene(p: &Project) -> String {
     let small = p.read("scenes/minimal.toml").replacen("width = 640", "width = 64", 1).replacen("height = 360", "height = 48", 1);
     assert!(
         small.contains("width = 64") && small.contains("height = 48") && !small.contains("[quality]"),
@@ -710,7 +740,37 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
     );
     // No weights named: the bundled LDR network for colour, albedo and normal.
     p.write("scenes/small.toml", small + "\n[quality]\nrenderer = \"path\"\npath_spp = 2\n\n[denoiser]\nmode = \"ldr\"\n");
-    let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/small.toml"]);
+    "scenes/small.toml".to_owned()
+}
+
+/// Every tensor the denoiser's passes write (but their `overflow` counts),
+/// as "pass/output", in the order of `/api/passes`: the network's order.
+fn denoiser_tensors(s: &Server) -> Vec<String> {
+    s.get_json("/api/passes")
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["name"].as_str().unwrap().starts_with("denoise") && p["status"] == "ok")
+        .flat_map(|p| {
+            p["writes"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter(|w| w["kind"] == "buffer" && w["name"] != "overflow")
+                .map(|w| format!("{}/{}", p["name"].as_str().unwrap(), w["name"].as_str().unwrap()))
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// A denoiser tensor in the page: every denoiser tensor listed with its
+/// statistics, three picked channels as RGB equal to the values the server
+/// serves (each mapped from its own min…max), the value of every channel
+/// under the mouse exact, a grid cell and a histogram per channel.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
+    let p = Project::copy_of_repo("browser-denoiser");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", &small_denoised_scene(&p)]);
     let (_driver, c) = browser().await;
     c.goto(&s.url("/")).await.unwrap();
     until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
@@ -728,22 +788,7 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
     .await;
 
     // Every denoiser tensor the frame makes is listed.
-    let tensors: Vec<String> = s
-        .get_json("/api/passes")
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|p| p["name"].as_str().unwrap().starts_with("denoise") && p["status"] == "ok")
-        .flat_map(|p| {
-            p["writes"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .filter(|w| w["kind"] == "buffer" && w["name"] != "overflow")
-                .map(|w| format!("{}/{}", p["name"].as_str().unwrap(), w["name"].as_str().unwrap()))
-                .collect::<Vec<_>>()
-        })
-        .collect();
+    let tensors = denoiser_tensors(&s);
     assert!(tensors.len() > 10 && tensors.iter().any(|t| t == "denoise.pool1/tensor"), "{tensors:?}");
     until(&c, &s, "every denoiser tensor listed", &format!("document.querySelector('#tensor-list').dataset.count === '{}'", tensors.len()))
         .await;
@@ -983,12 +1028,7 @@ async fn the_docs_screenshot_of_the_inspector_is_regenerable() {
     let committed = repo().join("docs/images/inspector.png");
     let p = Project::copy_of_repo("browser-screenshot");
     let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/showcase.toml"]);
-    let (_driver, c) = browser_sized(WIDTH, HEIGHT).await;
-    // The window is larger than the page by the browser's own bars: grow
-    // it by that much so that the page, which the screenshot shows, has the size.
-    let inner = c.execute("return [window.innerWidth, window.innerHeight];", vec![]).await.unwrap();
-    let (w, h) = (inner[0].as_u64().unwrap() as u32, inner[1].as_u64().unwrap() as u32);
-    c.set_window_size(2 * WIDTH - w, 2 * HEIGHT - h).await.unwrap();
+    let (_driver, c) = browser_with_page(WIDTH, HEIGHT).await;
     c.goto(&s.url("/")).await.unwrap();
     until(&c, &s, "a frame", "document.querySelector('#frame').complete && Number(document.querySelector('#frame').dataset.frame || 0)")
         .await;
@@ -1014,4 +1054,3 @@ async fn the_docs_screenshot_of_the_inspector_is_regenerable() {
     let file = image::open(&committed).unwrap_or_else(|e| panic!("{} (LOUPE_BLESS=1 writes it): {e}", committed.display()));
     assert_eq!((file.width(), file.height()), (WIDTH, HEIGHT), "{} has the screenshot's size", committed.display());
 }
-mod readouts;

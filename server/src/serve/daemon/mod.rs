@@ -206,6 +206,7 @@ impl Daemon {
         self.start_reload(keys, Vec::new(), 0.0);
         self.publish_state();
         self.publish_controls();
+        self.publish_measured();
         let interval = Duration::from_secs_f64(1.0 / self.config.max_fps.max(0.1));
         loop {
             // Frames on their way back are polled for; otherwise only an
@@ -337,6 +338,7 @@ impl Daemon {
         if scene_changed {
             self.reload_scene();
         }
+        self.publish_measured();
         // Exactly the pipelines whose sources depend on a touched file, plus
         // any the (new) graph needs that were never built.
         let lib = self.session.library().clone();
@@ -372,7 +374,7 @@ impl Daemon {
             SceneCommand::Set { path, value } => {
                 let mut o = self.overrides.clone();
                 o.insert(path, value);
-                o
+                self.without_file_values(o)
             }
             SceneCommand::Clear => Overrides::new(),
             SceneCommand::Save => {
@@ -380,12 +382,12 @@ impl Daemon {
                     .map_err(|e| e.to_string())
                     .and_then(|text| scene::overrides::apply(&text, &self.overrides))
                     .and_then(|text| write_atomically(&self.config.scene_path, &text).map_err(|e| e.to_string()));
-                match saved {
-                    // The file now holds the values: the watcher's reload
-                    // of it renders the same scene.
-                    Ok(()) => self.overrides.clear(),
-                    Err(e) => self.shared.publish(ServerEvent::Error { message: format!("cannot save {display}: {e}") }),
+                // The file now holds the values: the watcher's reload of it
+                // renders the same scene.
+                if saved.is_ok() {
+                    self.overrides.clear();
                 }
+                self.shared.publish(ServerEvent::SceneSaved { file: display, error: saved.err() });
                 self.publish_controls();
                 return;
             }
@@ -401,6 +403,19 @@ impl Daemon {
             Err(d) => self.shared.publish(ServerEvent::Error { message: format!("override refused: {d}") }),
         }
         self.publish_controls();
+    }
+
+    /// `overrides` less those equal to the scene file's own value (the
+    /// file as it is on disk; unreadable or invalid, all are kept).
+    fn without_file_values(&self, overrides: Overrides) -> Overrides {
+        let display = display_path(&self.config.scene_path);
+        let file = std::fs::read_to_string(&self.config.scene_path).ok().and_then(|text| scene::parse(&display, &text).ok());
+        match file {
+            Some(scene) => {
+                scene::overrides::without_file_values(overrides, &scene::overrides::controls(&scene, crate::render::passes::affected))
+            }
+            None => overrides,
+        }
     }
 
     fn start_reload(&mut self, keys: BTreeSet<PipelineKey>, files: Vec<String>, watch_ms: f64) {

@@ -27,6 +27,14 @@ impl Daemon {
         self.shared.publish(ServerEvent::Controls(report));
     }
 
+    /// What `/api/tradeoffs` compares results with: after the scene file
+    /// or a shader source changed.
+    pub(super) fn publish_measured(&self) {
+        let text = std::fs::read(&self.config.scene_path).unwrap_or_default();
+        let measured = crate::tradeoffs::Provenance::new(&self.config.scene_path, &text, self.session.library());
+        shared::write(&self.shared.measured, measured);
+    }
+
     pub(super) fn publish_frame(&mut self, done: InFlight, result: FrameResult) {
         let InFlight { results: _, reloads, started, final_key, clean, replaced, trace } = done;
         if clean {

@@ -11,7 +11,7 @@ use axum::response::{IntoResponse, Response};
 use serde::{Deserialize, Serialize};
 
 use super::AppState;
-use super::guard::{error, json, json_response};
+use super::guard::{error, json, json_response, state};
 use crate::protocol::DiagnosticsReport;
 use crate::render::capture::{CapturedImage, ImageStats};
 use crate::serve::event::SceneCommand;
@@ -114,8 +114,10 @@ pub(super) async fn capture(
     };
     let key = format!("{pass}/{output}");
     let Some(img) = set.get(&key).cloned() else {
-        let which = if q.version.as_deref() == Some("last_good") { "last good capture" } else { "capture" };
-        return error(StatusCode::NOT_FOUND, &format!("no {which} of `{key}`"));
+        if writes(&st.shared, &pass, output) {
+            return state(NOT_CAPTURED);
+        }
+        return error(StatusCode::NOT_FOUND, &format!("`{pass}` writes no output `{output}`"));
     };
     let ext = ext.to_owned();
     let (mime, channels) = match ext.as_str() {
@@ -155,6 +157,16 @@ pub(super) async fn capture(
         h.insert("x-loupe-channels", HeaderValue::from_static(c));
     }
     resp
+}
+
+/// The state of an output the frame graph writes that no frame has
+/// captured yet (or, asked for `last_good`, that no reload has replaced).
+pub(super) const NOT_CAPTURED: &str = "not-captured";
+
+/// Whether `pass` writes `output` in the current frame graph: such an
+/// output without a capture is a state; any other name is unknown (404).
+pub(super) fn writes(shared: &Shared, pass: &str, output: &str) -> bool {
+    shared.passes.read().unwrap_or_else(|e| e.into_inner()).iter().any(|p| p.name == pass && p.writes.iter().any(|w| w.name == output))
 }
 
 /// Hands `command` to the daemon: 202, or 503 when it is gone or too many

@@ -36,6 +36,13 @@ pub(super) fn error(status: StatusCode, message: &str) -> Response {
     json_response(status, &ErrorBody { error: message })
 }
 
+/// A documented state, not an error (PROTOCOL.md, "States"): what was
+/// asked for exists but has nothing to show yet. `204 No Content` with
+/// `X-Loupe-State: {name}`, so a browser logs no failed request.
+pub(super) fn state(name: &'static str) -> Response {
+    (StatusCode::NO_CONTENT, [("x-loupe-state", name)]).into_response()
+}
+
 fn is_api(path: &str) -> bool {
     path == "/api" || path.starts_with("/api/")
 }

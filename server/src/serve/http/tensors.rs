@@ -42,7 +42,11 @@ pub(super) async fn tensor(State(st): State<Arc<AppState>>, UrlPath((pass, file)
     };
     let key = format!("{pass}/{output}");
     let Some(t) = read(&st.shared.tensors).get(&key).cloned() else {
-        return error(StatusCode::NOT_FOUND, &format!("no tensor `{key}` captured: subscribe to it so frames capture it"));
+        // Subscribing makes a later frame capture it.
+        if super::api::writes(&st.shared, &pass, output) {
+            return super::guard::state(super::api::NOT_CAPTURED);
+        }
+        return error(StatusCode::NOT_FOUND, &format!("`{pass}` writes no tensor `{output}`"));
     };
     if !raw {
         return json(&info(&t));
