@@ -16,8 +16,11 @@
 //   #range-max, #auto-fit, #overlay-nan, #overlay-inf, #overlay-neg, #srgb,
 //   #compare-mode (off|split|diff), #compare-b (last_good | "pass/output"), #live
 //   #linearize (depth as distance), #inspector[data-meaning]: see presets.js
-//   #renderer-raster, #renderer-path, #path-samples, #path-difference,
+//   #renderer-raster, #renderer-path, #path-samples, #path-rate,
+//                      #path-difference, #path-difference-open,
 //                      #path-difference-stats: see path.js
+//   #diff-scale, #mask-emitters, #mask-background, #compare-stats:
+//                      see inspector_compare.js
 //   window.loupe       see the end of this file
 //
 // Source of truth: the HTTP API. Events say *that* something changed (and
@@ -34,7 +37,7 @@ import { LiveFrame } from './live.js';
 import { TensorView } from './tensor.js';
 import { ControlsPanel } from './controls.js';
 import { QuadView } from './quads.js';
-import { PathView } from './path.js';
+import { PathView, TRACED } from './path.js';
 import { TradeoffsView } from './tradeoffs.js';
 import { bindShortcuts } from './shortcuts.js';
 import { Layout } from './layout.js';
@@ -280,6 +283,10 @@ const inspector = new Inspector({
   subscribeOnly: streamF32('inspector'),
   awaitCapture,
   outputInfo,
+  // The path view's raster reference is a B, with its masks (path.js).
+  reference: () => pathView.referenceSlot(),
+  maskFor: (width, height) => pathView.chosenMask(width, height),
+  masksChanged: () => pathView.showDifference(),
 });
 
 // The tensor view takes the inspector's place: one set of outputs for both.
@@ -593,6 +600,9 @@ const pathView = new PathView({
   send: (message) => conn.send(message),
   want: (wanted) => conn?.want('path', wanted),
   refreshCaptures: refetchCapturesSoon,
+  maskChoice: () => inspector.compareTools.maskChoice(),
+  referenceChanged: () => inspector.referenceChanged(),
+  open: () => inspector.compareWithReference(TRACED.pass, TRACED.output),
 });
 
 // ---- accuracy against time ------------------------------------------------
@@ -662,7 +672,7 @@ window.loupe = {
   displayedAt: (x, y, which) => inspector.displayedAt(x, y, which),
   /** Puts the readout on pixel (x, y), as the mouse would. */
   hover: (x, y) => inspector.hoverPixel(x, y),
-  /** Compare mode 'off' | 'split' | 'diff' against B ('last_good' or 'pass/output'). */
+  /** Compare mode 'off' | 'split' | 'diff' against B ('last_good', 'raster_reference' or 'pass/output'). */
   compare: (mode, b = 'last_good') => {
     const modeSel = $('compare-mode');
     const bSel = $('compare-b');
@@ -670,8 +680,10 @@ window.loupe = {
     bSel.value = b;
     modeSel.value = mode;
     inspector.root.dataset.compare = mode;
-    return inspector.load();
+    return inspector.compareChanged();
   },
+  /** Opens |path − raster| in the inspector, as the path panel's button. */
+  openDifference: () => inspector.compareWithReference(TRACED.pass, TRACED.output),
   autoFit: () => inspector.autoFit(),
   refresh: () => inspector.load(),
   fit: () => inspector.fit(),

@@ -13,7 +13,11 @@
 // inspector_loader.js (fetching and streaming, throttled by
 // inspector_throttle.js), inspector_view.js (zoom, pan, selection),
 // inspector_draw.js (the canvas) and inspector_readout.js (the text).
+// B may also be the page's raster reference (path.js, through
+// hooks.reference), which is not fetched; a compare has statistics, a
+// display scale and masks (inspector_compare.js).
 
+import { CompareTools, REFERENCE } from './inspector_compare.js';
 import { tonemapSlot, draw } from './inspector_draw.js';
 import { keyOf, Loader, parseKey } from './inspector_loader.js';
 import { Readout } from './inspector_readout.js';
@@ -35,6 +39,11 @@ export class Inspector {
    * @param {(pass: string, output: string) => object | null}
    *   hooks.outputInfo the output's `writes[]` entry of /api/passes (its
    *   meaning and depth projection pick its display preset)
+   * @param {() => {slot?: object, label?: string, problem?: string}} hooks.reference
+   *   the page's raster reference, a B that is not fetched
+   * @param {(width: number, height: number) => {mask: Uint8Array | null, missing: string[]}} hooks.maskFor
+   *   the chosen masks of a difference against the reference
+   * @param {() => void} hooks.masksChanged the mask choice changed
    */
   constructor(hooks) {
     this.hooks = hooks;
@@ -79,6 +88,12 @@ export class Inspector {
     this.needsRebuild = false;
     this.frameRequested = false;
 
+    this.compareTools = new CompareTools(() => {
+      this.hooks.masksChanged?.();
+      this.needsRebuild = true;
+      this.requestFrame();
+    });
+    this.compareStats = null; // statistics of A against B, when comparing
     this.view = new View();
     this.readout = new Readout();
     this.loader = new Loader(hooks, {
@@ -146,6 +161,7 @@ export class Inspector {
     const mode = this.selMode.value;
     if (mode === 'off' || !this.target) return null;
     const value = this.selB.value;
+    if (value === REFERENCE) return null; // the page's own: see takeReference
     if (value === 'last_good' || !value) return { ...this.target, lastGood: true };
     const parsed = parseKey(value);
     return parsed ? { ...parsed, lastGood: false } : null;
@@ -234,8 +250,35 @@ export class Inspector {
     this.redisplay();
   }
 
+  /** Whether B is the page's raster reference (in a compare). */
+  comparesReference() {
+    return this.mode() !== 'off' && this.selB.value === REFERENCE;
+  }
+
+  /** B becomes the raster reference when it is chosen (unchanged if it is
+   * the same image). */
+  takeReference() {
+    if (!this.comparesReference()) return;
+    const ref = this.hooks.reference?.() ?? { problem: 'no raster reference in this page' };
+    if (!ref.slot) {
+      this.b = null;
+      this.bError = new Error(ref.problem);
+      return;
+    }
+    this.bError = null;
+    if (this.b?.data === ref.slot.data) return;
+    this.b = makeSlot(ref.slot, { key: ref.label, pass: 'raster reference', output: 'color', lastGood: false }, this.b);
+  }
+
+  /** The raster reference changed (path.js): shown anew when it is B. */
+  referenceChanged() {
+    this.relabelReference();
+    if (this.comparesReference()) this.redisplay();
+  }
+
   /** New data in A or B: retonemap, draw, update the message and readout. */
   redisplay() {
+    this.takeReference();
     this.needsRebuild = true;
     this.flush();
     this.showMessage();
@@ -252,7 +295,7 @@ export class Inspector {
     // Refreshed with every live fetch: rebuilding identical options would
     // close a dropdown the user has open.
     const aMetaNow = this.target ? this.metaFor(this.target.pass, this.target.output) : null;
-    const signature = JSON.stringify([this.captures.map(label), aValue, aMetaNow?.last_good]);
+    const signature = JSON.stringify([this.captures.map(label), aValue, aMetaNow?.last_good, this.referenceLabel()]);
     if (signature === this.optionsSignature) {
       this.describe();
       return;
@@ -268,12 +311,22 @@ export class Inspector {
     // The list says whether A has a previous good version to compare with.
     const aMeta = this.target ? this.metaFor(this.target.pass, this.target.output) : null;
     const lastGoodText = aMeta && aMeta.last_good === false ? 'A · last good version (none yet)' : 'A · last good version';
-    const bOptions = [el('option', { value: 'last_good' }, lastGoodText)];
+    const bOptions = [el('option', { value: 'last_good' }, lastGoodText), el('option', { value: REFERENCE }, this.referenceLabel())];
     for (const c of this.captures) bOptions.push(el('option', { value: keyOf(c.pass, c.output) }, label(c)));
     this.selB.replaceChildren(...bOptions);
     if (bValue !== 'last_good') this.ensureOption(this.selB, bValue);
     this.selB.value = bValue;
     this.describe();
+  }
+
+  /** The B option of the raster reference: "raster reference · frame N". */
+  referenceLabel() {
+    return this.hooks.reference?.().label ?? 'raster reference (none yet)';
+  }
+
+  relabelReference() {
+    const option = [...this.selB.options].find((o) => o.value === REFERENCE);
+    if (option) option.textContent = this.referenceLabel();
   }
 
   ensureOption(select, value) {
@@ -313,10 +366,10 @@ export class Inspector {
     });
     this.selMode.addEventListener('change', () => {
       this.root.dataset.compare = this.selMode.value;
-      this.load();
+      this.compareChanged();
     });
     this.selB.addEventListener('change', () => {
-      if (this.selMode.value !== 'off') this.load();
+      if (this.selMode.value !== 'off') this.compareChanged();
     });
     this.channelSel.addEventListener('change', () => {
       this.opts.channel = tex.CHANNELS.includes(this.channelSel.value) ? this.channelSel.value : 'rgb';
@@ -373,6 +426,31 @@ export class Inspector {
     this.liveIn.addEventListener('change', () => {
       if (this.liveIn.checked) this.loader.throttle.requestFetch();
     });
+  }
+
+  /** The compare mode or B changed: B is fetched, or taken from the page. */
+  compareChanged() {
+    this.compareTools.setReference(this.selB.value === REFERENCE);
+    this.b = null;
+    this.bError = null;
+    this.redisplay();
+    return this.load();
+  }
+
+  /**
+   * Compares `pass/output` with the raster reference as |A − B|, a heat
+   * map at the 99th percentile scale, emitters masked: what the path
+   * panel opens.
+   */
+  compareWithReference(pass, output) {
+    this.ensureOption(this.selB, REFERENCE);
+    this.selB.value = REFERENCE;
+    this.selMode.value = 'diff';
+    this.root.dataset.compare = 'diff';
+    this.compareTools.set({ scale: 'p99', heat: true, emitters: true });
+    this.compareTools.setReference(true);
+    // Inspecting loads A, and B is taken from the page once A lands.
+    return this.inspect(pass, output);
   }
 
   /** The image the display options apply to: the difference in diff mode. */
@@ -495,15 +573,23 @@ export class Inspector {
     const mode = this.mode();
     if (this.a && mode !== 'diff') tonemapSlot(this.a, this.opts, this.shownData(this.a));
     if (this.b && mode === 'split') tonemapSlot(this.b, this.opts, this.shownData(this.b));
+    const mask = this.compareMask();
     if (this.a && this.b && mode === 'diff') {
       const d = tex.difference(this.a.data, this.a.width, this.a.height, this.b.data, this.b.width, this.b.height);
       this.diff = reuseCanvas({ key: 'diff', format: this.a.format, names: this.a.names, ...d }, this.diff);
-      tonemapSlot(this.diff, this.opts);
+      this.compareTools.showDiff(this.diff, this.opts, mask?.mask ?? null);
     } else {
       this.diff = null;
     }
+    this.compareStats = this.a && this.b ? this.compareTools.showStats(this.a, this.b, mask) : this.compareTools.showStats(null);
     if (this.view.auto && this.a) this.fit();
     this.describe();
+  }
+
+  /** The chosen masks when B is the raster reference: {mask, missing} or null. */
+  compareMask() {
+    if (!this.a || !this.comparesReference() || !this.hooks.maskFor) return null;
+    return this.hooks.maskFor(this.a.width, this.a.height);
   }
 
   /**
@@ -702,8 +788,11 @@ export class Inspector {
       compare: {
         mode: this.mode(),
         b: this.selB.value,
+        bLabel: this.b?.key ?? null,
         loaded: !!this.b,
         error: this.bError ? errorText(this.bError) : null,
+        stats: this.compareStats,
+        ...this.compareTools.snapshot(),
       },
       options: { ...this.opts },
       view: { scale, tx, ty },

@@ -2,7 +2,10 @@
 // triangles, materials, lights and environment the raster renders, with
 // the same BRDF module. One sample per pixel per frame is added to an f32
 // history; the outputs are the running means (colour, and the first hit's
-// albedo and normal for a denoiser) and the sample count.
+// albedo and normal for a denoiser) and the sample count. The albedo's
+// alpha is the fraction of samples whose camera ray saw a rect light
+// directly: the emitter mask of the page's path − raster difference (the
+// raster draws no rect light).
 //
 // Light transport: at every surface or medium vertex, next-event
 // estimation to every light (delta lights directly; rect lights by area
@@ -32,6 +35,7 @@ struct Shading {
 struct Accumulated {
     // rgb: radiance sum; w: samples.
     color: vec4<f32>,
+    // rgb: first-hit albedo sum; w: samples that saw a rect light directly.
     albedo: vec4<f32>,
     normal: vec4<f32>,
 }
@@ -348,6 +352,8 @@ struct Sample {
     radiance: vec3<f32>,
     albedo: vec3<f32>,
     normal: vec3<f32>,
+    // 1 when the camera ray saw a rect light directly.
+    emitter: f32,
 }
 
 fn shade_hit(tri: u32, u: f32, v: f32, p: vec3<f32>, dir: vec3<f32>) -> Vertex {
@@ -371,7 +377,7 @@ fn path(pixel: vec2<u32>) -> Sample {
     let jitter = vec2(rand(), rand());
     var origin = view.position.xyz;
     var dir = normalize(world_position(vec2<f32>(pixel) + jitter, 1.0) - origin);
-    var out = Sample(vec3(0.0), vec3(0.0), vec3(0.0));
+    var out = Sample(vec3(0.0), vec3(0.0), vec3(0.0), 0.0);
     var throughput = vec3(1.0);
     // The pdf the last vertex sampled `dir` with, for MIS against light
     // sampling; 0 for the camera ray.
@@ -383,7 +389,11 @@ fn path(pixel: vec2<u32>) -> Sample {
         let flight = fly(origin, dir, hit.t);
         out.radiance += throughput * flight.emitted;
         let t_end = select(hit.t, flight.t, flight.scattered);
-        out.radiance += throughput * flight.weight * rect_emission(origin, dir, t_end, last_pdf);
+        let emitted = rect_emission(origin, dir, t_end, last_pdf);
+        out.radiance += throughput * flight.weight * emitted;
+        if depth == 0u && max3(emitted) > 0.0 {
+            out.emitter = 1.0;
+        }
         throughput *= flight.weight;
         if flight.absorbed {
             break;
@@ -457,12 +467,12 @@ fn path_trace(@builtin(global_invocation_id) id: vec3<u32>) {
         // A sample that went non-finite counts as black: one bad path must
         // not poison the pixel for the rest of the accumulation.
         let radiance = select(vec3(0.0), s.radiance, finite(s.radiance));
-        acc = Accumulated(acc.color + vec4(radiance, 1.0), acc.albedo + vec4(s.albedo, 0.0), acc.normal + vec4(s.normal, 0.0));
+        acc = Accumulated(acc.color + vec4(radiance, 1.0), acc.albedo + vec4(s.albedo, s.emitter), acc.normal + vec4(s.normal, 0.0));
         accumulated[index] = acc;
     }
     let n = max(acc.color.w, 1.0);
     textureStore(out_color, id.xy, vec4(acc.color.rgb / n, 1.0));
-    textureStore(out_albedo, id.xy, vec4(acc.albedo.rgb / n, 1.0));
+    textureStore(out_albedo, id.xy, acc.albedo / n);
     let normal = acc.normal.xyz;
     textureStore(out_normal, id.xy, vec4(select(vec3(0.0), normalize(normal), length(normal) > 0.0), 1.0));
     textureStore(out_samples, id.xy, vec4(acc.color.w, 0.0, 0.0, 0.0));
