@@ -101,6 +101,11 @@ fn every_documented_message_has_every_documented_key() {
     }
     missing.dedup();
     assert!(missing.is_empty(), "documented keys are missing:\n{}", missing.join("\n"));
+    let mut undocumented: Vec<String> =
+        seen.0.iter().flat_map(|(name, message)| protocol::undocumented_keys(&rows, name, message)).collect();
+    undocumented.sort();
+    undocumented.dedup();
+    assert!(undocumented.is_empty(), "keys sent but not in PROTOCOL.md's table:\n{}", undocumented.join("\n"));
     // Every message of the table was checked (what a test cannot provoke
     // aside), and every message checked is in the table.
     for row in &rows {

@@ -67,3 +67,21 @@ pub fn missing_keys(rows: &[Row], name: &str, message: &Value) -> Vec<String> {
     }
     out
 }
+
+/// The keys `message` has that no row about `name` documents at that place,
+/// each said with where and in what: the table must name what is sent, not
+/// only a subset of it.
+pub fn undocumented_keys(rows: &[Row], name: &str, message: &Value) -> Vec<String> {
+    let mut out = Vec::new();
+    for row in rows.iter().filter(|r| r.message == name) {
+        // The keys of every row about this place (a place may take rows).
+        let named: Vec<&String> = rows.iter().filter(|r| r.message == name && r.at == row.at).flat_map(|r| &r.keys).collect();
+        for object in objects_at(message, &row.at) {
+            let Some(map) = object.as_object() else { continue };
+            for key in map.keys().filter(|k| !named.contains(k)) {
+                out.push(format!("{name} at `{}` sends `{key}`, which the table does not name", row.at));
+            }
+        }
+    }
+    out
+}

@@ -144,19 +144,41 @@ pub fn without_file_values(mut overrides: Overrides, file: &[Control]) -> Overri
 }
 
 /// One live control the browser shows for the current scene.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Control {
     pub path: String,
     pub label: String,
-    #[serde(flatten)]
     pub kind: ControlKind,
     pub value: Value,
     /// The render passes whose output it changes.
     pub affects: Vec<&'static str>,
 }
 
-#[derive(Debug, Clone, Serialize, PartialEq)]
-#[serde(tag = "kind", rename_all = "snake_case")]
+/// A control as the protocol sends it: every key of every kind, `null`
+/// where the kind has none (PROTOCOL.md: no key is ever left out).
+impl Serialize for Control {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let (kind, range, options) = match &self.kind {
+            ControlKind::Slider { min, max, step } => ("slider", Some((min, max, step)), None),
+            ControlKind::Toggle => ("toggle", None, None),
+            ControlKind::Choice { options } => ("choice", None, Some(options)),
+        };
+        let mut out = s.serialize_struct("Control", 9)?;
+        out.serialize_field("path", &self.path)?;
+        out.serialize_field("label", &self.label)?;
+        out.serialize_field("kind", kind)?;
+        out.serialize_field("min", &range.map(|r| r.0))?;
+        out.serialize_field("max", &range.map(|r| r.1))?;
+        out.serialize_field("step", &range.map(|r| r.2))?;
+        out.serialize_field("options", &options)?;
+        out.serialize_field("value", &self.value)?;
+        out.serialize_field("affects", &self.affects)?;
+        out.end()
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
 pub enum ControlKind {
     Slider { min: f64, max: f64, step: f64 },
     Toggle,
