@@ -39,6 +39,7 @@ import { ControlsPanel } from './controls.js';
 import { QuadView } from './quads.js';
 import { PathView, TRACED } from './path.js';
 import { TradeoffsView } from './tradeoffs.js';
+import { awaitListed } from './capture_wait.js';
 import { bindShortcuts } from './shortcuts.js';
 import { Layout } from './layout.js';
 import { isBrowserNotice } from './browser_notices.js';
@@ -48,8 +49,11 @@ import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
 
 /** The protocol version this client speaks (protocol.rs `VERSION`). */
 const PROTOCOL = 3;
-/** How long the inspector waits for a newly subscribed output's capture. */
-const CAPTURE_WAIT_MS = 4000;
+/** How many frames, and how long at most, the inspector waits for a newly
+ * subscribed output's capture: the server captures it from the next frame
+ * on; a slow adapter (seconds a frame on lavapipe) needs the time. */
+const CAPTURE_WAIT_FRAMES = 3;
+const CAPTURE_WAIT_MS = 20000;
 
 const state = {
   connection: 'connecting',
@@ -391,24 +395,23 @@ function nextFrame(timeoutMs) {
   });
 }
 
-/** Waits until `pass/output` appears in the capture list (after a
- * subscribe), for at most CAPTURE_WAIT_MS. */
+/** Waits until `pass/output` appears in the capture list after a
+ * subscribe (capture_wait.js): CAPTURE_WAIT_FRAMES frames, at most
+ * CAPTURE_WAIT_MS in all. */
 async function awaitCapture(pass, output) {
   // A failed or culled pass does not render: nothing will be captured.
   const info = state.passes.find((p) => p.name === pass);
   if (info && (info.status === 'failed' || info.status === 'culled')) return false;
   const deadline = performance.now() + CAPTURE_WAIT_MS;
-  while (performance.now() < deadline) {
-    if (!(await nextFrame(deadline - performance.now()))) return false;
-    try {
+  return awaitListed({
+    frames: CAPTURE_WAIT_FRAMES,
+    nextFrame: () => nextFrame(deadline - performance.now()),
+    listed: async () => {
       const list = await api.captures();
       applyCaptures(list);
-      if (list.some((c) => c.pass === pass && c.output === output)) return true;
-    } catch {
-      // Keep waiting: the next frame may bring it.
-    }
-  }
-  return false;
+      return list.some((c) => c.pass === pass && c.output === output);
+    },
+  });
 }
 
 // ---- events --------------------------------------------------------------

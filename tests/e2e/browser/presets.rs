@@ -30,20 +30,14 @@ const LOOK: &str = "const s = window.loupe.state.inspector;
       grid,
     };";
 
-/// Opens `pass/output` in the inspector. With on-change rendering, the
-/// frame that captures a new subscription can come before the inspector
-/// waits for it (its wait then ends unmet): opening again fetches it.
+/// Opens `pass/output` in the inspector; the page waits for a new
+/// subscription's first capture (app.js `awaitCapture`).
 async fn open(c: &fantoccini::Client, pass: &str, output: &str) {
-    for _ in 0..3 {
-        let loaded = c
-            .execute_async("window.loupe.inspect(arguments[0], arguments[1]).then(arguments[2]);", vec![pass.into(), output.into()])
-            .await
-            .unwrap();
-        if loaded == true {
-            return;
-        }
-    }
-    panic!("the inspector did not load {pass}/{output}");
+    let loaded = c
+        .execute_async("window.loupe.inspect(arguments[0], arguments[1]).then(arguments[2]);", vec![pass.into(), output.into()])
+        .await
+        .unwrap();
+    assert_eq!(loaded, true, "the inspector loads {pass}/{output}");
 }
 
 async fn look(c: &fantoccini::Client, x: u32, y: u32) -> Value {

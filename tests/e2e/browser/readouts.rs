@@ -32,15 +32,7 @@ async fn the_quad_maps_read_the_servers_count_under_the_cursor_and_the_table_sta
     let passes = s.get_json("/api/passes");
     let gbuffer = passes.as_array().unwrap().iter().find(|p| p["name"] == "gbuffer").expect("the showcase has a gbuffer pass");
     let output = gbuffer["writes"][0]["name"].as_str().unwrap().to_owned();
-    // The page waits a few seconds for a first capture; a loaded machine
-    // may take longer: ask again, as a person would click again.
-    let mut shown = serde_json::Value::Null;
-    for _ in 0..6 {
-        shown = c.execute_async(&format!("window.loupe.inspect('gbuffer', '{output}').then(arguments[0]);"), vec![]).await.unwrap();
-        if shown == true {
-            break;
-        }
-    }
+    let shown = c.execute_async(&format!("window.loupe.inspect('gbuffer', '{output}').then(arguments[0]);"), vec![]).await.unwrap();
     let why = js(&c, "return window.loupe.state.inspector;").await;
     assert_eq!(shown, true, "gbuffer/{output}: {why}");
     c.find(Locator::Css("#quad-stats")).await.unwrap().click().await.unwrap();
