@@ -11,8 +11,8 @@ use loupe_tests::{Project, Server};
 
 use super::{Log, browser_with_page, denoiser_tensors, small_denoised_scene, small_showcase_scene, until};
 
-/// A laptop window and a small one.
-const SIZES: [(u32, u32); 2] = [(1280, 720), (1600, 857)];
+/// A small window, a laptop's, full HD and 1440p.
+const SIZES: [(u32, u32); 4] = [(1280, 720), (1600, 857), (1920, 1080), (2560, 1440)];
 const CHECK: &str = include_str!("layout_check.js");
 
 /// Fails with every violation of the layout found in the page.

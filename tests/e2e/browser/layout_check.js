@@ -7,6 +7,8 @@
 //    panel, or to an open tooltip, menu or dialog;
 //  - no element of a panel lies outside the panel's box unless an ancestor
 //    inside the panel (the panel included) clips it;
+//  - a panel does not scroll sideways, and nothing lies outside the head
+//    (title bar or toolbar) it is in: a head that wraps grows;
 //  - the top bar truncates nothing and open tooltips lie inside the viewport.
 const floating = '[role=tooltip], [role=dialog], [role=menu], .popup';
 const out = [];
@@ -35,6 +37,20 @@ for (const panel of document.querySelectorAll('main .panel')) {
   if (!collapsed && r.height < min - 0.5) out.push(`${id} is ${r.height.toFixed(1)} px tall, under its minimum ${min} px`);
   if (r.left < -0.5 || r.top < -0.5 || r.right > vw + 0.5 || r.bottom > vh + 0.5) {
     out.push(`${id} lies outside the viewport: ${[r.left, r.top, r.right, r.bottom].map(Math.round)} in ${vw}×${vh}`);
+  }
+  if (!collapsed && panel.scrollWidth > panel.clientWidth + 1) {
+    out.push(`${id} scrolls sideways: ${panel.scrollWidth} px of content in ${panel.clientWidth} px`);
+  }
+  for (const head of panel.querySelectorAll('.panel-head')) {
+    if (!shown(head)) continue;
+    const h = head.getBoundingClientRect();
+    for (const e of head.querySelectorAll('*')) {
+      const b = e.getBoundingClientRect();
+      if (!shown(e) || e.closest(floating) || (b.width === 0 && b.height === 0)) continue;
+      if (b.top < h.top - 1 || b.bottom > h.bottom + 1) {
+        out.push(`${path(e, panel)} lies outside its head in ${id}: ${[b.top, b.bottom].map(Math.round)} outside ${[h.top, h.bottom].map(Math.round)}`);
+      }
+    }
   }
   // What is on top over the panel (inside the viewport).
   const [x0, x1] = [Math.max(r.left, 0) + 2, Math.min(r.right, vw) - 2];
