@@ -511,7 +511,9 @@ fn quad_statistics_stream_while_asked_and_follow_a_vertex_stage_edit() {
     let p = Project::copy_of_repo("serve-quads");
     let s = Server::start(&p.root, &["--render", "on-change", "--scene", "scenes/pattern.toml"]);
     s.wait_for("a first frame", LIMIT, || (frame_of(&s) > 0).then_some(()));
-    assert_eq!(s.get("/api/quads").0, 404, "not computed until asked");
+    let not_computed = (204, Some("not-computed".to_owned()));
+    assert_eq!(s.get_state("/api/quads"), not_computed, "not computed until asked");
+    assert_eq!(s.get_state("/api/quads/tonemap/overdraw.f32"), not_computed);
     let mut ws = s.ws();
     ws.send(serde_json::json!({ "type": "quad_statistics", "on": true }));
     let tonemap_quads =
@@ -522,6 +524,7 @@ fn quad_statistics_stream_while_asked_and_follow_a_vertex_stage_edit() {
     assert_eq!(tonemap_quads(&s.get_json("/api/quads")), Some(480 * 270));
     let (status, map) = s.get("/api/quads/tonemap/overdraw.f32");
     assert_eq!((status, map.len()), (200, 960 * 540 * 4));
+    assert_eq!(s.get_state("/api/quads/nope/overdraw.f32"), (404, None), "not a raster pass of the frame");
 
     // (-1,-1), (1,-1), (-1,1): the lower-left half of the screen.
     let fullscreen = p.read("shaders/lib/fullscreen.wgsl");
@@ -534,7 +537,7 @@ fn quad_statistics_stream_while_asked_and_follow_a_vertex_stage_edit() {
     assert!((480 * 270 / 2..480 * 270 / 2 + 480).contains(&q), "{q} quads for half the screen");
 
     ws.send(serde_json::json!({ "type": "quad_statistics", "on": false }));
-    s.wait_for("the statistics to stop", LIMIT, || (s.get("/api/quads").0 == 404).then_some(()));
+    s.wait_for("the statistics to stop", LIMIT, || (s.get_state("/api/quads") == not_computed).then_some(()));
 }
 
 /// The per-pixel sample count of each `path_trace/samples` capture that

@@ -9,16 +9,18 @@ use axum::http::{HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 
 use super::AppState;
-use super::guard::{error, json};
+use super::guard::{error, json, state};
 use crate::serve::shared::read;
 
-const NOT_ASKED: &str = "no quad statistics: they are computed while a WebSocket client asks for them (`quad_statistics`)";
+/// No client asks for quad statistics (`quad_statistics`), or none has come
+/// yet: a state (PROTOCOL.md "States"), not an error.
+const NOT_COMPUTED: &str = "not-computed";
 
 /// `GET /api/quads`: the newest frame's quad statistics.
 pub(super) async fn report(State(st): State<Arc<AppState>>) -> Response {
     match read(&st.shared.quads) {
         Some(r) => json(&*r),
-        None => error(StatusCode::NOT_FOUND, NOT_ASKED),
+        None => state(NOT_COMPUTED),
     }
 }
 
@@ -33,7 +35,7 @@ pub(super) async fn map(State(st): State<Arc<AppState>>, UrlPath((pass, file)): 
         _ => return error(StatusCode::BAD_REQUEST, &format!("unknown map `{file}`: expected overdraw.f32 or helpers.f32")),
     };
     let Some(report) = read(&st.shared.quads) else {
-        return error(StatusCode::NOT_FOUND, NOT_ASKED);
+        return state(NOT_COMPUTED);
     };
     let Some(p) = report.passes.iter().find(|p| p.quads.pass == pass) else {
         return error(StatusCode::NOT_FOUND, &format!("no quad statistics for pass `{pass}`: not a raster pass of this frame"));
