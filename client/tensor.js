@@ -6,7 +6,8 @@
 // ([y, x, channel]) is shown as images instead (tensor_image.js), and a
 // denoiser tensor with the list of all of the denoiser's (tensor_list.js).
 //
-// Test hooks: #tensor-panel[data-key], #tensor-shape, #tensor-stats,
+// Test hooks: #tensor-panel[data-key], #tensor-shape, #tensor-stats (a
+// constant channel's row: tr.constant[data-constant]),
 // #tensor-plot (canvas, data-bars = bars drawn), #tensor-readout.
 
 import * as api from './api.js';
@@ -112,9 +113,18 @@ export class TensorView {
     const { layout, stats, frame } = this.meta;
     const dims = layout.dims.map(([name, n]) => `${name} ${n}`).join(' × ');
     this.shape.textContent = `[${dims}] ${layout.element} · frame ${frame}`;
-    const channels = stats.min.map((min, c) =>
-      el('tr', {}, el('td', { text: layout.dims.length > 1 ? `c${c}` : 'all' }), ...[min, stats.max[c], stats.mean[c]].map((v) => el('td', { class: 'num', text: fmt(v) }))),
-    );
+    // A channel whose min is its max holds one value: said, not left for
+    // the reader to spot among the figures.
+    const channels = stats.min.map((min, c) => {
+      const constant = min === stats.max[c];
+      const name = layout.dims.length > 1 ? `c${c}` : 'all';
+      return el(
+        'tr',
+        constant ? { class: 'constant', dataset: { constant: String(min) } } : {},
+        el('td', { text: constant ? `${name} constant` : name }),
+        ...[min, stats.max[c], stats.mean[c]].map((v) => el('td', { class: 'num', text: fmt(v) })),
+      );
+    });
     this.stats.replaceChildren(
       el('table', {}, el('tr', {}, el('th', { text: '' }), el('th', { text: 'min' }), el('th', { text: 'max' }), el('th', { text: 'mean' })), ...channels),
       el('div', { class: 'tensor-counts', text: `NaN ${stats.nan} · Inf ${stats.inf} · negative ${stats.negative}` }),

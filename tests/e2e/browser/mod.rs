@@ -815,6 +815,11 @@ async fn a_denoiser_tensor_shows_as_images_of_its_channels_with_exact_values() {
     )
     .await;
     assert_eq!(s.get_json(&format!("/api/tensors/{pass}/tensor"))["frame"], meta["frame"], "no frame rendered meanwhile");
+    // The statistics table says which channels hold one value (a ReLU's
+    // dead channels), as the served floats have it.
+    let constant: Vec<usize> = (0..channels).filter(|&ch| data.iter().skip(ch).step_by(channels).all(|v| *v == data[ch])).collect();
+    let labelled = c.execute("return Array.from(document.querySelectorAll('#tensor-stats tr'), (r, i) => [i, r.classList.contains('constant'), r.cells[0].textContent]).filter(r => r[1]).map(r => r[0] - 1);", vec![]).await.unwrap();
+    assert_eq!(labelled, serde_json::json!(constant), "the channels labelled constant in #tensor-stats");
     let row = listed.iter().find(|r| r[0] == format!("{pass}/tensor").as_str()).unwrap();
     let lo = meta["stats"]["min"].as_array().unwrap();
     assert_eq!(row[2], format!("{h} × {w} × {channels}"));
