@@ -957,6 +957,36 @@ async fn the_tradeoffs_chart_shows_the_sweep_and_applies_a_point() {
         "{text}"
     );
     until(&c, &s, "its image", "document.querySelector('#tradeoffs-image').naturalWidth === 32").await;
+    // Every point's tip, its image in, lies inside the window and off the
+    // point it describes (the chart sits in the window's lower left).
+    let placed = c
+        .execute_async(
+            "const done = arguments[0], out = [];
+             const circles = Array.from(document.querySelectorAll('#tradeoffs-chart circle'));
+             const tip = document.querySelector('#tradeoffs-tip'), image = document.querySelector('#tradeoffs-image');
+             const settle = () => new Promise((r) => setTimeout(r, 50));
+             (async () => {
+               for (const circle of circles) {
+                 circle.dispatchEvent(new MouseEvent('mouseenter'));
+                 for (let i = 0; i < 100 && !(image.complete && image.naturalWidth); i++) await settle();
+                 await settle();
+                 const t = tip.getBoundingClientRect(), p = circle.getBoundingClientRect();
+                 const inside = t.left >= 0 && t.top >= 0 && t.right <= innerWidth + 0.5 && t.bottom <= innerHeight + 0.5;
+                 const off = t.right <= p.left || t.left >= p.right || t.bottom <= p.top || t.top >= p.bottom;
+                 if (tip.hidden || !inside || !off) out.push([circle.dataset.series, circle.dataset.index, tip.hidden, inside, off, [t.left, t.top, t.right, t.bottom, innerWidth, innerHeight]]);
+                 circle.dispatchEvent(new MouseEvent('mouseleave'));
+               }
+               done(out);
+             })();",
+            vec![],
+        )
+        .await
+        .unwrap();
+    assert_eq!(
+        placed,
+        serde_json::json!([]),
+        "tips hidden, outside the window or over their point: [series, index, hidden, inside, off, rect]"
+    );
 
     c.execute(&format!("{point}.dispatchEvent(new MouseEvent('click')); return true;"), vec![]).await.unwrap();
     until(&c, &s, "the point applied and marked", "JSON.stringify(window.loupe.state.tradeoffs.current) === '[[2,2],[3,1]]'").await;
