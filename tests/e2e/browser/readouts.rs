@@ -110,6 +110,21 @@ async fn keys_change_the_channel_and_output_and_question_mark_lists_every_shortc
     press(&c, 'g').await;
     assert_eq!(js(&c, &format!("return {channel};")).await, serde_json::json!(["g", "g"]), "g shows the green channel");
 
+    // 1 is one image pixel per device pixel; + and - double and halve it; f
+    // fits the view again.
+    let scale = "return window.loupe.state.inspector.view.scale;";
+    let fitted = js(&c, scale).await.as_f64().unwrap();
+    press(&c, '1').await;
+    let actual = js(&c, "return [window.loupe.state.inspector.view.scale, devicePixelRatio];").await;
+    assert_eq!(actual[0], actual[1], "1: one image pixel per device pixel");
+    press(&c, '+').await;
+    assert_eq!(js(&c, scale).await.as_f64(), actual[0].as_f64().map(|s| s * 2.0), "+ doubles the zoom");
+    press(&c, '-').await;
+    press(&c, '-').await;
+    assert_eq!(js(&c, scale).await.as_f64(), actual[0].as_f64().map(|s| s / 2.0), "- halves it");
+    press(&c, 'f').await;
+    assert_eq!(js(&c, scale).await.as_f64(), Some(fitted), "f fits the image to the view again");
+
     // A channel the output lacks (its option disabled, as a format's
     // preset leaves it) does nothing; another still works.
     js(&c, "document.querySelector('#channel option[value=b]').disabled = true;").await;
