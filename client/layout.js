@@ -146,11 +146,17 @@ export class Layout {
     panel.dataset.sized = '';
   }
 
-  /** One splitter between each two visible panels of a column. */
+  /** One splitter between each two visible panels of a column. A column
+   * whose visible panels did not change keeps its splitters: the page sets
+   * `hidden` again on every update, and a drag holds its splitter. */
   placeSplitters() {
     for (const column of this.columns) {
-      for (const s of column.querySelectorAll(':scope > .splitter')) s.remove();
       const shown = [...column.querySelectorAll(':scope > .panel')].filter((p) => !p.hidden);
+      const splitters = [...column.querySelectorAll(':scope > .splitter')];
+      const have = splitters.map((s) => `${s.dataset.above}/${s.dataset.below}`).join();
+      const want = shown.slice(1).map((p, i) => `${shown[i].id}/${p.id}`).join();
+      if (have === want) continue;
+      for (const s of splitters) s.remove();
       for (let i = 1; i < shown.length; i++) {
         const splitter = document.createElement('div');
         splitter.className = 'splitter';

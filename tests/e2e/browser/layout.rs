@@ -164,6 +164,19 @@ async fn collapsed_panels_and_dragged_splitters_survive_a_reload_until_reset() {
     c.goto(&s.url("/")).await.unwrap();
     let ready = "document.querySelector('#passes li[data-status=\"ok\"]') && document.querySelector('.column.left > .splitter')";
     until(&c, &s, "the passes listed", ready).await;
+    // The page states each panel's visibility again on every update; the
+    // splitters stay the same elements unless the visible panels change,
+    // so a drag in progress keeps its handle.
+    let kept = c
+        .execute_async(
+            "const done = arguments[0], s = document.querySelector('.column.left > .splitter');
+             for (const id of ['path-panel', 'quad-panel']) { const p = document.getElementById(id); p.hidden = p.hidden; }
+             setTimeout(() => done(s.isConnected), 50);",
+            vec![],
+        )
+        .await
+        .unwrap();
+    assert_eq!(kept, true, "a splitter outlives an update that shows and hides nothing");
     let default = c.execute(GEOMETRY, vec![]).await.unwrap();
     let height = |g: &serde_json::Value, id: &str| g["heights"][id].as_i64().unwrap_or_else(|| panic!("{id} in {g}"));
 
