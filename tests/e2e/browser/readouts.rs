@@ -58,9 +58,11 @@ async fn the_quad_maps_read_the_servers_count_under_the_cursor_and_the_table_sta
     }
 
     // Each map: the readout under the cursor is the served map's value there.
+    // The o key steps through the maps: none, overdraw, helpers.
+    js(&c, "document.querySelector('#inspector canvas').focus();").await;
     for kind in ["overdraw", "helpers"] {
-        js(&c, &format!("const s = document.querySelector('#quad-overlay'); s.value = '{kind}'; s.dispatchEvent(new Event('change'));"))
-            .await;
+        press(&c, 'o').await;
+        assert_eq!(js(&c, "return document.querySelector('#quad-overlay').value;").await, kind, "o chooses the next map");
         let size = until(
             &c,
             &s,
