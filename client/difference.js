@@ -16,8 +16,8 @@
 export const RELATIVE_EPSILON = 0.01;
 
 /** The quantiles the statistics give. */
-export const MEDIAN = 0.5;
-export const P95 = 0.95;
+const MEDIAN = 0.5;
+const P95 = 0.95;
 
 /**
  * The q-quantile of `sorted` (ascending) by nearest rank: the value at rank

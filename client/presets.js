@@ -22,7 +22,7 @@
 import { CHANNELS } from './texture.js';
 
 /** The display options a preset sets; the overlays stay the user's. */
-export const PRESET_FIELDS = ['channel', 'exposure', 'min', 'max', 'srgb', 'linearize'];
+const PRESET_FIELDS = ['channel', 'exposure', 'min', 'max', 'srgb', 'linearize'];
 
 const STORAGE_PREFIX = 'loupe.preset.';
 
@@ -62,7 +62,7 @@ export function channelOptions(info) {
 }
 
 /** The meaning to show an output by: the declared one, else a depth format's. */
-export function meaningOf(declared, info) {
+function meaningOf(declared, info) {
   if (typeof declared === 'string' && declared) return declared;
   return info.depth ? 'depth' : 'color';
 }

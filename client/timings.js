@@ -8,7 +8,7 @@
 import { formatMs } from './util.js';
 
 /** The clocks a pass's `timing` names (protocol.rs `Clock`). */
-export const CLOCKS = {
+const CLOCKS = {
   gpu: { label: 'GPU', help: "GPU time: the adapter's timestamps around the pass" },
   wall: {
     label: 'wall',
