@@ -14,6 +14,7 @@ pub mod diag;
 pub mod files;
 pub mod gpu;
 pub mod loaded;
+pub mod material;
 pub mod mesh;
 pub mod npy;
 pub mod offline;

@@ -1,0 +1,346 @@
+//! The material tree: the compiler's IR, between the front end (`front`,
+//! `*.mat` files and the scene's shorthand) and the back end (`back`, WGSL).
+//!
+//! A `Definition` is one material's code: its parameters, the tree of slabs
+//! and operators, and the expressions feeding them. Parameters stay symbolic
+//! here (MDL's "class compilation"): a material's instances — the scene's
+//! `[[materials]]` naming it, each with its own parameter values — share the
+//! definition's generated code and differ only in the values the renderer
+//! uploads, so a slider in the browser changes a buffer, never a pipeline.
+//! Functions, imports and calls of other materials are gone by the time a
+//! tree exists: the front end inlines them, so a node or expression's span
+//! may point into an imported file.
+//!
+//! Architecture Invariant: every node and expression carries the `Location`
+//! it was written at, in the file the user wrote; the back end never needs
+//! the source text.
+
+use crate::diag::Location;
+
+/// Index into `Definition::nodes`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct NodeId(pub u32);
+
+/// Index into `Definition::exprs`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ExprId(pub u32);
+
+/// One material's code.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Definition {
+    /// The material's name, unique among the definitions of a program
+    /// (`file::material`, or `shorthand` for the scene file's own).
+    pub name: String,
+    /// Where `material NAME` is written.
+    pub location: Location,
+    /// The parameters an instance sets, in declaration order; each takes
+    /// one `vec4<f32>` slot of the instance's block (a float in `.x`, a
+    /// colour or vector in `.xyz`).
+    pub params: Vec<Param>,
+    /// Nodes in creation order; children come before their parents.
+    pub nodes: Vec<Node>,
+    pub exprs: Vec<Expr>,
+    pub root: NodeId,
+    /// Multiple-scattering energy compensation of the GGX lobes. On for
+    /// materials from `*.mat` files, off for the scene file's shorthand (so
+    /// today's scenes keep their look); `quality.energy_compensation` turns
+    /// it off everywhere.
+    pub energy_compensation: bool,
+}
+
+impl Definition {
+    pub fn node(&self, id: NodeId) -> &Node {
+        &self.nodes[id.0 as usize]
+    }
+
+    pub fn expr(&self, id: ExprId) -> &Expr {
+        &self.exprs[id.0 as usize]
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Param {
+    pub name: String,
+    pub ty: Type,
+    pub default: Value,
+    /// Inclusive bounds an instance's value must lie in (each component of
+    /// a colour or vector); `None`: any finite value.
+    pub range: Option<(f32, f32)>,
+    /// Shown beside the control (`mm`, `nm`, ...); informational.
+    pub unit: Option<String>,
+    /// The comment written above the parameter, if any.
+    pub doc: Option<String>,
+    pub location: Location,
+}
+
+/// The types of values. Colours are linear RGB.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Type {
+    Float,
+    Color,
+    Vec3,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Value {
+    Float(f32),
+    /// A colour or a vector (see the parameter's or expression's `Type`).
+    Vec3([f32; 3]),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Node {
+    pub kind: NodeKind,
+    pub location: Location,
+}
+
+/// Substrate's operators over slabs.
+#[derive(Debug, Clone, PartialEq)]
+pub enum NodeKind {
+    Slab(Slab),
+    /// Horizontal mix: `b` with weight `weight` (clamped to [0, 1]), `a`
+    /// with `1 - weight`.
+    Mix { a: NodeId, b: NodeId, weight: ExprId },
+    /// Vertical layering: `top` over `base`; the base is weighted by what
+    /// the top lets through (`f = f_top + (1 - E_top) T f_base`), with the
+    /// top's `thickness` and `transmission_color` giving `T`.
+    Layer { top: NodeId, base: NodeId },
+    /// `a` covering a fraction `weight` of the pixel; the rest is empty
+    /// (transmits).
+    Coverage { a: NodeId, weight: ExprId },
+    /// `a + b`: not energy-conserving, and the report says so.
+    Add { a: NodeId, b: NodeId },
+}
+
+/// One slab of matter: an interface over a medium, with fuzz on top and
+/// emission. Fields the material does not set take `Field::default`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Slab {
+    /// At most one expression per field, in the order written.
+    pub fields: Vec<(Field, ExprId)>,
+}
+
+impl Slab {
+    pub fn get(&self, field: Field) -> Option<ExprId> {
+        self.fields.iter().find(|(f, _)| *f == field).map(|&(_, e)| e)
+    }
+}
+
+/// A slab's fields, named after OpenPBR Surface's parameters where the
+/// concept maps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Field {
+    /// Diffuse albedo of a dielectric; the specular colour (F0) of a metal.
+    BaseColor,
+    /// 0: dielectric, 1: metal (F0 = base_color, no diffuse).
+    BaseMetalness,
+    /// Scales the interface's specular reflection (and what it takes).
+    SpecularWeight,
+    /// Tints the dielectric's F0.
+    SpecularColor,
+    /// F90: the colour at grazing angles (white: Schlick's Fresnel).
+    SpecularEdgeColor,
+    /// The dielectric's index of refraction; F0 = ((ior - 1) / (ior + 1))².
+    SpecularIor,
+    SpecularRoughness,
+    /// A second, wider specular lobe mixed into the first: its weight...
+    HazeWeight,
+    /// ...and its roughness.
+    HazeRoughness,
+    FuzzWeight,
+    FuzzColor,
+    FuzzRoughness,
+    EmissionColor,
+    /// Emitted radiance is `emission_color * emission_luminance`.
+    EmissionLuminance,
+    /// The colour light keeps after crossing a unit thickness of the slab's
+    /// medium (white: clear). Used when the slab is the top of a layer.
+    TransmissionColor,
+    /// The slab's thickness, in the units of `transmission_color`.
+    Thickness,
+}
+
+impl Field {
+    pub const ALL: [Field; 16] = [
+        Field::BaseColor,
+        Field::BaseMetalness,
+        Field::SpecularWeight,
+        Field::SpecularColor,
+        Field::SpecularEdgeColor,
+        Field::SpecularIor,
+        Field::SpecularRoughness,
+        Field::HazeWeight,
+        Field::HazeRoughness,
+        Field::FuzzWeight,
+        Field::FuzzColor,
+        Field::FuzzRoughness,
+        Field::EmissionColor,
+        Field::EmissionLuminance,
+        Field::TransmissionColor,
+        Field::Thickness,
+    ];
+
+    /// The name written in material files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Field::BaseColor => "base_color",
+            Field::BaseMetalness => "base_metalness",
+            Field::SpecularWeight => "specular_weight",
+            Field::SpecularColor => "specular_color",
+            Field::SpecularEdgeColor => "specular_edge_color",
+            Field::SpecularIor => "specular_ior",
+            Field::SpecularRoughness => "specular_roughness",
+            Field::HazeWeight => "haze_weight",
+            Field::HazeRoughness => "haze_roughness",
+            Field::FuzzWeight => "fuzz_weight",
+            Field::FuzzColor => "fuzz_color",
+            Field::FuzzRoughness => "fuzz_roughness",
+            Field::EmissionColor => "emission_color",
+            Field::EmissionLuminance => "emission_luminance",
+            Field::TransmissionColor => "transmission_color",
+            Field::Thickness => "thickness",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Field> {
+        Field::ALL.into_iter().find(|f| f.name() == name)
+    }
+
+    pub fn ty(self) -> Type {
+        match self {
+            Field::BaseColor
+            | Field::SpecularColor
+            | Field::SpecularEdgeColor
+            | Field::FuzzColor
+            | Field::EmissionColor
+            | Field::TransmissionColor => Type::Color,
+            _ => Type::Float,
+        }
+    }
+
+    /// The value of a field the material does not set: together, a white
+    /// rough plastic with IOR 1.5 (F0 = 0.04), no haze, fuzz or emission,
+    /// and a clear, infinitely thin medium.
+    pub fn default(self) -> Value {
+        match self {
+            Field::BaseColor => Value::Vec3([0.8; 3]),
+            Field::BaseMetalness => Value::Float(0.0),
+            Field::SpecularWeight => Value::Float(1.0),
+            Field::SpecularColor | Field::SpecularEdgeColor | Field::FuzzColor | Field::TransmissionColor => {
+                Value::Vec3([1.0; 3])
+            }
+            Field::SpecularIor => Value::Float(1.5),
+            Field::SpecularRoughness => Value::Float(0.5),
+            Field::HazeWeight | Field::FuzzWeight | Field::EmissionLuminance | Field::Thickness => Value::Float(0.0),
+            Field::HazeRoughness => Value::Float(0.7),
+            Field::FuzzRoughness => Value::Float(0.5),
+            Field::EmissionColor => Value::Vec3([1.0; 3]),
+        }
+    }
+
+    /// The range a constant value must lie in (`None`: any finite value).
+    /// Parameters feeding a field are checked against it too.
+    pub fn range(self) -> Option<(f32, f32)> {
+        match self {
+            Field::SpecularIor => Some((1.0, 5.0)),
+            Field::EmissionLuminance | Field::Thickness => Some((0.0, f32::MAX)),
+            _ => Some((0.0, 1.0)),
+        }
+    }
+}
+
+/// Expressions over parameters and constants. Arithmetic on a float and a
+/// colour broadcasts the float.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Expr {
+    pub kind: ExprKind,
+    pub ty: Type,
+    pub location: Location,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum ExprKind {
+    Const(Value),
+    /// The instance's value of `Definition::params[i]`.
+    Param(u32),
+    Neg(ExprId),
+    Binary(BinOp, ExprId, ExprId),
+    Call(Builtin, Vec<ExprId>),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BinOp {
+    Add,
+    Sub,
+    Mul,
+    Div,
+}
+
+/// Functions on values, the same in every material.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Builtin {
+    /// `rgb(r, g, b)`: a colour from three floats.
+    Rgb,
+    /// `grey(x)`: `rgb(x, x, x)`.
+    Grey,
+    /// `lerp(a, b, t)`.
+    Lerp,
+    Clamp,
+    Saturate,
+    Min,
+    Max,
+    Pow,
+    Sqrt,
+    Abs,
+    /// `luminance(c)`: Rec. 709 luminance of a linear colour.
+    Luminance,
+    /// `srgb(c)`: an sRGB-encoded colour (as colour pickers give) to linear.
+    Srgb,
+    /// `ior_to_f0(ior)`: `((ior - 1) / (ior + 1))²`.
+    IorToF0,
+    /// `transmittance_to_mfp(color, distance)`: the mean free path that keeps
+    /// `color` of the light after `distance`.
+    TransmittanceToMfp,
+}
+
+impl Builtin {
+    pub const ALL: [Builtin; 14] = [
+        Builtin::Rgb,
+        Builtin::Grey,
+        Builtin::Lerp,
+        Builtin::Clamp,
+        Builtin::Saturate,
+        Builtin::Min,
+        Builtin::Max,
+        Builtin::Pow,
+        Builtin::Sqrt,
+        Builtin::Abs,
+        Builtin::Luminance,
+        Builtin::Srgb,
+        Builtin::IorToF0,
+        Builtin::TransmittanceToMfp,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Builtin::Rgb => "rgb",
+            Builtin::Grey => "grey",
+            Builtin::Lerp => "lerp",
+            Builtin::Clamp => "clamp",
+            Builtin::Saturate => "saturate",
+            Builtin::Min => "min",
+            Builtin::Max => "max",
+            Builtin::Pow => "pow",
+            Builtin::Sqrt => "sqrt",
+            Builtin::Abs => "abs",
+            Builtin::Luminance => "luminance",
+            Builtin::Srgb => "srgb",
+            Builtin::IorToF0 => "ior_to_f0",
+            Builtin::TransmittanceToMfp => "transmittance_to_mfp",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Builtin> {
+        Builtin::ALL.into_iter().find(|b| b.name() == name)
+    }
+}
