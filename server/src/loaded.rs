@@ -9,8 +9,10 @@ use std::sync::Arc;
 use crate::denoise::network::{Inputs, Network};
 use crate::denoise::{bundled, tza};
 use crate::diag::{Code, Diagnostic};
+use crate::material::tree::Value;
+use crate::material::{Instance, Program};
 use crate::mesh::MeshData;
-use crate::scene::{self, Denoiser, Scene, overrides::Overrides};
+use crate::scene::{self, Denoiser, MaterialSource, Scene, overrides::Overrides};
 
 /// A scene and the meshes and weights it references, read from disk.
 #[derive(Debug, Clone)]
@@ -21,8 +23,11 @@ pub struct Loaded {
     /// The network `[denoiser]` names (or the bundled one), built from its
     /// weights.
     pub denoiser: Option<Arc<Network>>,
-    /// Every file this scene was read from (itself, its meshes and
-    /// weights), for the watcher's dependency graph.
+    /// The scene's materials compiled: the definitions its
+    /// `[[materials]]` use and one instance per entry.
+    pub materials: Arc<Program>,
+    /// Every file this scene was read from (itself, its meshes, material
+    /// files and weights), for the watcher's dependency graph.
     pub files: Vec<PathBuf>,
 }
 
@@ -36,8 +41,9 @@ pub fn load(path: &Path) -> Result<Loaded, Diagnostic> {
 pub fn load_with(path: &Path, overrides: &Overrides) -> Result<Loaded, Diagnostic> {
     let scene::Read { scene, meshes, mut files } = scene::load_with(path, overrides)?;
     let dir = path.parent().unwrap_or(Path::new("."));
+    let materials = Arc::new(materials(path, &scene, &mut files)?);
     let denoiser = scene.denoiser.as_ref().map(|d| network(dir, d, &mut files)).transpose()?.map(Arc::new);
-    Ok(Loaded { scene, meshes, denoiser, files })
+    Ok(Loaded { scene, meshes, materials, denoiser, files })
 }
 
 /// The network of `[denoiser]`: without `weights`, the bundled one for its
@@ -67,3 +73,28 @@ fn network(dir: &Path, d: &Denoiser, files: &mut Vec<PathBuf>) -> Result<Network
 
 #[cfg(test)]
 mod tests;
+
+/// The scene's materials compiled: the shorthand's one definition (when
+/// any entry uses it) and each material file's, once each.
+fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Program, Diagnostic> {
+    let _ = files;
+    let mut program = Program { definitions: Vec::new(), instances: Vec::new() };
+    let mut shorthand = None;
+    for m in &scene.materials {
+        let instance = match &m.source {
+            MaterialSource::Shorthand { base_color, metallic, roughness } => {
+                let definition = *shorthand.get_or_insert_with(|| {
+                    let at = crate::diag::Location::file_start(&crate::diag::display_path(path));
+                    program.definitions.push(crate::material::shorthand(at));
+                    program.definitions.len() as u32 - 1
+                });
+                Instance { definition, values: vec![Value::Vec3(*base_color), Value::Float(*metallic), Value::Float(*roughness)] }
+            }
+            MaterialSource::File { at, .. } => {
+                return Err(Diagnostic::error(Code::Scene, "material files are not read yet").with_label(at.clone(), "here", true));
+            }
+        };
+        program.instances.push(instance);
+    }
+    Ok(program)
+}

@@ -1,13 +1,14 @@
 // Base pass: writes the G-buffer. Layout (all Rgba16Float, exact in the
 // inspector):
 //   normal:   xyz world-space unit normal, w = 1 where geometry was drawn
-//   albedo:   rgb base colour, a = metallic
+//   albedo:   rgb base colour, a = metallic (the material's closures'
+//             values by weight: `material_base_color`, for the debug views)
 //   material: x = roughness, y = metallic, z = material index, w = shading
 //             model (1 = standard lit; the material header later layers grow)
-#import loupe::geometry::{Vertex, Material, objects, world_position, world_normal}
+// The lighting pass evaluates the material itself from its index.
+#import loupe::geometry::{Vertex, objects, world_position, world_normal}
 #import loupe::view::view
-
-@group(0) @binding(2) var<storage, read> materials: array<Material>;
+#import loupe::material::{material_init, material_base_color, material_metallic, material_roughness}
 
 struct Varyings {
     @builtin(position) position: vec4<f32>,
@@ -29,12 +30,14 @@ fn vs_main(v: Vertex, @builtin(instance_index) object: u32) -> Varyings {
 @fragment
 fn fs_main(in: Varyings, @builtin(front_facing) front: bool) -> GBuffer {
     let id = objects[in.object].ids.x;
-    let m = materials[id];
     // Planes and open meshes are seen from both sides: face the viewer.
     let n = normalize(in.normal) * select(-1.0, 1.0, front);
+    // Seen along the normal: the summaries do not depend on the view.
+    let s = material_init(id, n, n);
+    let metallic = material_metallic(s);
     return GBuffer(
         vec4(n, 1.0),
-        m.base_color,
-        vec4(m.params.x, m.base_color.a, f32(id), 1.0),
+        vec4(material_base_color(s), metallic),
+        vec4(material_roughness(s), metallic, f32(id), 1.0),
     );
 }

@@ -43,7 +43,13 @@ fn v_smith(n_v: f32, n_l: f32, a: f32) -> f32 {
 // (l = v to rounding: a light at the camera) one evaluation in five was
 // NaN: NaN pixels in the raster, light the path tracer silently dropped.
 fn f_schlick(f0: vec3<f32>, v_h: f32) -> vec3<f32> {
-    return f0 + (1.0 - f0) * pow(clamp(1.0 - v_h, 0.0, 1.0), 5.0);
+    return f_schlick_edge(f0, vec3(1.0), v_h);
+}
+
+// Schlick's Fresnel toward `f90` at grazing angles instead of white (a
+// material's edge tint); with f90 = 1 it is `f_schlick` to the bit.
+fn f_schlick_edge(f0: vec3<f32>, f90: vec3<f32>, v_h: f32) -> vec3<f32> {
+    return f0 + (f90 - f0) * pow(clamp(1.0 - v_h, 0.0, 1.0), 5.0);
 }
 
 // (1 - F(x)) / (1 - f0): the share of Schlick's Fresnel that passes at
@@ -64,6 +70,14 @@ fn alpha(roughness: f32) -> f32 {
 
 // BRDF × cosine for light from `l`, seen from `v`.
 fn brdf_cos(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, metallic: f32, roughness: f32) -> vec3<f32> {
+    return slab_cos(n, v, l, base_color, metallic, specular_f0(base_color, metallic), vec3(1.0), roughness);
+}
+
+// The same lobes with the interface's reflectance given: F0 (from an IOR
+// and a tint, or a metal's colour) and F90 (the edge tint). A material
+// slab's core (`loupe::material`); `brdf_cos` is the slab whose F0 follows
+// from metalness and F90 is white.
+fn slab_cos(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, metallic: f32, f0: vec3<f32>, f90: vec3<f32>, roughness: f32) -> vec3<f32> {
     let n_l = dot(n, l);
     // Written so that a NaN (from a NaN normal or direction) takes this
     // branch too: the light is 0, not NaN.
@@ -73,8 +87,7 @@ fn brdf_cos(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, met
     let h = normalize(v + l);
     let n_v = max(dot(n, v), 1e-4);
     let a = alpha(roughness);
-    let f0 = specular_f0(base_color, metallic);
-    let specular = d_ggx(n, h, a) * v_smith(n_v, n_l, a) * f_schlick(f0, max(dot(v, h), 0.0));
+    let specular = d_ggx(n, h, a) * v_smith(n_v, n_l, a) * f_schlick_edge(f0, f90, max(dot(v, h), 0.0));
     let diffuse = (1.0 - metallic) * (1.0 - f0) * schlick_transmission(n_l) * schlick_transmission(n_v) * base_color / PI;
     return (diffuse + specular) * n_l;
 }
@@ -105,8 +118,8 @@ fn luminance_of(c: vec3<f32>) -> f32 {
 
 // How often the specular lobe is sampled: its share of the reflected
 // energy, estimated from Fresnel at n·v against the diffuse albedo.
-fn specular_probability(n_v: f32, base_color: vec3<f32>, metallic: f32) -> f32 {
-    let f = luminance_of(f_schlick(specular_f0(base_color, metallic), n_v));
+fn specular_probability(n_v: f32, base_color: vec3<f32>, metallic: f32, f0: vec3<f32>) -> f32 {
+    let f = luminance_of(f_schlick(f0, n_v));
     let d = (1.0 - metallic) * luminance_of(base_color) * (1.0 - f);
     return clamp(f / max(f + d, 1e-6), 0.05, 1.0);
 }
@@ -142,6 +155,11 @@ fn sample_vndf(ve: vec3<f32>, a: f32, u: vec2<f32>) -> vec3<f32> {
 
 // The mixture pdf (solid angle) of sampling `l` with `brdf_sample`.
 fn brdf_pdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, metallic: f32, roughness: f32) -> f32 {
+    return slab_pdf(n, v, l, base_color, metallic, specular_f0(base_color, metallic), roughness);
+}
+
+// `brdf_pdf` of a slab with its F0 given (`slab_cos`).
+fn slab_pdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, metallic: f32, f0: vec3<f32>, roughness: f32) -> f32 {
     let n_l = dot(n, l);
     // NaN takes this branch too (see brdf_cos).
     if !(n_l > 0.0) {
@@ -154,7 +172,7 @@ fn brdf_pdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, met
     // Jacobian 1 / (4 v·h) cancels the v·h.
     let specular = g1_smith(n_v, a) * d_ggx(n, h, a) / (4.0 * n_v);
     let diffuse = n_l / PI;
-    let p = specular_probability(n_v, base_color, metallic);
+    let p = specular_probability(n_v, base_color, metallic, f0);
     return p * specular + (1.0 - p) * diffuse;
 }
 
@@ -169,16 +187,7 @@ fn cosine_direction(frame: mat3x3<f32>, u: vec2<f32>) -> vec3<f32> {
 // A direction from `u` (three uniform numbers in [0, 1)): u.x picks the
 // lobe, u.yz place the direction.
 fn brdf_sample(n: vec3<f32>, v: vec3<f32>, u: vec3<f32>, base_color: vec3<f32>, metallic: f32, roughness: f32) -> BrdfSample {
-    let frame = basis(n);
-    let n_v = max(dot(n, v), 1e-4);
-    var l: vec3<f32>;
-    if u.x < specular_probability(n_v, base_color, metallic) {
-        let ve = normalize(transpose(frame) * v);
-        let h = frame * sample_vndf(ve, alpha(roughness), u.yz);
-        l = reflect(-v, h);
-    } else {
-        l = cosine_direction(frame, u.yz);
-    }
+    let l = slab_direction(n, v, u, base_color, metallic, specular_f0(base_color, metallic), roughness);
     let pdf = brdf_pdf(n, v, l, base_color, metallic, roughness);
     // No direction (below the surface, or NaN from a NaN normal): the
     // path ends. The zero vector says so, and stays finite.
@@ -186,4 +195,20 @@ fn brdf_sample(n: vec3<f32>, v: vec3<f32>, u: vec3<f32>, base_color: vec3<f32>, 
         return BrdfSample(vec3(0.0), 0.0, vec3(0.0));
     }
     return BrdfSample(l, pdf, brdf_cos(n, v, l, base_color, metallic, roughness) / pdf);
+}
+
+// The direction `brdf_sample` draws, for a slab with its F0 given: a
+// material mixing slabs weighs it by its own pdf and evaluation.
+fn slab_direction(n: vec3<f32>, v: vec3<f32>, u: vec3<f32>, base_color: vec3<f32>, metallic: f32, f0: vec3<f32>, roughness: f32) -> vec3<f32> {
+    let frame = basis(n);
+    let n_v = max(dot(n, v), 1e-4);
+    var l: vec3<f32>;
+    if u.x < specular_probability(n_v, base_color, metallic, f0) {
+        let ve = normalize(transpose(frame) * v);
+        let h = frame * sample_vndf(ve, alpha(roughness), u.yz);
+        l = reflect(-v, h);
+    } else {
+        l = cosine_direction(frame, u.yz);
+    }
+    return l;
 }

@@ -1,4 +1,4 @@
-// Objects and materials as the renderer uploads them. Each draw is one
+// Objects as the renderer uploads them. Each draw is one
 // object: its index arrives as the instance index, so no per-draw binding
 // changes are needed.
 #define_import_path loupe::geometry
@@ -7,15 +7,8 @@ struct Object {
     model: mat4x4<f32>,
     // Inverse transpose of the model matrix, for normals.
     normal: mat4x4<f32>,
-    // x: material index.
+    // x: material index (the instance `loupe::material` reads).
     ids: vec4<u32>,
-}
-
-struct Material {
-    // rgb: base colour; a: metallic.
-    base_color: vec4<f32>,
-    // x: roughness.
-    params: vec4<f32>,
 }
 
 struct Vertex {

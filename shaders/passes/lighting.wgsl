@@ -5,8 +5,8 @@
 #import loupe::fullscreen::{FullscreenOut, fullscreen}
 #import loupe::view::{view, world_position}
 #import loupe::lights::{Light, lights, incident, light_type, rect_area, rect_cosine, LIGHT_RECT}
-#import loupe::brdf::{brdf_cos, specular_f0}
-#import loupe::environment::{environment_radiance, environment_light}
+#import loupe::environment::environment_radiance
+#import loupe::material::{Surface, material_init, material_eval, material_ambient, material_emission}
 #ifdef SHADOWS
 #import loupe::shadows::shadow
 #endif
@@ -14,7 +14,7 @@
 #import loupe::media::transmittance
 #endif
 #ifdef LIGHT_RECT
-#import loupe::ltc::{ltc_rect}
+#import loupe::material::material_rect
 @group(2) @binding(0) var ltc_matrix: texture_2d<f32>;
 @group(2) @binding(1) var ltc_amplitude: texture_2d<f32>;
 #endif
@@ -24,8 +24,8 @@
 const RECT_GRID: u32 = 16u;
 
 // A rect light's reflected radiance by a stratified grid of points over
-// its area, each through the BRDF itself: Σ L brdf_cos cos_light A / (N² d²).
-fn rect_sampled(light: Light, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, base: vec3<f32>, metallic: f32, roughness: f32) -> vec3<f32> {
+// its area, each through the material itself: Σ L f cos_light A / (N² d²).
+fn rect_sampled(light: Light, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, s: Surface) -> vec3<f32> {
     let half = light.extra.xy;
     var sum = vec3(0.0);
     for (var j = 0u; j < RECT_GRID; j++) {
@@ -35,7 +35,7 @@ fn rect_sampled(light: Light, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, base: ve
             let to_light = q - p;
             let d2 = max(dot(to_light, to_light), 1e-8);
             let l = to_light * inverseSqrt(d2);
-            sum += brdf_cos(n, v, l, base, metallic, roughness) * (rect_cosine(light, l) / d2);
+            sum += material_eval(s, n, v, l) * (rect_cosine(light, l) / d2);
         }
     }
     return light.color.rgb * sum * (rect_area(light) / f32(RECT_GRID * RECT_GRID));
@@ -43,7 +43,6 @@ fn rect_sampled(light: Light, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, base: ve
 #endif
 
 @group(0) @binding(2) var gbuffer_normal: texture_2d<f32>;
-@group(0) @binding(3) var gbuffer_albedo: texture_2d<f32>;
 @group(0) @binding(4) var gbuffer_material: texture_2d<f32>;
 @group(0) @binding(5) var depth: texture_depth_2d;
 @group(0) @binding(6) var dfg: texture_2d<f32>;
@@ -75,15 +74,12 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
         return vec4(environment_radiance(normalize(p - view.position.xyz)), 1.0);
     }
     let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
-    let albedo = textureLoad(gbuffer_albedo, pixel, 0);
-    let material = textureLoad(gbuffer_material, pixel, 0);
-    let base_color = albedo.rgb;
-    let metallic = albedo.a;
-    let roughness = material.x;
+    let instance = u32(textureLoad(gbuffer_material, pixel, 0).z);
     let p = world_position(in.position.xy, z);
     let v = normalize(view.position.xyz - p);
+    let s = material_init(instance, n, v);
 
-    var color = environment_light(n, v, base_color, metallic, roughness, dfg);
+    var color = material_ambient(s, n, v, view.environment_top.rgb, view.environment_bottom.rgb, dfg) + material_emission(s);
     for (var i = 0u; i < view.counts.x; i++) {
         let light = lights[i];
 #ifdef LIGHT_RECT
@@ -92,9 +88,7 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
             let rx = light.right.xyz * light.extra.x;
             let ry = light.up.xyz * light.extra.y;
             let corners = array<vec3<f32>, 4>(c - rx - ry, c + rx - ry, c + rx + ry, c - rx + ry);
-            let r = ltc_rect(n, v, p, roughness, corners, light.extra.z > 0.5, ltc_matrix, ltc_amplitude);
-            let f0 = specular_f0(base_color, metallic);
-            let lit = base_color * (1.0 - metallic) * r.diffuse + f0 * r.specular.x + r.specular.y;
+            let lit = material_rect(s, n, v, p, corners, light.extra.z > 0.5, ltc_matrix, ltc_amplitude);
             let to_light = c - p;
             let seen = visibility(light, p, n, normalize(to_light), length(to_light));
             color += light.color.rgb * lit * seen;
@@ -104,13 +98,13 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
 #ifdef RECT_SAMPLED
         if light_type(light) == LIGHT_RECT {
             let to_light = light.position.xyz - p;
-            color += rect_sampled(light, n, v, p, base_color, metallic, roughness) * visibility(light, p, n, normalize(to_light), length(to_light));
+            color += rect_sampled(light, n, v, p, s) * visibility(light, p, n, normalize(to_light), length(to_light));
             continue;
         }
 #endif
         let inc = incident(light, p);
         let seen = visibility(light, p, n, inc.l, inc.distance);
-        color += inc.radiance * brdf_cos(n, v, inc.l, base_color, metallic, roughness) * seen;
+        color += inc.radiance * material_eval(s, n, v, inc.l) * seen;
     }
     return vec4(color, 1.0);
 }

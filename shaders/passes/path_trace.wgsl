@@ -16,9 +16,9 @@
 // shadow rays by ratio tracking.
 #import loupe::view::{view, world_position}
 #import loupe::lights::{Light, lights, incident, light_type, rect_area, rect_cosine, LIGHT_RECT}
-#import loupe::brdf::{brdf_cos, brdf_pdf, brdf_sample, basis, cosine_direction, PI}
+#import loupe::brdf::{basis, cosine_direction, PI}
+#import loupe::material::{Surface, material_init, material_eval, material_pdf, material_sample, material_emission, material_base_color}
 #import loupe::environment::environment_radiance
-#import loupe::geometry::Material
 #import loupe::random::{random_key, random_f32}
 #import loupe::bvh::{trace, occluded, triangles, NO_HIT}
 #ifdef MEDIA
@@ -40,7 +40,6 @@ struct Accumulated {
     normal: vec4<f32>,
 }
 
-@group(0) @binding(2) var<storage, read> materials: array<Material>;
 @group(0) @binding(3) var<storage, read> shading: array<Shading>;
 // x: samples per pixel to accumulate to; y: indirect bounces.
 @group(0) @binding(4) var<uniform> params: vec4<u32>;
@@ -233,17 +232,26 @@ fn rect_emission(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, bsdf_pdf: f32) -
     return sum;
 }
 
-// The shading point: a surface (BRDF) or a medium (isotropic phase).
+// The shading point: a surface (its material) or a medium (isotropic
+// phase; `surface` unused).
 struct Vertex {
     p: vec3<f32>,
     // Geometric normal (facing the incoming ray); zero in a medium.
     ng: vec3<f32>,
     n: vec3<f32>,
     v: vec3<f32>,
-    base_color: vec3<f32>,
-    metallic: f32,
-    roughness: f32,
+    surface: Surface,
     in_medium: bool,
+}
+
+// A vertex in a medium at p, reached travelling along dir.
+fn medium_vertex(p: vec3<f32>, dir: vec3<f32>) -> Vertex {
+    var x: Vertex;
+    x.p = p;
+    x.n = vec3(0.0, 1.0, 0.0);
+    x.v = -dir;
+    x.in_medium = true;
+    return x;
 }
 
 fn scatter(x: Vertex, l: vec3<f32>) -> vec3<f32> {
@@ -253,14 +261,14 @@ fn scatter(x: Vertex, l: vec3<f32>) -> vec3<f32> {
     if dot(l, x.ng) <= 0.0 {
         return vec3(0.0);
     }
-    return brdf_cos(x.n, x.v, l, x.base_color, x.metallic, x.roughness);
+    return material_eval(x.surface, x.n, x.v, l);
 }
 
 fn scatter_pdf(x: Vertex, l: vec3<f32>) -> f32 {
     if x.in_medium {
         return ISOTROPIC;
     }
-    return brdf_pdf(x.n, x.v, l, x.base_color, x.metallic, x.roughness);
+    return material_pdf(x.surface, x.n, x.v, l);
 }
 
 // How much of the light along `l` for `dist` arrives: surfaces block it,
@@ -369,8 +377,7 @@ fn shade_hit(tri: u32, u: f32, v: f32, p: vec3<f32>, dir: vec3<f32>) -> Vertex {
     n = select(ng, n / len, len > 1e-6 && finite(n / len));
     // Shading normals on the geometric normal's side.
     n = select(-n, n, dot(n, ng) >= 0.0);
-    let m = materials[u32(s.na.w)];
-    return Vertex(p, ng, n, -dir, m.base_color.rgb, m.base_color.a, m.params.x, false);
+    return Vertex(p, ng, n, -dir, material_init(u32(s.na.w), n, -dir), false);
 }
 
 fn path(pixel: vec2<u32>) -> Sample {
@@ -382,7 +389,7 @@ fn path(pixel: vec2<u32>) -> Sample {
     // The pdf the last vertex sampled `dir` with, for MIS against light
     // sampling; 0 for the camera ray.
     var last_pdf = 0.0;
-    var last = Vertex(origin, vec3(0.0), vec3(0.0, 1.0, 0.0), vec3(0.0), vec3(0.0), 0.0, 1.0, true);
+    var last = medium_vertex(origin, vec3(0.0));
     let bounces = params.y;
     for (var depth = 0u; depth <= bounces + 1u; depth++) {
         let hit = trace(origin, dir, 0.0, 1e30);
@@ -400,15 +407,18 @@ fn path(pixel: vec2<u32>) -> Sample {
         }
         var x: Vertex;
         if flight.scattered {
-            x = Vertex(origin + dir * flight.t, vec3(0.0), vec3(0.0, 1.0, 0.0), -dir, vec3(0.0), 0.0, 1.0, true);
+            x = medium_vertex(origin + dir * flight.t, dir);
         } else if hit.triangle == NO_HIT {
             let w = select(power_heuristic(last_pdf, environment_pdf(last, dir)), 1.0, last_pdf <= 0.0);
             out.radiance += throughput * environment_radiance(dir) * w;
             break;
         } else {
             x = shade_hit(hit.triangle, hit.u, hit.v, origin + dir * hit.t, dir);
+            // Emissive surfaces are not sampled by next-event estimation:
+            // a path finds them by its own direction, at full weight.
+            out.radiance += throughput * material_emission(x.surface);
             if depth == 0u {
-                out.albedo = x.base_color;
+                out.albedo = material_base_color(x.surface);
                 out.normal = x.n;
             }
         }
@@ -425,7 +435,7 @@ fn path(pixel: vec2<u32>) -> Sample {
             l = sphere_direction(vec2(rand(), rand()));
             pdf = ISOTROPIC;
         } else {
-            let s = brdf_sample(x.n, x.v, vec3(rand(), rand(), rand()), x.base_color, x.metallic, x.roughness);
+            let s = material_sample(x.surface, x.n, x.v, vec3(rand(), rand(), rand()));
             if s.pdf <= 0.0 || dot(s.l, x.ng) <= 0.0 {
                 break;
             }

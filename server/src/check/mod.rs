@@ -23,6 +23,8 @@ use crate::gpu::{
     self, Gpu,
     pipeline::{self, PipelineSpec},
 };
+use crate::loaded::Loaded;
+use crate::material::Program;
 use crate::shader::{Compose, Composed, Library, NagaOil, ShaderDefs, SourceFile, defs_key, library};
 
 /// naga's parser and validator recurse on nested expressions; a worker stack
@@ -102,8 +104,12 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
             Err(_) => {}
         }
     }
-    let lib = Library::new(sources);
+    let mut lib = Library::new(sources);
     let shader_root = canon(&opts.shader_root);
+    // Scenes first: their materials make the `loupe::material` module the
+    // renderer's shaders import, so every material's code passes the gate.
+    let scenes: Vec<(Checked, Option<Loaded>)> = pool.install(|| scenes.par_iter().with_max_len(1).map(|p| check_scene(p)).collect());
+    crate::render::session::material_module(&mut lib, &opts.shader_root, &project_materials(scenes.iter().filter_map(|(_, l)| l.as_ref())));
     let specs_by_file = specs_by_display(&lib, &shader_root);
 
     // The device first: without a capability list, sources are judged by
@@ -141,8 +147,7 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
             })
             .collect()
     });
-    let scenes: Vec<Checked> = pool.install(|| scenes.par_iter().with_max_len(1).map(|p| check_scene(p)).collect());
-    for c in scenes {
+    for (c, _) in scenes {
         format::human::read_sources(&c.diagnostics, &mut files);
         checked.push(c);
     }
@@ -237,13 +242,30 @@ fn is_toml(path: &Path) -> bool {
     path.extension().is_some_and(|e| e == "toml")
 }
 
-/// Loads a scene as `loupe serve` does: the file, then every glTF it
-/// references.
-fn check_scene(path: &Path) -> Checked {
+/// Loads a scene as `loupe serve` does: the file, then every glTF and
+/// material file it references.
+fn check_scene(path: &Path) -> (Checked, Option<Loaded>) {
     let start = Instant::now();
     let display = display_path(path);
-    let diagnostics = guarded(&display, "the scene loader", || crate::loaded::load(path).map_err(|d| vec![d])).err().unwrap_or_default();
-    Checked { duration: start.elapsed(), ..Checked::uncompiled(&display, ModuleKind::Scene, diagnostics) }
+    let (loaded, diagnostics) = match guarded(&display, "the scene loader", || crate::loaded::load(path).map_err(|d| vec![d])) {
+        Ok(l) => (Some(l), Vec::new()),
+        Err(ds) => (None, ds),
+    };
+    (Checked { duration: start.elapsed(), ..Checked::uncompiled(&display, ModuleKind::Scene, diagnostics) }, loaded)
+}
+
+/// Every material definition the checked scenes use, each once, and the
+/// shorthand's always: the renderer's shaders compile against it even in
+/// a project without scenes.
+fn project_materials<'a>(scenes: impl Iterator<Item = &'a Loaded>) -> Program {
+    let mut program =
+        Program { definitions: vec![crate::material::shorthand(Location::file_start("scene shorthand"))], instances: Vec::new() };
+    for d in scenes.flat_map(|l| l.materials.definitions.iter()) {
+        if !program.definitions.iter().any(|x| x.nodes == d.nodes && x.exprs == d.exprs && x.params == d.params) {
+            program.definitions.push(d.clone());
+        }
+    }
+    program
 }
 
 /// Pipeline specs by the display path of the shader file they build from.

@@ -156,7 +156,7 @@ mod tests {
         let net = Arc::new(network(&small_unet(9), 1));
         let gpu_of = |text: &str, n: &Arc<crate::denoise::network::Network>, previous: Option<&SceneGpu>| {
             let scene = crate::scene::parse("s.toml", text).unwrap_or_else(|d| panic!("{d}"));
-            SceneGpu::new(&gpu.device, &gpu.queue, &scene, &Default::default(), Some(n), previous)
+            SceneGpu::new(&gpu.device, &gpu.queue, &scene, &Default::default(), &Default::default(), Some(n), previous)
         };
         let first = gpu_of(SCENE, &net, None);
         let weights = first.denoiser.as_ref().expect("a denoised frame has weights");

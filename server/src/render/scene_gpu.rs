@@ -12,6 +12,7 @@ use wgpu::util::DeviceExt;
 use super::denoise_weights::DenoiseWeights;
 use super::path_geometry::PathGeometry;
 use crate::denoise::network::Network;
+use crate::material::Program;
 use crate::mesh::MeshData;
 use crate::scene::{Geometry, LightKind, Medium, Renderer, Scene, SdfShape};
 
@@ -24,7 +25,10 @@ pub struct GpuMesh {
 pub struct SceneGpu {
     pub view: wgpu::Buffer,
     pub objects: wgpu::Buffer,
-    pub materials: wgpu::Buffer,
+    /// `loupe::material`'s parameters and instance table
+    /// (`material::Program::buffers`).
+    pub material_params: wgpu::Buffer,
+    pub material_instances: wgpu::Buffer,
     pub lights: wgpu::Buffer,
     pub media: wgpu::Buffer,
     pub shadow_views: wgpu::Buffer,
@@ -156,8 +160,6 @@ pub fn view_bytes(scene: &Scene) -> Vec<u8> {
 
 /// One `Light` of lights.wgsl: six vec4.
 const LIGHT_BYTES: usize = 96;
-/// One `Material` of geometry.wgsl: two vec4.
-const MATERIAL_BYTES: usize = 32;
 
 fn light_bytes(scene: &Scene) -> Vec<u8> {
     let (first_layer, _) = shadow_layout(scene);
@@ -332,6 +334,7 @@ impl SceneGpu {
         queue: &wgpu::Queue,
         scene: &Scene,
         loaded: &BTreeMap<String, Arc<MeshData>>,
+        materials: &Program,
         network: Option<&Arc<Network>>,
         previous: Option<&SceneGpu>,
     ) -> Self {
@@ -369,11 +372,7 @@ impl SceneGpu {
             push_mat4(&mut objects, model.inverse().transpose());
             objects.extend_from_slice(bytemuck::cast_slice(&[o.material as u32, 0, 0, 0]));
         }
-        let mut materials = Vec::new();
-        for m in &scene.materials {
-            push_vec4(&mut materials, [m.base_color[0], m.base_color[1], m.base_color[2], m.metallic]);
-            push_vec4(&mut materials, [m.roughness, 0.0, 0.0, 0.0]);
-        }
+        let (material_params, material_instances) = materials.buffers();
         let (center, radius) = bounds(scene, &data, &draws);
         let shadow_layers = shadow_views(scene, center, radius);
         let mut shadow_bytes = Vec::new();
@@ -398,11 +397,11 @@ impl SceneGpu {
                 usage: wgpu::BufferUsages::UNIFORM,
             }),
             objects: storage("objects", objects),
-            // Likewise one (zeroed) material: the path tracer binds them in
-            // a compute pass, where the binding is checked against the
-            // shader's 32-byte struct even when no triangle reads one (a
-            // path-traced scene of media alone failed every dispatch).
-            materials: storage("materials", if materials.is_empty() { vec![0; MATERIAL_BYTES] } else { materials }),
+            // Never empty (`buffers` pads): the path tracer binds them in a
+            // compute pass, where a binding is checked against the shader's
+            // element size even when no triangle reads one.
+            material_params: storage("material params", bytemuck::cast_slice(&material_params).to_vec()),
+            material_instances: storage("material instances", bytemuck::cast_slice(&material_instances).to_vec()),
             // A scene without lights still binds one (zeroed) light: the
             // shader's array needs room for one element.
             lights: storage("lights", if scene.lights.is_empty() { vec![0; LIGHT_BYTES] } else { light_bytes(scene) }),

@@ -29,9 +29,10 @@ use crate::diag::{Diagnostic, display_path};
 use crate::gpu::Gpu;
 use crate::gpu::pipeline::{MESH_VERTICES, PipelineSpec, Stages};
 use crate::loaded::Loaded;
+use crate::material::{self, Program};
 use crate::mesh::MeshData;
 use crate::scene::{Camera, Scene};
-use crate::shader::{ComposeCache, Library};
+use crate::shader::{ComposeCache, Library, SourceFile};
 
 /// How a pass stands this frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -118,6 +119,9 @@ pub struct Session {
     meshes: BTreeMap<String, Arc<MeshData>>,
     /// The network the scene's `[denoiser]` names.
     network: Option<Arc<Network>>,
+    /// The scene's materials; their WGSL is the library's
+    /// `loupe::material` module.
+    materials: Arc<Program>,
     scene_gpu: SceneGpu,
     graph: Graph,
     cache: PipelineCache,
@@ -141,8 +145,10 @@ pub struct Session {
 }
 
 impl Session {
-    pub fn new(gpu: Gpu, shader_root: &Path, lib: Library, loaded: &Loaded) -> Self {
-        let scene_gpu = SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes, loaded.denoiser.as_ref(), None);
+    pub fn new(gpu: Gpu, shader_root: &Path, mut lib: Library, loaded: &Loaded) -> Self {
+        let scene_gpu =
+            SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes, &loaded.materials, loaded.denoiser.as_ref(), None);
+        material_module(&mut lib, shader_root, &loaded.materials);
         let limits = gpu.device.limits();
         let options = FrameOptions { max_buffer: Some(crate::gpu::largest_binding(&limits)), ..FrameOptions::default() };
         Session {
@@ -157,6 +163,7 @@ impl Session {
             scene: loaded.scene.clone(),
             meshes: loaded.meshes.clone(),
             network: loaded.denoiser.clone(),
+            materials: loaded.materials.clone(),
             scene_gpu,
             shader_root: shader_root.to_owned(),
             lib: Arc::new(lib),
@@ -224,19 +231,31 @@ impl Session {
 
     /// Replaces the scene: its GPU data and the graph follow. Pipelines
     /// the new frame no longer uses are kept (switching back costs
-    /// nothing), at most `KEPT_UNUSED` of them.
-    pub fn set_scene(&mut self, loaded: &Loaded) {
+    /// nothing), at most `KEPT_UNUSED` of them. Returns the library files
+    /// the scene changed (the material module, when its code changed):
+    /// the pipelines built from them must be rebuilt.
+    pub fn set_scene(&mut self, loaded: &Loaded) -> BTreeSet<String> {
         self.scene_gpu = SceneGpu::new(
             &self.gpu.device,
             &self.gpu.queue,
             &loaded.scene,
             &loaded.meshes,
+            &loaded.materials,
             loaded.denoiser.as_ref(),
             Some(&self.scene_gpu),
         );
         self.scene = loaded.scene.clone();
         self.meshes = loaded.meshes.clone();
         self.network = loaded.denoiser.clone();
+        let mut changed = BTreeSet::new();
+        if self.materials.definitions != loaded.materials.definitions {
+            let mut lib = (*self.lib).clone();
+            if material_module(&mut lib, &self.shader_root, &loaded.materials) {
+                changed.insert(material::back::DISPLAY.to_owned());
+                self.lib = Arc::new(lib);
+            }
+        }
+        self.materials = loaded.materials.clone();
         self.graph = super::build_graph(&self.scene, self.network.as_deref(), self.options);
         // History describes the old scene: accumulation starts over.
         self.reset_history();
@@ -245,6 +264,7 @@ impl Session {
         for k in unused.iter().take(unused.len().saturating_sub(KEPT_UNUSED)) {
             self.cache.entries.remove(k);
         }
+        changed
     }
 
     /// A new version of the shader sources; pipelines rebuild only when
@@ -449,7 +469,8 @@ impl Session {
         self.pool = ResourcePool::default();
         self.vertex_captures.clear();
         self.capture_generations.clear();
-        self.scene_gpu = SceneGpu::new(&self.gpu.device, &self.gpu.queue, &self.scene, &self.meshes, self.network.as_ref(), None);
+        self.scene_gpu =
+            SceneGpu::new(&self.gpu.device, &self.gpu.queue, &self.scene, &self.meshes, &self.materials, self.network.as_ref(), None);
         self.cache.recreate_all(&self.gpu.device, &self.lib)
     }
 
@@ -664,4 +685,17 @@ mod tests {
         let missing: BTreeSet<String> = s.missing().iter().map(PipelineKey::label).collect();
         assert_eq!(missing, one, "switching back builds them again");
     }
+}
+
+/// Puts `program`'s `loupe::material` module into `lib` (generated, never
+/// on disk; it sits among the shaders as `material::back::DISPLAY`).
+/// Returns whether the library's text of it changed.
+pub fn material_module(lib: &mut Library, shader_root: &Path, program: &Program) -> bool {
+    let text = program.wgsl();
+    if lib.get(material::back::DISPLAY).is_some_and(|f| *f.text == *text) {
+        return false;
+    }
+    let display = material::back::DISPLAY.to_owned();
+    lib.upsert(SourceFile::from_text(display, shader_root.join(material::back::DISPLAY), text.into()));
+    true
 }

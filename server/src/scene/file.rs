@@ -4,6 +4,8 @@
 //! located by its path in the document. `[post]` and `[quality]` are read
 //! through the settings table instead (`super::settings`).
 
+use std::collections::BTreeMap;
+
 use serde::Deserialize;
 use serde::de::IgnoredAny;
 
@@ -108,20 +110,35 @@ pub struct Denoiser {
     pub input_scale: Option<f32>,
 }
 
+/// A `[[materials]]` entry as written: the shorthand (`base_color`,
+/// `metallic`, `roughness`) or a material file.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
     pub name: String,
-    #[serde(default = "grey")]
-    pub base_color: Vec3,
     #[serde(default)]
-    pub metallic: f32,
-    #[serde(default = "half")]
-    pub roughness: f32,
+    pub base_color: Option<Vec3>,
+    #[serde(default)]
+    pub metallic: Option<f32>,
+    #[serde(default)]
+    pub roughness: Option<f32>,
+    /// A material file (`*.mat`), relative to the scene file.
+    #[serde(default)]
+    pub file: Option<String>,
+    /// Which material of `file`; may be left out when the file defines one.
+    #[serde(default)]
+    pub material: Option<String>,
+    /// Values for the material's parameters, by name: numbers, or arrays
+    /// of three for colours and vectors.
+    #[serde(default)]
+    pub params: BTreeMap<String, ParamValue>,
 }
 
-fn grey() -> Vec3 {
-    [0.8; 3]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum ParamValue {
+    Float(f32),
+    Vec3(Vec3),
 }
 
 fn half() -> f32 {

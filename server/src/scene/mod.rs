@@ -15,7 +15,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-pub use file::{Camera, Environment, Material, Noise, SdfShape, Vec3};
+pub use file::{Camera, Environment, Noise, ParamValue, SdfShape, Vec3};
 pub use settings::{DebugView, DenoiserKernel, Estimator, Post, Quality, Renderer, Tonemap, VolumeResolution};
 
 use crate::denoise_options::{Mode, Precision};
@@ -44,6 +44,32 @@ pub struct Scene {
     pub denoiser: Option<Denoiser>,
     pub post: Post,
     pub quality: Quality,
+}
+
+/// A `[[materials]]` entry, validated. The renderer takes it compiled
+/// (`crate::loaded`, `crate::material`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    pub name: String,
+    pub source: MaterialSource,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum MaterialSource {
+    /// `base_color`, `metallic`, `roughness`: one slab, as before
+    /// materials were a language.
+    Shorthand { base_color: Vec3, metallic: f32, roughness: f32 },
+    /// A material of a `*.mat` file.
+    File {
+        /// As written, relative to the scene file.
+        file: String,
+        /// Which of the file's materials; `None`: its only one.
+        material: Option<String>,
+        /// Parameter values, each with where it is written.
+        params: Vec<(String, ParamValue, Location)>,
+        /// Where `file` is written.
+        at: Location,
+    },
 }
 
 /// `[denoiser]`: OIDN's U-Net run on the path tracer's output.

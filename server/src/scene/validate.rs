@@ -50,6 +50,14 @@ impl Checker<'_> {
         }
     }
 
+    /// Where `materials[i].params.NAME` is written (keys are the user's,
+    /// so not a `Seg` path).
+    fn param_location(&self, i: usize, name: &str) -> Option<Location> {
+        let table = self.doc.get("materials")?.as_array_of_tables()?.get(i)?.get("params")?;
+        let item = table.as_inline_table().and_then(|t| t.get(name)).or_else(|| table.as_table().and_then(|t| t.get(name)?.as_value()))?;
+        self.located(item.span())
+    }
+
     fn finite(&self, path: &[Seg], v: f32) -> Checked<f32> {
         if v.is_finite() {
             return Ok(v);
@@ -214,14 +222,50 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
     }
 
     let mut names = BTreeSet::new();
+    let mut materials = Vec::new();
     for (i, m) in f.materials.iter().enumerate() {
         let p = |k| [K("materials"), I(i), K(k)];
         if !names.insert(m.name.as_str()) {
             return Err(c.error(&p("name"), format!("a material named `{}` is already defined", m.name)));
         }
-        c.unit01(&p("base_color"), m.base_color)?;
-        c.range(&p("metallic"), m.metallic, 0.0, 1.0)?;
-        c.range(&p("roughness"), m.roughness, 0.0, 1.0)?;
+        let source = match &m.file {
+            None => {
+                if m.material.is_some() {
+                    return Err(c.error(&p("material"), "applies to a material `file` only"));
+                }
+                if !m.params.is_empty() {
+                    return Err(c.error(&p("params"), "applies to a material `file` only"));
+                }
+                MaterialSource::Shorthand {
+                    base_color: c.unit01(&p("base_color"), m.base_color.unwrap_or([0.8; 3]))?,
+                    metallic: c.range(&p("metallic"), m.metallic.unwrap_or(0.0), 0.0, 1.0)?,
+                    roughness: c.range(&p("roughness"), m.roughness.unwrap_or(0.5), 0.0, 1.0)?,
+                }
+            }
+            Some(file) => {
+                for (key, set) in
+                    [("base_color", m.base_color.is_some()), ("metallic", m.metallic.is_some()), ("roughness", m.roughness.is_some())]
+                {
+                    if set {
+                        return Err(c.error(&p(key), "a material from a `file` takes its values from the file: set them in `params`"));
+                    }
+                }
+                if file.trim().is_empty() {
+                    return Err(c.error(&p("file"), "must name a material file (.mat)"));
+                }
+                let at = c.location(&p("file")).unwrap_or_else(|| Location::file_start(display));
+                let params = m
+                    .params
+                    .iter()
+                    .map(|(name, v)| {
+                        let at = c.param_location(i, name).unwrap_or_else(|| at.clone());
+                        (name.clone(), *v, at)
+                    })
+                    .collect();
+                MaterialSource::File { file: file.clone(), material: m.material.clone(), params, at }
+            }
+        };
+        materials.push(Material { name: m.name.clone(), source });
     }
 
     if f.objects.len() > MAX_OBJECTS {
@@ -415,7 +459,7 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
         width,
         height,
         camera: f.camera,
-        materials: f.materials,
+        materials,
         objects,
         lights,
         media,

@@ -73,7 +73,13 @@ pub fn denoise(gpu: Gpu, shader_root: &Path, net: Arc<Network>, images: &TileIma
         mode: s.mode,
         input_scale: Some(s.input_scale),
     });
-    let loaded = Loaded { scene: scene.clone(), meshes: Default::default(), denoiser: Some(net.clone()), files: vec![] };
+    let loaded = Loaded {
+        scene: scene.clone(),
+        meshes: Default::default(),
+        materials: Default::default(),
+        denoiser: Some(net.clone()),
+        files: vec![],
+    };
     let adapter = gpu.adapter_name();
     let mut session = Session::new(gpu, shader_root, lib, &loaded);
 

@@ -1,7 +1,7 @@
 //! Surface attributes per pixel (layout in `geometry/gbuffer.wgsl`).
 
-use super::VIEW;
-use crate::gpu::pipeline::{ALL, Depth, FRAG, Group, HDR, PipelineSpec, Stages, storage};
+use super::{MATERIAL_INSTANCES, MATERIAL_PARAMS, VIEW, material_bindings};
+use crate::gpu::pipeline::{ALL, Depth, Group, HDR, PipelineSpec, Stages, storage};
 use crate::render::context::DepthTarget;
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Meaning, Handle, PipelineKey, TextureDesc};
@@ -11,7 +11,7 @@ pub static GBUFFER: PipelineSpec = PipelineSpec {
     name: "geometry.gbuffer",
     shader: "geometry/gbuffer.wgsl",
     stages: Stages::Mesh { vertex: "vs_main", fragment: Some("fs_main"), targets: &[HDR, HDR, HDR], depth: Depth::Equal },
-    groups: &[Group::always(0, &[VIEW, storage("objects", 1, ALL), storage("materials", 2, FRAG)])],
+    groups: &[Group::always(0, &[VIEW, storage("objects", 1, ALL), MATERIAL_PARAMS, MATERIAL_INSTANCES])],
     defs: &[],
 };
 pub const SPECS: &[&PipelineSpec] = &[&GBUFFER];
@@ -35,7 +35,8 @@ pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle) -> GBuffer {
     let targets = [gb.normal, gb.albedo, gb.material];
     p.execute(move |ctx| {
         let s = ctx.scene;
-        let bindings = [("view", s.view.as_entire_binding()), ("objects", s.objects.as_entire_binding()), ("materials", s.materials.as_entire_binding())];
+        let [params, instances] = material_bindings(s);
+        let bindings = [("view", s.view.as_entire_binding()), ("objects", s.objects.as_entire_binding()), params, instances];
         ctx.draw_objects(&key, &bindings, &targets, Some(DepthTarget { texture: depth, layer: 0, clear: false }));
     });
     gb

@@ -76,6 +76,14 @@ pub const LIGHTS: Binding = storage("lights", 1, FRAG.union(COMPUTE));
 pub const SHADOW_GROUP: Group =
     Group::when(1, SHADOWS, &[crate::gpu::pipeline::depth_array("shadow_maps", 0), storage("shadow_views", 1, FRAG)]);
 /// The participating media (`lib/media.wgsl`), for raster and compute passes.
+/// `loupe::material`'s parameters and instance table (group 0, in every
+/// pass that imports the module; `material::back`'s binding numbers).
+pub const MATERIAL_PARAMS: Binding = storage("material_params", crate::material::back::PARAMS_BINDING, FRAG.union(COMPUTE));
+pub const MATERIAL_INSTANCES: Binding = storage("material_instances", crate::material::back::INSTANCES_BINDING, FRAG.union(COMPUTE));
+/// Binds them.
+pub fn material_bindings(s: &crate::render::scene_gpu::SceneGpu) -> [(&'static str, wgpu::BindingResource<'_>); 2] {
+    [("material_params", s.material_params.as_entire_binding()), ("material_instances", s.material_instances.as_entire_binding())]
+}
 pub const MEDIA: &[Binding] = &[storage("media", 0, FRAG.union(COMPUTE))];
 
 /// A fullscreen pass's key: TWO_TRIANGLES as the scene says, plus `defs`.

@@ -6,7 +6,7 @@
 //! denoiser takes), and `samples`. The session forgets the history, so
 //! accumulation restarts, whenever the scene or its pipeline changes.
 
-use super::{LIGHTS, MEDIA, VIEW};
+use super::{LIGHTS, MATERIAL_INSTANCES, MATERIAL_PARAMS, MEDIA, VIEW, material_bindings};
 use crate::gpu::pipeline::{COMPUTE, Group, HDR, PipelineSpec, Stages, sizes, storage, storage_rw, storage_texture, uniform};
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Meaning, Element, Handle, PipelineKey, TensorLayout, TextureDesc};
@@ -32,7 +32,6 @@ pub static PATH_TRACE: PipelineSpec = PipelineSpec {
             &[
                 VIEW,
                 LIGHTS,
-                storage("materials", 2, COMPUTE),
                 storage("shading", 3, COMPUTE),
                 uniform("params", 4, COMPUTE, sizes::VEC4),
                 storage_rw("accumulated", 5),
@@ -40,6 +39,8 @@ pub static PATH_TRACE: PipelineSpec = PipelineSpec {
                 storage_texture("albedo", 7, HDR),
                 storage_texture("normal", 8, HDR),
                 storage_texture("samples", 9, SAMPLES),
+                MATERIAL_PARAMS,
+                MATERIAL_INSTANCES,
             ],
         ),
         Group::always(1, &[storage("nodes", 0, COMPUTE), storage("triangles", 1, COMPUTE)]),
@@ -80,7 +81,6 @@ pub fn path_trace(g: &mut GraphBuilder, scene: &Scene) -> Option<Traced> {
         let mut b = vec![
             ("view", s.view.as_entire_binding()),
             ("lights", s.lights.as_entire_binding()),
-            ("materials", s.materials.as_entire_binding()),
             ("shading", geometry.shading.as_entire_binding()),
             ("params", u.as_entire_binding()),
             ("accumulated", ctx.bind(accumulated)),
@@ -91,6 +91,7 @@ pub fn path_trace(g: &mut GraphBuilder, scene: &Scene) -> Option<Traced> {
             ("nodes", geometry.nodes().as_entire_binding()),
             ("triangles", geometry.triangles().as_entire_binding()),
         ];
+        b.extend(material_bindings(s));
         if media {
             b.push(("media", s.media.as_entire_binding()));
         }

@@ -172,7 +172,7 @@ const SCENE: &str = "[quality]\nrenderer = \"path\"\n[[materials]]\nname = \"m\"
 
 fn gpu_of(text: &str, previous: Option<&SceneGpu>, gpu: &crate::gpu::Gpu) -> SceneGpu {
     let scene = crate::scene::parse("s.toml", text).unwrap_or_else(|d| panic!("{d}"));
-    SceneGpu::new(&gpu.device, &gpu.queue, &scene, &Default::default(), None, previous)
+    SceneGpu::new(&gpu.device, &gpu.queue, &scene, &Default::default(), &Default::default(), None, previous)
 }
 
 /// Moving a light or changing a material keeps the hierarchy; moving

@@ -144,6 +144,7 @@ impl Daemon {
                     crate::loaded::Loaded {
                         scene: empty,
                         meshes: Default::default(),
+                        materials: Default::default(),
                         denoiser: None,
                         files: vec![config.scene_path.clone()],
                     },
@@ -336,7 +337,9 @@ impl Daemon {
         }
         self.session.apply_sources(lib);
         if scene_changed {
-            self.reload_scene();
+            // A material edit changes the generated material module: the
+            // pipelines built from it rebuild like those of an edited shader.
+            touched.extend(self.reload_scene());
         }
         self.publish_measured();
         // Exactly the pipelines whose sources depend on a touched file, plus
@@ -348,22 +351,30 @@ impl Daemon {
         self.start_reload(keys, touched.into_iter().collect(), watch_ms);
     }
 
-    fn reload_scene(&mut self) {
-        match crate::loaded::load_with(&self.config.scene_path, &self.overrides) {
+    /// Reloads the scene; returns the library files its reload changed.
+    fn reload_scene(&mut self) -> BTreeSet<String> {
+        let changed = match crate::loaded::load_with(&self.config.scene_path, &self.overrides) {
             Ok(l) => self.install_scene(l),
             // The last good scene keeps rendering.
-            Err(d) => self.scene_error = Some(d),
-        }
+            Err(d) => {
+                self.scene_error = Some(d);
+                BTreeSet::new()
+            }
+        };
         self.dirty = true;
         self.publish_controls();
+        changed
     }
 
-    fn install_scene(&mut self, l: crate::loaded::Loaded) {
+    /// Swaps the scene in; returns the library files it changed (the
+    /// generated material module).
+    fn install_scene(&mut self, l: crate::loaded::Loaded) -> BTreeSet<String> {
         self.trace_stale = true;
-        self.session.set_scene(&l);
+        let changed = self.session.set_scene(&l);
         self.scene_files = l.files;
         self.config.watch_files.set(&self.scene_files);
         self.scene_error = None;
+        changed
     }
 
     /// Live overrides: a value that makes the scene invalid is refused with
@@ -395,9 +406,12 @@ impl Daemon {
         match crate::loaded::load_with(&self.config.scene_path, &overrides) {
             Ok(l) => {
                 self.overrides = overrides;
-                self.install_scene(l);
+                let changed = self.install_scene(l);
                 self.dirty = true;
-                let keys = self.session.missing();
+                let lib = self.session.library().clone();
+                let affected: BTreeSet<String> = changed.iter().flat_map(|d| lib.dependents(d)).collect();
+                let mut keys = self.session.built_from(&affected);
+                keys.extend(self.session.missing());
                 self.start_reload(keys, vec![display], 0.0);
             }
             Err(d) => self.shared.publish(ServerEvent::Error { message: format!("override refused: {d}") }),
