@@ -71,8 +71,12 @@ fn network(dir: &Path, d: &Denoiser, files: &mut Vec<PathBuf>) -> Result<Network
     Network::from_archive(&archive).map_err(|e| e.diagnostic(&display).with_label(d.at.clone(), "named here", false))
 }
 
-#[cfg(test)]
-mod tests;
+/// The materials of a scene parsed from text, for tests: material files
+/// relative to the working directory; a failure panics.
+#[cfg(any(test, feature = "testing"))]
+pub fn materials_of(scene: &Scene) -> Arc<Program> {
+    Arc::new(materials(Path::new("scene.toml"), scene, &mut Vec::new()).unwrap_or_else(|d| panic!("{d}")))
+}
 
 /// The scene's materials compiled: the shorthand's one definition (when
 /// any entry uses it) and each material file's, once each.
@@ -98,3 +102,6 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Pro
     }
     Ok(program)
 }
+
+#[cfg(test)]
+mod tests;

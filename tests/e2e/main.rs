@@ -5,6 +5,7 @@ mod browser;
 mod check;
 mod denoise;
 mod golden;
+mod materials;
 mod no_adapter;
 mod protocol;
 mod recipe;

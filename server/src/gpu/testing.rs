@@ -87,7 +87,13 @@ pub fn run_compute<T: bytemuck::Pod, U: bytemuck::Pod>(
 
 impl Kernel {
     pub fn new(gpu: &Gpu, source: &str, entry: &str) -> Result<Kernel, Error> {
-        let module = compose(gpu, source)?;
+        Self::with_modules(gpu, source, entry, &[])
+    }
+
+    /// `new`, with `modules` (generated ones, such as a material module)
+    /// added to the library `source` imports from.
+    pub fn with_modules(gpu: &Gpu, source: &str, entry: &str, modules: &[SourceFile]) -> Result<Kernel, Error> {
+        let module = compose(gpu, source, modules)?;
         let ep = module
             .entry_points
             .iter()
@@ -241,9 +247,12 @@ impl Kernel {
 }
 
 /// The shader composed with the repository's shader library.
-fn compose(gpu: &Gpu, source: &str) -> Result<naga::Module, Error> {
+fn compose(gpu: &Gpu, source: &str, modules: &[SourceFile]) -> Result<naga::Module, Error> {
     let shaders = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
     let mut lib = library::read_tree(&shaders.join("lib")).map_err(Error::Interface)?;
+    for m in modules {
+        lib.upsert(m.clone());
+    }
     let entry = SourceFile::from_text("test_kernel.wgsl".into(), shaders.join("test_kernel.wgsl"), source.into());
     lib.upsert(entry.clone());
     NagaOil.compose(&lib, &entry, &ShaderDefs::new(), gpu.capabilities()).map(|c| c.module).map_err(Error::Compose)

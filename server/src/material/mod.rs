@@ -30,7 +30,7 @@ pub struct Instance {
 impl Program {
     /// The WGSL module every material pass imports.
     pub fn wgsl(&self) -> String {
-        back::wgsl(&self.definitions)
+        back::wgsl(&self.definitions, back::Bindings::RENDERER)
     }
 
     /// The two buffers the module reads: the parameters (one `vec4` each,
@@ -89,3 +89,6 @@ pub fn shorthand(at: Location) -> Definition {
         energy_compensation: false,
     }
 }
+
+#[cfg(test)]
+mod tests;

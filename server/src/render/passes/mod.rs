@@ -4,6 +4,7 @@
 //! output handles. `render::build_graph` assembles them into a frame.
 
 use crate::gpu::pipeline::{ALL, Binding, COMPUTE, FRAG, Group, PipelineSpec, Stages, sizes, storage, uniform};
+use crate::material::back::Bindings;
 use crate::scene::Scene;
 use crate::scene::settings::FULLSCREEN;
 
@@ -78,8 +79,8 @@ pub const SHADOW_GROUP: Group =
 /// The participating media (`lib/media.wgsl`), for raster and compute passes.
 /// `loupe::material`'s parameters and instance table (group 0, in every
 /// pass that imports the module; `material::back`'s binding numbers).
-pub const MATERIAL_PARAMS: Binding = storage("material_params", crate::material::back::PARAMS_BINDING, FRAG.union(COMPUTE));
-pub const MATERIAL_INSTANCES: Binding = storage("material_instances", crate::material::back::INSTANCES_BINDING, FRAG.union(COMPUTE));
+pub const MATERIAL_PARAMS: Binding = storage("material_params", Bindings::RENDERER.params, FRAG.union(COMPUTE));
+pub const MATERIAL_INSTANCES: Binding = storage("material_instances", Bindings::RENDERER.instances, FRAG.union(COMPUTE));
 /// Binds them.
 pub fn material_bindings(s: &crate::render::scene_gpu::SceneGpu) -> [(&'static str, wgpu::BindingResource<'_>); 2] {
     [("material_params", s.material_params.as_entire_binding()), ("material_instances", s.material_instances.as_entire_binding())]

@@ -1,0 +1,201 @@
+//! The back end on the device: the scene file's shorthand, compiled through
+//! the material module, evaluates, samples and weighs exactly as
+//! `brdf.wgsl` does (what keeps the old scenes' images), and the module's
+//! loops over several closures add up as the operators say.
+
+use super::back::{self, Bindings};
+use super::tree::{Definition, Expr, ExprId, ExprKind, Field, Node, NodeId, NodeKind, Slab, Type, Value};
+use super::{Instance, Program, shorthand};
+use crate::diag::Location;
+use crate::gpu::testing::{Kernel, device};
+use crate::shader::SourceFile;
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Query {
+    /// View direction (n = +z); w: the instance.
+    v: [f32; 4],
+    /// Light direction.
+    l: [f32; 4],
+    /// Three uniform numbers for the samplers.
+    u: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct Out {
+    /// The material's eval (xyz) and pdf (w) of l.
+    material: [f32; 4],
+    /// brdf.wgsl's, for the instance's shorthand values.
+    brdf: [f32; 4],
+    /// The material's sample: direction and pdf, then weight.
+    sample: [f32; 4],
+    sample_weight: [f32; 4],
+    /// brdf_sample's.
+    brdf_sample: [f32; 4],
+    brdf_sample_weight: [f32; 4],
+}
+
+const SHADER: &str = r#"
+#import loupe::brdf::{brdf_cos, brdf_pdf, brdf_sample}
+#import loupe::material::{material_init, material_eval, material_pdf, material_sample, material_params, material_instances}
+
+struct Query { v: vec4<f32>, l: vec4<f32>, u: vec4<f32> }
+struct Out { material: vec4<f32>, brdf: vec4<f32>, sample: vec4<f32>, sample_weight: vec4<f32>, brdf_sample: vec4<f32>, brdf_sample_weight: vec4<f32> }
+
+@group(0) @binding(0) var<storage, read> input: array<Query>;
+@group(0) @binding(1) var<storage, read_write> output: array<Out>;
+
+const N = vec3(0.0, 0.0, 1.0);
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= arrayLength(&output) { return; }
+    let q = input[id.x];
+    let instance = u32(q.v.w);
+    let s = material_init(instance, N, q.v.xyz);
+    // The shorthand's parameters, as the old materials buffer held them.
+    let slot = material_instances[instance].y;
+    let base = material_params[slot].xyz;
+    let metallic = material_params[slot + 1u].x;
+    let roughness = material_params[slot + 2u].x;
+    let ms = material_sample(s, N, q.v.xyz, q.u.xyz);
+    let bs = brdf_sample(N, q.v.xyz, q.u.xyz, base, metallic, roughness);
+    output[id.x] = Out(
+        vec4(material_eval(s, N, q.v.xyz, q.l.xyz), material_pdf(s, N, q.v.xyz, q.l.xyz)),
+        vec4(brdf_cos(N, q.v.xyz, q.l.xyz, base, metallic, roughness), brdf_pdf(N, q.v.xyz, q.l.xyz, base, metallic, roughness)),
+        vec4(ms.l, ms.pdf), vec4(ms.weight, 0.0),
+        vec4(bs.l, bs.pdf), vec4(bs.weight, 0.0),
+    );
+}
+"#;
+
+/// The program's module, bound at group 1 where the test kernel binds
+/// buffers, and its two buffers.
+fn module(program: &Program) -> (SourceFile, [wgpu::Buffer; 2]) {
+    let text = back::wgsl(&program.definitions, Bindings { group: 1, params: 0, instances: 1 });
+    let file = SourceFile::from_text(back::DISPLAY.into(), back::DISPLAY.into(), text.into());
+    let (params, instances) = program.buffers();
+    (file, [storage(bytemuck::cast_slice(&params)), storage(bytemuck::cast_slice(&instances))])
+}
+
+fn storage(bytes: &[u8]) -> wgpu::Buffer {
+    let gpu = shared();
+    wgpu::util::DeviceExt::create_buffer_init(
+        &gpu.device,
+        &wgpu::util::BufferInitDescriptor { label: Some("material test"), contents: bytes, usage: wgpu::BufferUsages::STORAGE },
+    )
+}
+
+fn shared() -> &'static crate::gpu::Gpu {
+    static GPU: std::sync::OnceLock<crate::gpu::Gpu> = std::sync::OnceLock::new();
+    GPU.get_or_init(device)
+}
+
+fn at() -> Location {
+    Location::file_start("test.mat")
+}
+
+/// Shorthand instances over the corners of their parameters' ranges.
+fn shorthand_program() -> Program {
+    let mut instances = Vec::new();
+    for base in [[0.0, 0.0, 0.0], [0.9, 0.5, 0.1], [1.0, 1.0, 1.0]] {
+        for metallic in [0.0, 0.3, 1.0] {
+            for roughness in [0.0, 0.05, 0.4, 1.0] {
+                instances
+                    .push(Instance { definition: 0, values: vec![Value::Vec3(base), Value::Float(metallic), Value::Float(roughness)] });
+            }
+        }
+    }
+    Program { definitions: vec![shorthand(at())], instances }
+}
+
+fn queries(instances: usize) -> Vec<Query> {
+    let dirs = |t: f32, p: f32| [t.sin() * p.cos(), t.sin() * p.sin(), t.cos(), 0.0];
+    let mut out = Vec::new();
+    for i in 0..instances {
+        for (k, theta_v) in [0.0f32, 0.6, 1.2, 1.55].into_iter().enumerate() {
+            for (j, theta_l) in [0.1f32, 0.7, 1.3, 1.6].into_iter().enumerate() {
+                let mut v = dirs(theta_v, 0.3);
+                v[3] = i as f32;
+                let u = [(k * 4 + j) as f32 / 16.0 + 0.01, 0.37 + 0.03 * j as f32, 0.71 - 0.05 * k as f32, 0.0];
+                out.push(Query { v, l: dirs(theta_l, 2.0), u });
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_shorthand_is_brdf_wgsl_to_the_bit() {
+    let program = shorthand_program();
+    let (file, [params, instances]) = module(&program);
+    let gpu = shared();
+    let kernel = Kernel::with_modules(gpu, SHADER, "main", &[file]).unwrap();
+    let q = queries(program.instances.len());
+    let out: Vec<Out> = kernel.run_bound(gpu, &q, q.len(), &[], &[&params, &instances]).unwrap();
+    let bits = |a: [f32; 4]| a.map(f32::to_bits);
+    for (q, o) in q.iter().zip(&out) {
+        let what = format!("{:?}: {:?}", q, program.instances[q.v[3] as usize].values);
+        assert_eq!(bits(o.material), bits(o.brdf), "eval and pdf of {what}");
+        assert_eq!(bits(o.sample), bits(o.brdf_sample), "sample of {what}");
+        assert_eq!(bits(o.sample_weight), bits(o.brdf_sample_weight), "sample weight of {what}");
+    }
+}
+
+/// A definition of one operator over two plain slabs of the given
+/// roughness and colour.
+fn two_slabs(op: impl FnOnce(NodeId, NodeId, ExprId) -> NodeKind, weight: f32) -> Definition {
+    let c = |v: Value, ty| Expr { kind: ExprKind::Const(v), ty, location: at() };
+    let exprs = vec![
+        c(Value::Vec3([0.9, 0.2, 0.1]), Type::Color),
+        c(Value::Float(0.3), Type::Float),
+        c(Value::Vec3([0.1, 0.3, 0.8]), Type::Color),
+        c(Value::Float(0.8), Type::Float),
+        c(Value::Float(weight), Type::Float),
+    ];
+    let slab = |color: u32, rough: u32| Node {
+        kind: NodeKind::Slab(Slab { fields: vec![(Field::BaseColor, ExprId(color)), (Field::SpecularRoughness, ExprId(rough))] }),
+        location: at(),
+    };
+    let root = Node { kind: op(NodeId(0), NodeId(1), ExprId(4)), location: at() };
+    Definition {
+        name: "two".into(),
+        location: at(),
+        params: vec![],
+        nodes: vec![slab(0, 1), slab(2, 3), root],
+        exprs,
+        root: NodeId(2),
+        energy_compensation: false,
+    }
+}
+
+#[test]
+fn a_mix_evaluates_as_its_weights_say() {
+    // mix(a, b, 0.25) = 0.75 a + 0.25 b, against each slab alone.
+    let mix = two_slabs(|a, b, weight| NodeKind::Mix { a, b, weight }, 0.25);
+    let only = |mix: &Definition, keep: u32| {
+        let mut d = mix.clone();
+        d.root = NodeId(keep);
+        d.nodes.truncate(2);
+        d
+    };
+    let program = Program {
+        definitions: vec![only(&mix, 0), only(&mix, 1), mix],
+        instances: (0..3).map(|definition| Instance { definition, values: vec![] }).collect(),
+    };
+    let (file, [params, instances]) = module(&program);
+    let gpu = shared();
+    let kernel = Kernel::with_modules(gpu, SHADER, "main", &[file]).unwrap();
+    let per = queries(1);
+    let q: Vec<Query> = (0..3).flat_map(|i| per.iter().map(move |q| Query { v: [q.v[0], q.v[1], q.v[2], i as f32], ..*q })).collect();
+    let out: Vec<Out> = kernel.run_bound(gpu, &q, q.len(), &[], &[&params, &instances]).unwrap();
+    let n = per.len();
+    for k in 0..n {
+        let (a, b, m) = (out[k].material, out[n + k].material, out[2 * n + k].material);
+        for c in 0..3 {
+            let want = 0.75 * a[c] + 0.25 * b[c];
+            assert!((m[c] - want).abs() <= 1e-5 * want.abs().max(1.0), "channel {c} of {:?}: {} against {want}", per[k], m[c]);
+        }
+    }
+}

@@ -1,0 +1,88 @@
+//! Materials from `*.mat` files in `loupe serve`: an edit reaches the frame,
+//! rebuilding only the pipelines that import the generated material module
+//! (none when only a value changed); a broken file keeps the last good
+//! material rendering and is reported at its line; the fix recovers.
+
+use std::collections::BTreeSet;
+use std::time::Duration;
+
+use loupe_tests::reload::Driver;
+use loupe_tests::{Project, Server};
+
+const LIMIT: Duration = Duration::from_secs(120);
+const SCENE: &str = "scenes/paint.toml";
+const MATERIAL: &str = "scenes/paint.mat";
+
+/// `minimal.toml` with its material taken from `paint.mat`.
+fn project(name: &str) -> Project {
+    let p = Project::copy_of_repo(name);
+    let minimal = p.read("scenes/minimal.toml");
+    let shorthand = "base_color = [0.2, 0.45, 0.8]\nmetallic = 0.0\nroughness = 0.35\n";
+    assert!(minimal.contains(shorthand), "minimal.toml still has its shorthand material");
+    p.write(SCENE, minimal.replace(shorthand, "file = \"paint.mat\"\n"));
+    p.write(MATERIAL, paint("rgb(0.2, 0.45, 0.8)", ""));
+    p
+}
+
+fn paint(colour: &str, extra: &str) -> String {
+    format!(
+        "// A test paint.\nparam colour: color = {colour}\n\nmaterial paint = slab {{\n    base_color: colour,\n    specular_roughness: 0.35,{extra}\n}}\n"
+    )
+}
+
+fn frame_png(s: &Server) -> Vec<u8> {
+    let (code, png) = s.get("/api/captures/lighting/color.png");
+    assert_eq!(code, 200);
+    png
+}
+
+fn rebuilt(d: &Driver) -> BTreeSet<String> {
+    d.events
+        .iter()
+        .filter(|e| e["type"] == "reload_started")
+        .flat_map(|e| e["pipelines"].as_array().unwrap().iter().map(|p| p.as_str().unwrap().to_owned()))
+        .collect()
+}
+
+#[test]
+fn a_material_edit_reaches_the_frame_and_a_broken_one_keeps_the_last_good_until_fixed() {
+    let p = project("materials-live");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", SCENE]);
+    s.wait_for("a first frame", LIMIT, || (s.get_json("/api/status")["frame"].as_u64() > Some(0)).then_some(()));
+    assert!(s.get_json("/api/diagnostics")["diagnostics"].as_array().unwrap().is_empty(), "{}", s.log());
+    let blue = frame_png(&s);
+    let all: BTreeSet<String> =
+        s.get_json("/api/pipelines").as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap().to_owned()).collect();
+    let material_users: BTreeSet<String> =
+        all.iter().filter(|n| n.starts_with("lighting.deferred") || n.starts_with("geometry.gbuffer")).cloned().collect();
+
+    // A new value: the parameter's buffer changes, no pipeline does.
+    let mut d = Driver::new(&p, &s);
+    let o = d.save(MATERIAL, &paint("rgb(0.8, 0.3, 0.1)", "")).unwrap_or_else(|| panic!("no reload\n{}", s.log()));
+    assert!(o.succeeded, "{:?}", d.events);
+    assert_eq!(rebuilt(&d), BTreeSet::new(), "a value edit rebuilds nothing");
+    let orange = frame_png(&s);
+    assert_ne!(orange, blue, "the frame shows the new colour");
+
+    // New code (haze): exactly the pipelines that import the material module.
+    let o = d.save(MATERIAL, &paint("rgb(0.8, 0.3, 0.1)", "\n    haze_weight: 0.5,")).unwrap_or_else(|| panic!("no reload\n{}", s.log()));
+    assert!(o.succeeded, "{:?}", d.events);
+    assert_eq!(rebuilt(&d), material_users, "the material's users rebuild, nothing else");
+    let hazy = frame_png(&s);
+    assert_ne!(hazy, orange, "the frame shows the haze");
+
+    // Broken: reported at its line; the last good material keeps rendering.
+    let broken = paint("rgb(0.8, 0.3, 0.1)", "\n    haze_weight: 0.5 +,");
+    let line = broken.lines().position(|l| l.contains("0.5 +")).unwrap() as u64 + 1;
+    p.save_by_rename(MATERIAL, &broken);
+    let diagnostic = s.wait_for("the material's error", LIMIT, || {
+        s.get_json("/api/diagnostics")["diagnostics"].as_array()?.iter().find(|d| d["location"]["file"] == MATERIAL).cloned()
+    });
+    assert_eq!(diagnostic["location"]["line"].as_u64(), Some(line), "{diagnostic}");
+    assert_eq!(frame_png(&s), hazy, "the last good material still renders");
+
+    // Fixed: the error clears and the frame is the good one again.
+    p.save_by_rename(MATERIAL, &paint("rgb(0.2, 0.45, 0.8)", ""));
+    s.wait_for("the error to clear", LIMIT, || s.get_json("/api/diagnostics")["diagnostics"].as_array()?.is_empty().then_some(()));
+    s.wait_for("the first frame's image again", LIMIT, || (frame_png(&s) == blue).then_some(()));
+}
