@@ -66,6 +66,7 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     let found = library::discover_with(&opts.paths, is_target).map_err(CheckError::BadPath)?;
     let (scenes, targets): (Vec<PathBuf>, Vec<PathBuf>) =
         found.into_iter().filter(|p| p.file_name().is_none_or(|n| n != project::FILE)).partition(|p| is_toml(p));
+    let (materials, targets): (Vec<PathBuf>, Vec<PathBuf>) = targets.into_iter().partition(|p| is_material(p));
     let root_files = if opts.shader_root.is_dir() {
         library::discover(std::slice::from_ref(&opts.shader_root)).map_err(CheckError::BadPath)?
     } else {
@@ -141,7 +142,10 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
             })
             .collect()
     });
-    let scenes: Vec<Checked> = pool.install(|| scenes.par_iter().with_max_len(1).map(|p| check_scene(p)).collect());
+    let scenes: Vec<Checked> = pool.install(|| {
+        let scenes = scenes.par_iter().with_max_len(1).map(|p| check_scene(p));
+        scenes.chain(materials.par_iter().with_max_len(1).map(|p| check_material(p))).collect()
+    });
     for c in scenes {
         format::human::read_sources(&c.diagnostics, &mut files);
         checked.push(c);
@@ -220,11 +224,12 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     Ok((report, files))
 }
 
-/// Whether a file found under `root` is checked: every `*.wgsl`, and a
+/// Whether a file found under `root` is checked: every `*.wgsl` and
+/// `*.mat`, and a
 /// `*.toml` inside a directory named `scenes` (the search root counts).
 /// Files named on the command line are always checked, by extension.
 fn is_target(root: &Path, path: &Path) -> bool {
-    if path.extension().is_some_and(|e| e == "wgsl") {
+    if path.extension().is_some_and(|e| e == "wgsl") || is_material(path) {
         return true;
     }
     let scenes = |c: &std::ffi::OsStr| c == "scenes";
@@ -235,6 +240,22 @@ fn is_target(root: &Path, path: &Path) -> bool {
 
 fn is_toml(path: &Path) -> bool {
     path.extension().is_some_and(|e| e == "toml")
+}
+
+fn is_material(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e == "mat")
+}
+
+/// Loads a material file and its imports, as the front end does for
+/// `loupe serve`: its errors, or its warnings.
+fn check_material(path: &Path) -> Checked {
+    let start = Instant::now();
+    let display = display_path(path);
+    let diagnostics = match guarded(&display, "the material compiler", || crate::material::front::load(path)) {
+        Ok(loaded) => loaded.warnings,
+        Err(errors) => errors,
+    };
+    Checked { duration: start.elapsed(), ..Checked::uncompiled(&display, ModuleKind::Material, diagnostics) }
 }
 
 /// Loads a scene as `loupe serve` does: the file, then every glTF it

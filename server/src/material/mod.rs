@@ -3,4 +3,5 @@
 //! the scene's shorthand) → `tree` (the IR) → analysis → `back` (WGSL).
 //! [docs/materials.md](../../../docs/materials.md) is the language.
 
+pub mod front;
 pub mod tree;
