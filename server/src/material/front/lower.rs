@@ -435,7 +435,7 @@ impl<'a> Lowerer<'a> {
             return self.material_in(scope, &callee, m, span);
         }
         let known: Vec<&str> = target_unit.ast.materials.iter().map(|m| m.name.name.as_str()).collect();
-        self.unknown(scope, span, &format!("material of `{}`", path[0].name), &name.name, &known, "")
+        self.unknown(scope, span, "material", &name.name, &known, &format!(" in `{}`", path[0].name))
     }
 
     /// Lowers `m` in `callee`'s scope, reporting recursion at the caller.
@@ -479,8 +479,8 @@ impl<'a> Lowerer<'a> {
         }
     }
 
-    fn unknown(&mut self, scope: &Scope, span: &Span, what: &str, name: &str, known: &[&str], note: &str) -> Val {
-        let mut d = error(format!("unknown {what} `{name}`{note}"), self.loc(scope.unit, span), "not declared");
+    fn unknown(&mut self, scope: &Scope, span: &Span, what: &str, name: &str, known: &[&str], context: &str) -> Val {
+        let mut d = error(format!("unknown {what} `{name}`{context}"), self.loc(scope.unit, span), "not declared");
         if let Some(best) = closest(name, known.iter().copied()) {
             d = d.with_note(format!("did you mean `{best}`?"));
         } else if !known.is_empty() {
@@ -512,7 +512,7 @@ impl<'a> Lowerer<'a> {
                 failed = true;
                 continue;
             };
-            if !self.in_range(scope, id, e, field.name(), field.range()) {
+            if !self.in_range(scope, id, e, &format!("`{}`", field.name()), field.range()) {
                 failed = true;
             }
             slab.fields.push((field, id));
@@ -530,9 +530,9 @@ impl<'a> Lowerer<'a> {
             match p.range {
                 Some((plo, phi)) if plo < lo || phi > hi => {
                     let d = error(
-                        format!("param `{}` may leave the range of `{what}`", p.name),
+                        format!("param `{}` may leave the range of {what}", p.name),
                         self.loc(scope.unit, &e.span),
-                        format!("`{what}` takes [{}, {}]", show(lo), show(hi)),
+                        format!("{what} takes [{}, {}]", show(lo), show(hi)),
                     )
                     .with_label(p.location.clone(), format!("declared in [{plo}, {phi}]"), false);
                     self.errors.push(d);
@@ -551,11 +551,11 @@ impl<'a> Lowerer<'a> {
             None => true,
             Some(x) => {
                 let message = if x.is_nan() {
-                    format!("`{what}` evaluates to NaN")
+                    format!("{what} evaluates to NaN")
                 } else {
-                    format!("`{what}` must lie in [{}, {}], not {x}", show(lo), show(hi))
+                    format!("{what} must lie in [{}, {}], not {x}", show(lo), show(hi))
                 };
-                self.err(scope, &e.span, message, "out of range");
+                self.err(scope, &e.span, message, if x.is_nan() { "not a number" } else { "out of range" });
                 false
             }
         }
@@ -589,7 +589,8 @@ impl<'a> Lowerer<'a> {
             known.extend(OPERATORS);
             known.extend(Builtin::ALL.iter().map(|b| b.name()));
         }
-        self.unknown(scope, &name.span, "function", &name.name, &known, "")
+        let note = if target == scope.unit { String::new() } else { format!(" in `{}`", callee[0].name) };
+        self.unknown(scope, &name.span, "function", &name.name, &known, &note)
     }
 
     /// The arguments as values, positionally; an error (and `None`) for a
@@ -655,7 +656,7 @@ impl<'a> Lowerer<'a> {
             };
             let Some(i) = params.iter().position(|p| p.name == name.name) else {
                 let known: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
-                self.unknown(scope, &name.span, &format!("param of `{}`", m.name.name), &name.name, &known, "");
+                self.unknown(scope, &name.span, "param", &name.name, &known, &format!(" of `{}`", m.name.name));
                 failed = true;
                 continue;
             };
@@ -666,7 +667,7 @@ impl<'a> Lowerer<'a> {
             }
             let (ty, range) = (params[i].ty, params[i].range);
             match self.value(v, &a.value, scope, ty, &format!("param `{}`", name.name)) {
-                Some(id) if self.in_range(scope, id, &a.value, &name.name, range) => bound[i] = Some(v),
+                Some(id) if self.in_range(scope, id, &a.value, &format!("param `{}`", name.name), range) => bound[i] = Some(v),
                 _ => failed = true,
             }
         }
@@ -693,7 +694,7 @@ impl<'a> Lowerer<'a> {
             let a = &args[slabs].value;
             let id = self.value(vals[slabs], a, scope, Type::Float, &format!("the weight of {what}"));
             match id {
-                Some(id) if self.in_range(scope, id, a, "weight", Some((0.0, 1.0))) => Some(id),
+                Some(id) if self.in_range(scope, id, a, &format!("the weight of {what}"), Some((0.0, 1.0))) => Some(id),
                 _ => return Val::Error,
             }
         } else {
@@ -891,7 +892,7 @@ fn join(a: Type, b: Type) -> Option<Type> {
 
 /// The known name closest to `name`, if close enough to be a likely typo.
 fn closest<'a>(name: &str, known: impl Iterator<Item = &'a str>) -> Option<&'a str> {
-    known.map(|k| (edit_distance(name, k), k)).filter(|(d, k)| *d <= (k.len().max(name.len()) / 3).max(1)).min().map(|(_, k)| k)
+    known.map(|k| (edit_distance(name, k), k)).filter(|(d, k)| *d <= k.len().max(name.len()).div_ceil(3)).min().map(|(_, k)| k)
 }
 
 fn edit_distance(a: &str, b: &str) -> usize {

@@ -153,7 +153,7 @@ fn named_arguments_of_a_material_are_checked() {
     let dir = dir_with(&[("lib.mat", lib.as_bytes()), ("a.mat", b"import \"lib.mat\"\nmaterial m = lib.p(colour: grey(1), rough: 2)\n")]);
     let e = load(&dir.path().join("a.mat")).err().expect("errors");
     let msgs: Vec<&str> = e.iter().map(|d| d.message.as_str()).collect();
-    assert_eq!(msgs, ["unknown param of `p` `colour`", "`rough` must lie in [0, 1], not 2"], "{}", lines(&e));
+    assert_eq!(msgs, ["unknown param `colour` of `p`", "param `rough` must lie in [0, 1], not 2"], "{}", lines(&e));
     assert_eq!(e[0].notes, ["did you mean `color`?"]);
 }
 
