@@ -40,10 +40,6 @@ pub enum TypeName {
 impl TypeName {
     pub const ALL: [(&'static str, TypeName); 4] =
         [("float", TypeName::Float), ("color", TypeName::Color), ("vec3", TypeName::Vec3), ("slab", TypeName::Slab)];
-
-    pub fn name(self) -> &'static str {
-        TypeName::ALL.iter().find(|(_, t)| *t == self).map_or("?", |(n, _)| n)
-    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -63,7 +59,6 @@ pub struct FnDecl {
     pub name: Ident,
     pub args: Vec<(Ident, TypeName)>,
     pub ret: TypeName,
-    pub ret_span: Span,
     pub body: Block,
 }
 
@@ -98,8 +93,6 @@ pub enum ExprKind {
         args: Vec<Arg>,
     },
     Slab(Vec<(Ident, Expr)>),
-    /// Something that did not parse; its error is already reported.
-    Error,
 }
 
 #[derive(Debug, Clone, PartialEq)]

@@ -360,7 +360,6 @@ impl<'a> Lowerer<'a> {
 
     fn expr(&mut self, scope: &Scope, e: &ast::Expr) -> Val {
         match &e.kind {
-            ast::ExprKind::Error => Val::Error,
             ast::ExprKind::Number(x) => self.push_expr(scope, &e.span, ExprKind::Const(Value::Float(*x)), Type::Float),
             ast::ExprKind::Neg(a) => match self.expr(scope, a) {
                 Val::Value(id) => {

@@ -196,10 +196,10 @@ impl Parser {
             return self.expected("`->` and the return type");
         }
         self.bump();
-        let (ret, ret_span) = self.type_name()?;
+        let ret = self.type_name()?.0;
         self.expect_punct('{')?;
         let body = self.block('}')?;
-        Ok(FnDecl { name, args, ret, ret_span, body })
+        Ok(FnDecl { name, args, ret, body })
     }
 
     fn material(&mut self) -> PResult<MaterialDecl> {

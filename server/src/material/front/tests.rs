@@ -12,7 +12,7 @@ fn ok(text: &str) -> Loaded {
 }
 
 fn errors(text: &str) -> Vec<Diagnostic> {
-    load_text(Path::new("t.mat"), text).err().expect("errors")
+    load_text(Path::new("t.mat"), text).expect_err("errors")
 }
 
 fn lines(ds: &[Diagnostic]) -> String {
@@ -151,7 +151,7 @@ fn declarations_and_defaults_are_checked() {
 fn named_arguments_of_a_material_are_checked() {
     let lib = "param color: color = grey(0.5)\nparam rough: float = 0.5 in [0, 1]\nmaterial p = slab { base_color: color, specular_roughness: rough }\n";
     let dir = dir_with(&[("lib.mat", lib.as_bytes()), ("a.mat", b"import \"lib.mat\"\nmaterial m = lib.p(colour: grey(1), rough: 2)\n")]);
-    let e = load(&dir.path().join("a.mat")).err().expect("errors");
+    let e = load(&dir.path().join("a.mat")).expect_err("errors");
     let msgs: Vec<&str> = e.iter().map(|d| d.message.as_str()).collect();
     assert_eq!(msgs, ["unknown param `colour` of `p`", "param `rough` must lie in [0, 1], not 2"], "{}", lines(&e));
     assert_eq!(e[0].notes, ["did you mean `color`?"]);
@@ -166,16 +166,16 @@ fn bad_files_are_diagnostics_at_their_import() {
         ("uses_bin.mat", b"import \"bin.mat\"\nimport \"gone.mat\"\nmaterial m = slab {}\n"),
         ("empty.mat", b"  \n"),
     ]);
-    let e = load(&dir.path().join("a.mat")).err().expect("a cycle");
+    let e = load(&dir.path().join("a.mat")).expect_err("a cycle");
     assert_eq!((e.len(), e[0].code), (1, Code::ImportCycle));
     let (a, b) = (display_path(&dir.path().join("a.mat")), display_path(&dir.path().join("b.mat")));
     assert_eq!(e[0].notes, [format!("cycle: {a} -> {b} -> {a}")]);
     assert_eq!(e[0].file(), Some(b.as_str()), "at the import that closes the cycle");
-    let e = load(&dir.path().join("uses_bin.mat")).err().expect("bad imports");
+    let e = load(&dir.path().join("uses_bin.mat")).expect_err("bad imports");
     let codes: Vec<Code> = e.iter().map(|d| d.code).collect();
     assert_eq!(codes, [Code::Encoding, Code::ImportMissing], "{}", lines(&e));
     assert_eq!(e[1].location.as_ref().map(|l| (l.line, l.column)), Some((2, 8)));
-    assert_eq!(load(&dir.path().join("empty.mat")).err().expect("empty")[0].code, Code::EmptyFile);
+    assert_eq!(load(&dir.path().join("empty.mat")).expect_err("empty")[0].code, Code::EmptyFile);
 }
 
 #[test]
@@ -184,7 +184,7 @@ fn a_file_over_the_cap_is_refused_before_it_is_read() {
     let path = dir.path().join("huge.mat");
     let f = std::fs::File::create(&path).expect("create");
     f.set_len(crate::shader::library::MAX_FILE_BYTES + 1).expect("a sparse file");
-    assert_eq!(load(&path).err().expect("too large")[0].code, Code::FileTooLarge);
+    assert_eq!(load(&path).expect_err("too large")[0].code, Code::FileTooLarge);
 }
 
 #[test]
@@ -199,7 +199,7 @@ fn deep_nesting_and_deep_imports_are_errors_not_overflows() {
     files.push(("f40.mat".into(), b"material m = slab {}\n".to_vec()));
     let named: Vec<(&str, &[u8])> = files.iter().map(|(n, t)| (n.as_str(), t.as_slice())).collect();
     let dir = dir_with(&named);
-    let e = load(&dir.path().join("f0.mat")).err().expect("too deep");
+    let e = load(&dir.path().join("f0.mat")).expect_err("too deep");
     assert!(e[0].message.contains("imports nest more than"), "{}", lines(&e));
     // Calls that double at each level: a size limit, not a hang.
     let mut text = String::from("fn f0(x: float) -> float { x }\n");
