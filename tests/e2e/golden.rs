@@ -58,7 +58,7 @@ fn golden_material_diagnostics() {
     // Over the size cap: a sparse file, never checked in.
     let generated = Project::empty("golden-materials");
     let huge = std::fs::File::create(generated.path("huge.mat")).expect("create huge.mat");
-    huge.set_len((8 << 20) + 1).expect("a sparse file");
+    huge.set_len(loupe::shader::library::MAX_FILE_BYTES + 1).expect("a sparse file");
     compare(&root, &generated.root, "huge.mat", &mut failures);
     assert!(failures.is_empty(), "golden output differs (LOUPE_BLESS=1 to regenerate):\n{}", failures.join("\n"));
 }
