@@ -142,11 +142,9 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
             })
             .collect()
     });
-    let scenes: Vec<Checked> = pool.install(|| {
-        let scenes = scenes.par_iter().with_max_len(1).map(|p| check_scene(p));
-        scenes.chain(materials.par_iter().with_max_len(1).map(|p| check_material(p))).collect()
-    });
-    for c in scenes {
+    let scenes: Vec<Checked> = pool.install(|| scenes.par_iter().with_max_len(1).map(|p| check_scene(p)).collect());
+    let materials: Vec<Checked> = pool.install(|| materials.par_iter().with_max_len(1).map(|p| check_material(p)).collect());
+    for c in scenes.into_iter().chain(materials) {
         format::human::read_sources(&c.diagnostics, &mut files);
         checked.push(c);
     }
@@ -225,8 +223,8 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
 }
 
 /// Whether a file found under `root` is checked: every `*.wgsl` and
-/// `*.mat`, and a
-/// `*.toml` inside a directory named `scenes` (the search root counts).
+/// `*.mat`, and a `*.toml` inside a directory named `scenes` (the search
+/// root counts).
 /// Files named on the command line are always checked, by extension.
 fn is_target(root: &Path, path: &Path) -> bool {
     if path.extension().is_some_and(|e| e == "wgsl") || is_material(path) {
