@@ -8,11 +8,11 @@ use std::sync::Arc;
 
 use crate::denoise::network::{Inputs, Network};
 use crate::denoise::{bundled, tza};
-use crate::diag::{Code, Diagnostic};
-use crate::material::tree::Value;
+use crate::diag::{Code, Diagnostic, Location, display_path};
+use crate::material::tree::{Definition, Type, Value};
 use crate::material::{Instance, Program};
 use crate::mesh::MeshData;
-use crate::scene::{self, Denoiser, MaterialSource, Scene, overrides::Overrides};
+use crate::scene::{self, Denoiser, MaterialSource, ParamValue, Scene, overrides::Overrides};
 
 /// A scene and the meshes and weights it references, read from disk.
 #[derive(Debug, Clone)]
@@ -79,28 +79,119 @@ pub fn materials_of(scene: &Scene) -> Arc<Program> {
 }
 
 /// The scene's materials compiled: the shorthand's one definition (when
-/// any entry uses it) and each material file's, once each.
+/// any entry uses it) and each material file's, once each. A material file
+/// and its imports join the scene's dependencies; a bad one is its own
+/// diagnostic with the scene line that names it as a second label.
 fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Program, Diagnostic> {
-    let _ = files;
+    let dir = path.parent().unwrap_or(Path::new("."));
     let mut program = Program { definitions: Vec::new(), instances: Vec::new() };
+    // Definition index by (material file, material name).
+    let mut known: BTreeMap<(PathBuf, String), u32> = BTreeMap::new();
     let mut shorthand = None;
     for m in &scene.materials {
         let instance = match &m.source {
             MaterialSource::Shorthand { base_color, metallic, roughness } => {
                 let definition = *shorthand.get_or_insert_with(|| {
-                    let at = crate::diag::Location::file_start(&crate::diag::display_path(path));
-                    program.definitions.push(crate::material::shorthand(at));
+                    program.definitions.push(crate::material::shorthand(Location::file_start(&display_path(path))));
                     program.definitions.len() as u32 - 1
                 });
                 Instance { definition, values: vec![Value::Vec3(*base_color), Value::Float(*metallic), Value::Float(*roughness)] }
             }
-            MaterialSource::File { at, .. } => {
-                return Err(Diagnostic::error(Code::Scene, "material files are not read yet").with_label(at.clone(), "here", true));
+            MaterialSource::File { file, material, params, at } => {
+                let file_path = dir.join(file);
+                let loaded = material_file(&file_path, at, files)?;
+                let chosen = match material {
+                    Some(name) => loaded.definitions.iter().find(|d| &d.name == name),
+                    None if loaded.definitions.len() == 1 => loaded.definitions.first(),
+                    None => None,
+                };
+                let names: Vec<&str> = loaded.definitions.iter().map(|d| d.name.as_str()).collect();
+                let Some(d) = chosen else {
+                    let shown = display_path(&file_path);
+                    let message = match material {
+                        Some(name) => format!("`{shown}` defines no material `{name}` (it defines: {})", names.join(", ")),
+                        None => format!("`{shown}` defines {} materials: name one with `material` ({})", names.len(), names.join(", ")),
+                    };
+                    return Err(Diagnostic::error(Code::Scene, message).with_label(at.clone(), "this file", true));
+                };
+                let values = param_values(d, params, &m.name)?;
+                let key = (file_path.clone(), d.name.clone());
+                let definition = match known.get(&key) {
+                    Some(&i) => i,
+                    None => {
+                        program.definitions.push(d.clone());
+                        let i = program.definitions.len() as u32 - 1;
+                        known.insert(key, i);
+                        i
+                    }
+                };
+                Instance { definition, values }
             }
         };
         program.instances.push(instance);
     }
     Ok(program)
+}
+
+/// A material file and its imports, read and lowered; every file read
+/// joins `files` (so a fix is seen even after a failure).
+fn material_file(path: &Path, at: &Location, files: &mut Vec<PathBuf>) -> Result<crate::material::front::Loaded, Diagnostic> {
+    files.push(path.to_owned());
+    if !path.is_file() {
+        let message = format!("material file `{}` does not exist", display_path(path));
+        return Err(Diagnostic::error(Code::Scene, message).with_label(at.clone(), "named here", true));
+    }
+    match crate::material::front::load(path) {
+        Ok(loaded) => {
+            files.extend(loaded.files.iter().skip(1).cloned());
+            Ok(loaded)
+        }
+        Err(errors) => {
+            let more = errors.len().saturating_sub(1);
+            let mut first = errors.into_iter().next().expect("a failed load has a diagnostic");
+            if more > 0 {
+                first = first.with_note(format!("and {more} more error{} in the material files", if more == 1 { "" } else { "s" }));
+            }
+            Err(first.with_label(at.clone(), "material file named here", false))
+        }
+    }
+}
+
+/// An instance's values: each parameter's default, replaced by the scene's
+/// `params` (checked against the parameter's type and range).
+fn param_values(d: &Definition, params: &[(String, ParamValue, Location)], material: &str) -> Result<Vec<Value>, Diagnostic> {
+    let mut values: Vec<Value> = d.params.iter().map(|p| p.default).collect();
+    for (name, value, at) in params {
+        let error = |message: String| {
+            Diagnostic::error(Code::Scene, format!("materials `{material}`: {message}")).with_label(at.clone(), "here", true)
+        };
+        let Some(i) = d.params.iter().position(|p| &p.name == name) else {
+            let known: Vec<&str> = d.params.iter().map(|p| p.name.as_str()).collect();
+            let known = if known.is_empty() { "none".to_owned() } else { known.join(", ") };
+            return Err(error(format!("material `{}` has no parameter `{name}` (it has: {known})", d.name)));
+        };
+        let p = &d.params[i];
+        let v = match (p.ty, *value) {
+            (Type::Float, ParamValue::Float(x)) => Value::Float(x),
+            (Type::Color | Type::Vec3, ParamValue::Vec3(c)) => Value::Vec3(c),
+            (Type::Float, _) => return Err(error(format!("`{name}` is a number"))),
+            (_, _) => return Err(error(format!("`{name}` is a colour: three numbers, [r, g, b]"))),
+        };
+        let parts: Vec<f32> = match v {
+            Value::Float(x) => vec![x],
+            Value::Vec3(c) => c.to_vec(),
+        };
+        if let Some(bad) = parts.iter().find(|x| !x.is_finite()) {
+            return Err(error(format!("`{name}` must be finite, not {bad}")));
+        }
+        if let Some((lo, hi)) = p.range
+            && let Some(bad) = parts.iter().find(|x| **x < lo || **x > hi)
+        {
+            return Err(error(format!("`{name}` must lie in [{lo}, {hi}], not {bad}")));
+        }
+        values[i] = v;
+    }
+    Ok(values)
 }
 
 #[cfg(test)]

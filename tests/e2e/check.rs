@@ -387,3 +387,30 @@ fn a_file_name_that_is_not_utf8_is_shown_escaped_and_its_uri_is_real() {
     }
     assert!(p.root.join(std::ffi::OsStr::from_bytes(&bytes)).is_file(), "{uri}, decoded, is the file");
 }
+
+#[test]
+fn material_files_are_checked_in_every_format() {
+    let p = Project::empty("bad-material");
+    p.write("scenes/materials/lib.mat", "param tint: color = grey(0.5)\nmaterial base = slab { base_color: tint }\n");
+    p.write(
+        "scenes/materials/bad.mat",
+        "import \"lib.mat\"\n\nmaterial m = layer(\n    slab { specular_ior: 0.5 },\n    lib.base(tint: grey(0.2)),\n)\n",
+    );
+    let run = p.run(&["check", "--no-device", "--format", "json"]);
+    run.code(1);
+    let diags: Vec<serde_json::Value> = run.stdout.lines().map(|l| serde_json::from_str(l).expect("each line is JSON")).collect();
+    let d = diags.iter().find(|d| d["code"] == "material").unwrap_or_else(|| panic!("no material diagnostic: {}", run.stdout));
+    assert_eq!(
+        (d["file"].as_str(), d["line"].as_u64(), d["column"].as_u64()),
+        (Some("scenes/materials/bad.mat"), Some(4), Some(26)),
+        "{d}"
+    );
+    assert_eq!(diags.len(), 1, "lib.mat is clean: {}", run.stdout);
+    let at = "scenes/materials/bad.mat:4:26";
+    p.run(&["check", "--no-device", "--color", "never"]).code(1).stdout_has("error[material]").stdout_has("scenes/materials/bad.mat:4:26");
+    p.run(&["check", "--no-device", "--format", "github"]).code(1).stdout_has("file=scenes/materials/bad.mat,line=4,col=26");
+    p.run(&["check", "--no-device", "--format", "sarif"]).code(1).stdout_has("\"ruleId\": \"material\"").stdout_has("\"startLine\": 4");
+    p.run(&["check", "--no-device", "--format", "junit"]).code(1).stdout_has("name=\"scenes/materials/lib.mat\"").stdout_has(at);
+    // The file named on the command line, alone.
+    p.run(&["check", "--no-device", "--format", "json", "scenes/materials/bad.mat"]).code(1).stdout_has("\"code\":\"material\"");
+}

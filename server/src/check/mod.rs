@@ -25,6 +25,7 @@ use crate::gpu::{
 };
 use crate::loaded::Loaded;
 use crate::material::Program;
+use crate::material::tree::Definition;
 use crate::shader::{Compose, Composed, Library, NagaOil, ShaderDefs, SourceFile, defs_key, library};
 
 /// naga's parser and validator recurse on nested expressions; a worker stack
@@ -68,6 +69,7 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     let found = library::discover_with(&opts.paths, is_target).map_err(CheckError::BadPath)?;
     let (scenes, targets): (Vec<PathBuf>, Vec<PathBuf>) =
         found.into_iter().filter(|p| p.file_name().is_none_or(|n| n != project::FILE)).partition(|p| is_toml(p));
+    let (materials, targets): (Vec<PathBuf>, Vec<PathBuf>) = targets.into_iter().partition(|p| is_material(p));
     let root_files = if opts.shader_root.is_dir() {
         library::discover(std::slice::from_ref(&opts.shader_root)).map_err(CheckError::BadPath)?
     } else {
@@ -106,10 +108,18 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     }
     let mut lib = Library::new(sources);
     let shader_root = canon(&opts.shader_root);
-    // Scenes first: their materials make the `loupe::material` module the
-    // renderer's shaders import, so every material's code passes the gate.
+    // Scenes and material files first: their materials make the
+    // `loupe::material` module the renderer's shaders import, so every
+    // material's generated code passes the gate.
     let scenes: Vec<(Checked, Option<Loaded>)> = pool.install(|| scenes.par_iter().with_max_len(1).map(|p| check_scene(p)).collect());
-    crate::render::session::material_module(&mut lib, &opts.shader_root, &project_materials(scenes.iter().filter_map(|(_, l)| l.as_ref())));
+    let materials: Vec<(Checked, Vec<Definition>)> =
+        pool.install(|| materials.par_iter().with_max_len(1).map(|p| check_material(p)).collect());
+    let definitions = scenes
+        .iter()
+        .filter_map(|(_, l)| l.as_ref())
+        .flat_map(|l| l.materials.definitions.iter())
+        .chain(materials.iter().flat_map(|(_, d)| d.iter()));
+    crate::render::session::material_module(&mut lib, &opts.shader_root, &project_materials(definitions));
     let specs_by_file = specs_by_display(&lib, &shader_root);
 
     // The device first: without a capability list, sources are judged by
@@ -147,7 +157,7 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
             })
             .collect()
     });
-    for (c, _) in scenes {
+    for c in scenes.into_iter().map(|(c, _)| c).chain(materials.into_iter().map(|(c, _)| c)) {
         format::human::read_sources(&c.diagnostics, &mut files);
         checked.push(c);
     }
@@ -225,11 +235,12 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     Ok((report, files))
 }
 
-/// Whether a file found under `root` is checked: every `*.wgsl`, and a
-/// `*.toml` inside a directory named `scenes` (the search root counts).
+/// Whether a file found under `root` is checked: every `*.wgsl` and
+/// `*.mat`, and a `*.toml` inside a directory named `scenes` (the search
+/// root counts).
 /// Files named on the command line are always checked, by extension.
 fn is_target(root: &Path, path: &Path) -> bool {
-    if path.extension().is_some_and(|e| e == "wgsl") {
+    if path.extension().is_some_and(|e| e == "wgsl") || is_material(path) {
         return true;
     }
     let scenes = |c: &std::ffi::OsStr| c == "scenes";
@@ -240,6 +251,23 @@ fn is_target(root: &Path, path: &Path) -> bool {
 
 fn is_toml(path: &Path) -> bool {
     path.extension().is_some_and(|e| e == "toml")
+}
+
+fn is_material(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e == "mat")
+}
+
+/// Loads a material file and its imports, as the front end does for
+/// `loupe serve`: its errors, or its warnings and its definitions (whose
+/// generated code the renderer's shaders are then checked with).
+fn check_material(path: &Path) -> (Checked, Vec<Definition>) {
+    let start = Instant::now();
+    let display = display_path(path);
+    let (diagnostics, definitions) = match guarded(&display, "the material compiler", || crate::material::front::load(path)) {
+        Ok(loaded) => (loaded.warnings, loaded.definitions),
+        Err(errors) => (errors, Vec::new()),
+    };
+    (Checked { duration: start.elapsed(), ..Checked::uncompiled(&display, ModuleKind::Material, diagnostics) }, definitions)
 }
 
 /// Loads a scene as `loupe serve` does: the file, then every glTF and
@@ -254,13 +282,14 @@ fn check_scene(path: &Path) -> (Checked, Option<Loaded>) {
     (Checked { duration: start.elapsed(), ..Checked::uncompiled(&display, ModuleKind::Scene, diagnostics) }, loaded)
 }
 
-/// Every material definition the checked scenes use, each once, and the
+/// Every material definition of the checked scenes and material files,
+/// each once, and the
 /// shorthand's always: the renderer's shaders compile against it even in
 /// a project without scenes.
-fn project_materials<'a>(scenes: impl Iterator<Item = &'a Loaded>) -> Program {
+fn project_materials<'a>(definitions: impl Iterator<Item = &'a Definition>) -> Program {
     let mut program =
         Program { definitions: vec![crate::material::shorthand(Location::file_start("scene shorthand"))], instances: Vec::new() };
-    for d in scenes.flat_map(|l| l.materials.definitions.iter()) {
+    for d in definitions {
         if !program.definitions.iter().any(|x| x.nodes == d.nodes && x.exprs == d.exprs && x.params == d.params) {
             program.definitions.push(d.clone());
         }

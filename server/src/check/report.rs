@@ -14,6 +14,8 @@ pub enum ModuleKind {
     Entry,
     /// A scene file, loaded with the meshes it references.
     Scene,
+    /// A material file (`*.mat`), lowered with the files it imports.
+    Material,
 }
 
 #[derive(Debug, Clone)]

@@ -110,6 +110,8 @@ pub enum Code {
     Weights,
     #[serde(rename = "image")]
     Image,
+    #[serde(rename = "material")]
+    Material,
 }
 
 impl Code {
@@ -135,6 +137,7 @@ impl Code {
             Code::Gpu => "gpu",
             Code::Weights => "weights",
             Code::Image => "image",
+            Code::Material => "material",
         }
     }
 
@@ -161,10 +164,11 @@ impl Code {
             Code::Gpu => "the GPU rejected commands while a frame was recorded or submitted (an error no error scope caught)",
             Code::Weights => "the denoiser's weights file (.tza) is malformed or is not a U-Net loupe can run",
             Code::Image => "an image file is malformed, or does not fit the images it goes with",
+            Code::Material => "the material file is invalid",
         }
     }
 
-    pub const ALL: [Code; 20] = [
+    pub const ALL: [Code; 21] = [
         Code::Io,
         Code::Encoding,
         Code::EmptyFile,
@@ -185,6 +189,7 @@ impl Code {
         Code::Gpu,
         Code::Weights,
         Code::Image,
+        Code::Material,
     ];
 }
 

@@ -5,6 +5,7 @@
 //! [docs/materials.md](../../../docs/materials.md) is the language.
 
 pub mod back;
+pub mod front;
 pub mod tree;
 
 use crate::diag::Location;
