@@ -3,4 +3,9 @@
 //! the scene's shorthand) → `tree` (the IR) → analysis → `back` (WGSL).
 //! [docs/materials.md](../../../docs/materials.md) is the language.
 
+pub mod analysis;
+#[cfg(test)]
+mod build;
+pub mod operators;
+pub mod report;
 pub mod tree;
