@@ -637,10 +637,15 @@ mod tests {
         let thick = b.float(0.2);
         let base = b.slab(&[(Field::TransmissionColor, green), (Field::Thickness, thick)]);
         let clear = b.rgb([1.0; 3]);
-        let top = b.slab(&[(Field::TransmissionColor, clear), (Field::Thickness, thick)]);
-        let root = b.layer(top, base);
+        let clear_top = b.slab(&[(Field::TransmissionColor, clear), (Field::Thickness, thick)]);
+        let tinted_top = b.slab(&[(Field::TransmissionColor, green), (Field::Thickness, thick)]);
+        let inner = b.layer(clear_top, base);
+        let root = b.layer(tinted_top, inner);
         let a = analyse(&b.finish(root));
-        assert!(!a.features().contains(&Feature::Absorption), "{:?}", a.features);
+        let absorbs = |n: NodeId| a.features[n.0 as usize].contains(&Feature::Absorption);
+        assert!(!absorbs(base), "a base's medium is not crossed: {:?}", a.features);
+        assert!(!absorbs(clear_top), "a clear medium absorbs nothing");
+        assert!(absorbs(tinted_top));
     }
 
     #[test]

@@ -122,6 +122,14 @@ mod tests {
         }
 
         #[test]
+        fn an_uncovered_side_has_no_say_in_what_a_mix_transmits(a in ct(), w in 0.01f32..=1.0) {
+            prop_assume!(a.coverage > 0.01);
+            let out = mix(EMPTY, a, w);
+            prop_assert!((out.coverage - w * a.coverage).abs() <= 1e-6);
+            prop_assert!(close(Ct { coverage: a.coverage, ..out }, a), "{out:?} from {a:?} at {w}");
+        }
+
+        #[test]
         fn mix_at_its_ends_is_one_side(a in ct(), b in ct()) {
             prop_assert!(close(mix(a, b, 0.0), a));
             prop_assert!(close(mix(a, b, 1.0), b));
