@@ -13,7 +13,7 @@ use std::collections::BTreeSet;
 
 use serde::Serialize;
 
-use super::operators::lerp;
+use super::operators::{lerp, saturate};
 use super::tree::{BinOp, Builtin, Definition, Expr, ExprId, ExprKind, Field, Node, NodeId, NodeKind, Slab, Value};
 use crate::diag::Location;
 
@@ -164,7 +164,7 @@ fn call(builtin: Builtin, args: &[Value]) -> Option<Value> {
         (Builtin::Lerp, &[a, b, t]) => zip3(a, b, t, lerp),
         // WGSL's clamp is min(max(x, lo), hi), whatever the bounds' order.
         (Builtin::Clamp, &[v, lo, hi]) => zip3(v, lo, hi, |v, lo, hi| v.max(lo).min(hi)),
-        (Builtin::Saturate, &[v]) => map(v, |v| v.max(0.0).min(1.0)),
+        (Builtin::Saturate, &[v]) => map(v, saturate),
         (Builtin::Min, &[a, b]) => zip(a, b, f32::min),
         (Builtin::Max, &[a, b]) => zip(a, b, f32::max),
         (Builtin::Pow, &[a, b]) => zip(a, b, f32::powf),

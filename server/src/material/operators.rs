@@ -22,7 +22,8 @@ pub(super) fn lerp(a: f32, b: f32, t: f32) -> f32 {
     a * (1.0 - t) + b * t
 }
 
-fn saturate(x: f32) -> f32 {
+/// WGSL's `saturate`.
+pub(super) fn saturate(x: f32) -> f32 {
     x.clamp(0.0, 1.0)
 }
 

@@ -92,7 +92,7 @@ impl Report {
             closures: analysis.closures.iter().map(|c| c.0).collect(),
             features: analysis.features().into_iter().collect(),
             energy_conserving: analysis.energy_conserving(),
-            energy_reasons: analysis.breaches.iter().map(|b| breach_text(b)).collect(),
+            energy_reasons: analysis.breaches.iter().map(breach_text).collect(),
             gbuffer_bytes_per_pixel,
             wgsl_bytes: None,
             compile_ms: None,
