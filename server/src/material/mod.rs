@@ -1,11 +1,17 @@
 //! Materials: a layered material language compiled to WGSL for the raster
 //! and the path tracer. Laid out as naga is: the front end (the `*.mat`
 //! parser, and `shorthand` for the scene file's own materials) → `tree`
-//! (the IR) → `back` (the `loupe::material` WGSL module).
+//! (the IR) → `analysis` (folding, pruning, features, the `report`) →
+//! `back` (the `loupe::material` WGSL module).
 //! [docs/materials.md](../../../docs/materials.md) is the language.
 
+pub mod analysis;
 pub mod back;
+#[cfg(test)]
+mod build;
 pub mod front;
+pub mod operators;
+pub mod report;
 pub mod tree;
 
 use crate::diag::Location;
