@@ -119,7 +119,8 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Pro
                 let definition = match known.get(&key) {
                     Some(&i) => i,
                     None => {
-                        program.definitions.push(d.clone());
+                        let analysed = crate::material::analysed(d).map_err(|ds| first_of(ds, at))?;
+                        program.definitions.push(analysed.def);
                         let i = program.definitions.len() as u32 - 1;
                         known.insert(key, i);
                         i
@@ -146,15 +147,19 @@ fn material_file(path: &Path, at: &Location, files: &mut Vec<PathBuf>) -> Result
             files.extend(loaded.files.iter().skip(1).cloned());
             Ok(loaded)
         }
-        Err(errors) => {
-            let more = errors.len().saturating_sub(1);
-            let mut first = errors.into_iter().next().expect("a failed load has a diagnostic");
-            if more > 0 {
-                first = first.with_note(format!("and {more} more error{} in the material files", if more == 1 { "" } else { "s" }));
-            }
-            Err(first.with_label(at.clone(), "material file named here", false))
-        }
+        Err(errors) => Err(first_of(errors, at)),
     }
+}
+
+/// The first of a material file's errors, saying how many more there are,
+/// with the scene line that names the file.
+fn first_of(errors: Vec<Diagnostic>, at: &Location) -> Diagnostic {
+    let more = errors.len().saturating_sub(1);
+    let mut first = errors.into_iter().next().expect("a failure has a diagnostic");
+    if more > 0 {
+        first = first.with_note(format!("and {more} more error{} in the material files", if more == 1 { "" } else { "s" }));
+    }
+    first.with_label(at.clone(), "material file named here", false)
 }
 
 /// An instance's values: each parameter's default, replaced by the scene's

@@ -94,10 +94,14 @@ fn export(scene_path: &Path, out: &Path) -> Result<usize, String> {
         }
         let ply = format!("object-{index}.ply");
         write_ply(&out.join(&ply), &mine).map_err(|e| format!("{ply}: {e}"))?;
-        let m = &scene.materials[o.material];
+        // Mitsuba's principled BSDF takes the shorthand's three values;
+        // a material from a `.mat` file has no counterpart there.
+        let loupe::scene::MaterialSource::Shorthand { base_color, metallic, roughness } = scene.materials[o.material].source else {
+            return Err(format!("object {}: only the scene file's shorthand materials export to Mitsuba", o.name));
+        };
         objects.push(json!({
             "name": o.name, "ply": ply, "triangles": mine.len(),
-            "base_color": m.base_color, "metallic": m.metallic, "roughness": m.roughness,
+            "base_color": base_color, "metallic": metallic, "roughness": roughness,
         }));
     }
     let (c, e) = (&scene.camera, &scene.environment);

@@ -86,3 +86,47 @@ fn a_material_edit_reaches_the_frame_and_a_broken_one_keeps_the_last_good_until_
     s.wait_for("the error to clear", LIMIT, || s.get_json("/api/diagnostics")["diagnostics"].as_array()?.is_empty().then_some(()));
     s.wait_for("the first frame's image again", LIMIT, || (frame_png(&s) == blue).then_some(()));
 }
+
+/// The bundled scenes, whose materials are the scene file's shorthand,
+/// render what they rendered before materials were a language: images made
+/// by the last build before it (`tests/golden/images/`, 96×54, one sample
+/// per pixel). The path tracer reads the same f32 values and runs the same
+/// arithmetic: within 1e-4. The raster's G-buffer used to hold the
+/// shorthand's values as f16; the lighting pass now reads them at f32, so
+/// its lit colour may move by the rounding of those values: at most 2⁻⁹ of
+/// the value (two half-float steps of the f16 target), plus 1e-4.
+#[test]
+fn the_bundled_scenes_render_what_they_rendered_before_materials() {
+    let p = Project::copy_of_repo("materials-unchanged");
+    let golden = loupe_tests::repo().join("tests/golden/images");
+    for scene in ["minimal", "showcase"] {
+        for (renderer, outputs, relative) in
+            [("raster", &["lighting.color", "volumes.color"][..], 2f32.powi(-9)), ("path", &["path_trace.color"][..], 0.0)]
+        {
+            let out = format!("out-{scene}-{renderer}");
+            let scene_file = format!("scenes/{scene}.toml");
+            p.run(&["render", "--scene", &scene_file, "--renderer", renderer, "--size", "96x54", "--out", &out]).code(0);
+            for output in outputs {
+                let reference = golden.join(format!("{scene}.{output}.exr"));
+                if !reference.is_file() {
+                    continue;
+                }
+                let (want, got) = (loupe_tests::exr_rgba(&reference), loupe_tests::exr_rgba(&p.path(&format!("{out}/{output}.exr"))));
+                assert_eq!(want.len(), got.len(), "{scene} {output}");
+                for (i, (w, g)) in want.iter().zip(&got).enumerate() {
+                    for c in 0..3 {
+                        let bound = 1e-4 + relative * w[c].abs();
+                        assert!(
+                            (w[c] - g[c]).abs() <= bound,
+                            "{scene} {output}: pixel ({}, {}) channel {c} is {} where it was {} (bound {bound})",
+                            i % 96,
+                            i / 96,
+                            g[c],
+                            w[c]
+                        );
+                    }
+                }
+            }
+        }
+    }
+}

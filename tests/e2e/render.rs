@@ -418,16 +418,7 @@ fn denoised_scene(denoiser: &str) -> String {
 /// RGB of an EXR `loupe render` wrote, clamped to [0, 1]: the range the
 /// LDR weights denoise.
 fn exr_rgb(path: &std::path::Path) -> Vec<[f32; 3]> {
-    use exr::prelude::*;
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |size, _| (size.width(), vec![[0.0f32; 3]; size.width() * size.height()]),
-        |(w, px): &mut (usize, Vec<[f32; 3]>), at, (r, g, b, _): (f32, f32, f32, f32)| {
-            px[at.y() * *w + at.x()] = [r, g, b].map(|v| v.clamp(0.0, 1.0))
-        },
-    )
-    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    image.layer_data.channel_data.pixels.1
+    loupe_tests::exr_rgba(path).into_iter().map(|[r, g, b, _]| [r, g, b].map(|v| v.clamp(0.0, 1.0))).collect()
 }
 
 fn mse(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {

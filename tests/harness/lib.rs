@@ -379,3 +379,15 @@ impl Drop for Server {
         let _ = self.child.wait();
     }
 }
+
+/// The RGBA pixels of an OpenEXR file `loupe render` wrote, row by row.
+pub fn exr_rgba(path: &Path) -> Vec<[f32; 4]> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |size, _| (size.width(), vec![[0.0f32; 4]; size.width() * size.height()]),
+        |(w, px): &mut (usize, Vec<[f32; 4]>), at, (r, g, b, a): (f32, f32, f32, f32)| px[at.y() * *w + at.x()] = [r, g, b, a],
+    )
+    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    image.layer_data.channel_data.pixels.1
+}

@@ -263,10 +263,12 @@ fn is_material(path: &Path) -> bool {
 fn check_material(path: &Path) -> (Checked, Vec<Definition>) {
     let start = Instant::now();
     let display = display_path(path);
-    let (diagnostics, definitions) = match guarded(&display, "the material compiler", || crate::material::front::load(path)) {
-        Ok(loaded) => (loaded.warnings, loaded.definitions),
-        Err(errors) => (errors, Vec::new()),
-    };
+    let compiled = guarded(&display, "the material compiler", || {
+        let loaded = crate::material::front::load(path)?;
+        let analysed = loaded.definitions.iter().map(crate::material::analysed).collect::<Result<Vec<_>, _>>()?;
+        Ok((loaded.warnings, analysed.into_iter().map(|a| a.def).collect()))
+    });
+    let (diagnostics, definitions) = compiled.unwrap_or_else(|errors| (errors, Vec::new()));
     (Checked { duration: start.elapsed(), ..Checked::uncompiled(&display, ModuleKind::Material, diagnostics) }, definitions)
 }
 

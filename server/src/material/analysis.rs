@@ -131,6 +131,13 @@ pub fn eval(def: &Definition, expr: ExprId, params: &[Value]) -> Value {
     operate(&def.expr(expr).kind, |e| Some(eval(def, e, params)), param).unwrap_or(Value::Float(f32::NAN))
 }
 
+/// The value of `id` among `exprs` when no parameter lies below it (the
+/// front end's check of defaults, ranges and constant fields, before a
+/// definition exists).
+pub fn constant(exprs: &[Expr], id: ExprId) -> Option<Value> {
+    operate(&exprs[id.0 as usize].kind, |e| constant(exprs, e), |_| None)
+}
+
 /// One expression's value from its operands' values (`None`: unknown, and
 /// so is the result).
 fn operate(kind: &ExprKind, operand: impl Fn(ExprId) -> Option<Value>, param: impl Fn(u32) -> Option<Value>) -> Option<Value> {
@@ -197,7 +204,8 @@ fn channel(v: Value, i: usize) -> f32 {
     }
 }
 
-fn channels(v: Value) -> Vec<f32> {
+/// Every channel of a value.
+pub fn channels(v: Value) -> Vec<f32> {
     match v {
         Value::Float(x) => vec![x],
         Value::Vec3(c) => c.to_vec(),
@@ -278,7 +286,8 @@ fn operands(kind: &ExprKind) -> Vec<ExprId> {
     }
 }
 
-fn constant(def: &Definition, expr: ExprId) -> Option<Value> {
+/// The value of an expression that folding made a constant.
+fn folded(def: &Definition, expr: ExprId) -> Option<Value> {
     match def.expr(expr).kind {
         ExprKind::Const(v) => Some(v),
         _ => None,
@@ -295,7 +304,7 @@ pub fn prune(def: &Definition) -> Definition {
     let mut stand_in: Vec<NodeId> = Vec::with_capacity(def.nodes.len());
     for (i, node) in def.nodes.iter().enumerate() {
         let resolve = |id: NodeId| stand_in.get(id.0 as usize).copied().unwrap_or(id);
-        let weight = |e: ExprId| constant(def, e).map(|v| channel(v, 0));
+        let weight = |e: ExprId| folded(def, e).map(|v| channel(v, 0));
         let id = match node.kind {
             NodeKind::Mix { a, b, weight: w } => match weight(w) {
                 Some(w) if w <= 0.0 => resolve(a),
@@ -406,7 +415,7 @@ fn in_layer_tops(def: &Definition) -> Vec<bool> {
 fn known(def: &Definition, slab: &Slab, field: Field) -> Option<Value> {
     match slab.get(field) {
         None => Some(field.default()),
-        Some(e) => constant(def, e),
+        Some(e) => folded(def, e),
     }
 }
 
@@ -443,7 +452,7 @@ fn breaches(def: &Definition) -> Vec<Breach> {
                     if matches!(field, Field::EmissionColor | Field::EmissionLuminance) {
                         continue;
                     }
-                    let (Some(value), Some((lo, hi))) = (constant(def, e), field.range()) else { continue };
+                    let (Some(value), Some((lo, hi))) = (folded(def, e), field.range()) else { continue };
                     if !channels(value).iter().all(|c| (lo..=hi).contains(c)) {
                         found.push(Breach::OutOfRange { field, value, location: def.expr(e).location.clone() });
                     }

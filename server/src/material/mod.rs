@@ -14,7 +14,7 @@ pub mod operators;
 pub mod report;
 pub mod tree;
 
-use crate::diag::Location;
+use crate::diag::{Code, Diagnostic, Location};
 use tree::{Definition, Expr, ExprId, ExprKind, Field, Node, NodeId, NodeKind, Param, Slab, Type, Value};
 
 /// The materials a scene uses, compiled: each definition once, and one
@@ -61,6 +61,27 @@ impl Program {
         }
         (params, instances)
     }
+}
+
+/// A definition through the analysis passes: folded and pruned, as the
+/// back end compiles it. A constant that is no finite number (a division
+/// by zero, the root of a negative) is an error where it is written.
+pub fn analysed(d: &Definition) -> Result<analysis::Analysis, Vec<Diagnostic>> {
+    let a = analysis::analyse(d);
+    if a.non_finite.is_empty() {
+        return Ok(a);
+    }
+    Err(a
+        .non_finite
+        .iter()
+        .map(|at| {
+            Diagnostic::error(Code::Material, format!("material `{}`: this is not a finite number", d.name)).with_label(
+                at.clone(),
+                "a division by zero, or a root or power of a negative number",
+                true,
+            )
+        })
+        .collect())
 }
 
 /// The definition of the scene file's shorthand (`base_color`, `metallic`,

@@ -9,9 +9,9 @@
 use std::collections::BTreeMap;
 
 use super::ast::{self, Ident, Span, TypeName};
-use super::eval::{components, constant};
 use super::imports::Unit;
 use crate::diag::{Code, Diagnostic, Location};
+use crate::material::analysis::{channels as components, constant};
 use crate::material::tree::*;
 
 /// How deep `fn` and material calls may inline into each other.

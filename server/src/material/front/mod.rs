@@ -5,7 +5,6 @@
 //! diagnostic; as many as can be found are reported at once.
 
 mod ast;
-mod eval;
 mod imports;
 mod lexer;
 mod lower;
