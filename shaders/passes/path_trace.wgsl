@@ -30,6 +30,14 @@ struct Shading {
     na: vec4<f32>,
     nb: vec4<f32>,
     nc: vec4<f32>,
+    // Vertex tangents (world): xyz unit, w = ±1 handedness, as
+    // geometry.wgsl's `world_tangent`.
+    ta: vec4<f32>,
+    tb: vec4<f32>,
+    tc: vec4<f32>,
+    // Vertex UVs: a in xy, b in zw; c in uv_c.xy (zw unused).
+    uv_ab: vec4<f32>,
+    uv_c: vec4<f32>,
 }
 
 struct Accumulated {

@@ -6,6 +6,7 @@ const VIEW_NORMAL: u32 = 0u;
 const VIEW_ALBEDO: u32 = 1u;
 const VIEW_ROUGHNESS: u32 = 2u;
 const VIEW_METALLIC: u32 = 3u;
+const VIEW_UV: u32 = 4u;
 
 struct DebugView {
     // VIEW_*; ignored for depth.
@@ -47,6 +48,10 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
         }
         case VIEW_ROUGHNESS: {
             return vec4(vec3(s.x), 1.0);
+        }
+        case VIEW_UV: {
+            // Tiled UVs repeat the 0..1 square: its fractional part.
+            return vec4(fract(s.xy), 0.0, 1.0);
         }
         default: {
             return vec4(vec3(s.y), 1.0);

@@ -31,7 +31,7 @@ fn paint(colour: &str, extra: &str) -> String {
 }
 
 fn frame_png(s: &Server) -> Vec<u8> {
-    let (code, png) = s.get("/api/captures/lighting/color.png");
+    let (code, png) = s.get("/api/captures/tonemap/color.png");
     assert_eq!(code, 200);
     png
 }

@@ -509,3 +509,50 @@ fn the_denoiser_runs_after_the_path_tracer_and_writes_every_tensor() {
     eprintln!("MSE against 256 spp: 2 spp {before:.5}, denoised {after:.5}");
     assert!(after < before * 0.5, "denoising the 2-spp image brings it closer to the 256-spp one: MSE {before} before, {after} after");
 }
+
+/// A unit sphere seen from +Z, filling most of a square frame, with the
+/// UV debug view on.
+const UV_SCENE: &str = "[output]\nwidth = 64\nheight = 64\n[camera]\nposition = [0.0, 0.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\nfov_deg = 45.0\n\
+[post]\ndebug_view = \"uv\"\n[[materials]]\nname = \"m\"\n[[objects]]\nshape = \"sphere\"\nmaterial = \"m\"\n\
+[[lights]]\ntype = \"directional\"\ndirection = [0.0, -1.0, 0.0]\n";
+
+/// The sphere's UV where pixel (x, y)'s ray meets it (longitude u = φ/2π
+/// with φ from +X towards −Z, latitude v = θ/π from the north pole).
+fn sphere_uv(x: u32, y: u32, size: u32) -> [f32; 2] {
+    let half = (45f32.to_radians() * 0.5).tan();
+    let ndc = |i: u32| (2.0 * (i as f32 + 0.5) / size as f32 - 1.0) * half;
+    let dir = glam::Vec3::new(ndc(x), -ndc(y), -1.0).normalize();
+    let eye = glam::Vec3::new(0.0, 0.0, 3.0);
+    // |eye + t dir| = 1, the nearer root.
+    let b = eye.dot(dir);
+    let t = -b - (b * b - (eye.length_squared() - 1.0)).sqrt();
+    let p = eye + dir * t;
+    let phi = (-p.z).atan2(p.x).rem_euclid(std::f32::consts::TAU);
+    [phi / std::f32::consts::TAU, p.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI]
+}
+
+/// `post.debug_view = "uv"`: the G-buffer's `uv` target holds each pixel's
+/// UV, and the debug view shows it in red and green. Pixels well inside
+/// the sphere's outline see the UV of where their ray meets the true
+/// sphere, up to its tessellation.
+#[test]
+fn the_uv_debug_view_shows_where_each_pixel_sits_on_the_sphere() {
+    let p = Project::empty("render-uv");
+    p.write("uv.toml", UV_SCENE);
+    let (run, report) = render_at(&p, "uv.toml", "64x64", &[]);
+    run.code(0);
+    let r = report.expect("report.json written");
+    let gbuffer = r["passes"].as_array().unwrap().iter().find(|p| p["name"] == "gbuffer").unwrap();
+    assert_eq!(names(&gbuffer["outputs"]), ["normal", "albedo", "material", "uv"], "{gbuffer}");
+    let uv = exr_rgb(&p.path("out/gbuffer.uv.exr"));
+    let shown = exr_rgb(&p.path("out/debug_view.color.exr"));
+    for (x, y) in [(32, 32), (20, 24), (44, 40), (26, 44), (40, 20)] {
+        let want = sphere_uv(x, y, 64);
+        let (got, seen) = (uv[(y * 64 + x) as usize], shown[(y * 64 + x) as usize]);
+        for c in 0..2 {
+            assert!((got[c] - want[c]).abs() < 0.01, "pixel ({x}, {y}): uv {got:?}, the sphere's is {want:?}");
+            assert!((seen[c] - want[c]).abs() < 0.015, "pixel ({x}, {y}): the debug view shows {seen:?}, the sphere's uv is {want:?}");
+        }
+        assert_eq!(seen[2], 0.0, "pixel ({x}, {y}): blue is 0");
+    }
+}

@@ -66,15 +66,13 @@ pub enum Depth {
 /// The depth format of the prepass and shadow maps.
 pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
-/// Vertex layout of every mesh: position then normal, f32x3 each.
-pub const VERTEX_STRIDE: u64 = 24;
-
 /// The one vertex buffer of every mesh pipeline, as the pipeline reads it
-/// (and as `shader::instrument` reads it for vertex capture).
+/// (and as `shader::instrument` reads it for vertex capture): position,
+/// normal, UV and tangent, as `MeshData::vertex_bytes` writes them.
 pub const MESH_VERTICES: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
-    array_stride: VERTEX_STRIDE,
+    array_stride: crate::mesh::VERTEX_STRIDE as u64,
     step_mode: wgpu::VertexStepMode::Vertex,
-    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4],
 };
 
 /// When a bind group is part of the pipeline's layout.

@@ -1,5 +1,7 @@
 //! glTF 2.0 to one `MeshData`: .gltf (buffers in files or data: URIs) and
 //! .glb. The default scene's node tree is flattened, node transforms applied.
+//! Per vertex it reads POSITION, NORMAL, TEXCOORD_0 and TANGENT; what a
+//! primitive leaves out is made (`smooth_normals`, `tangents`).
 //!
 //! The gltf crate's typed JSON model is used for deserialisation only. Its
 //! validation and readers are not: validation rejects legal files (custom
@@ -18,6 +20,7 @@ use gltf::json::{self, Root};
 
 use super::json_path::JsonPath;
 use super::math::{self, IDENTITY, Mat4, NormalTransform, Vec3};
+use super::tangents;
 use super::uri::{self, Uri, UriError};
 use super::{MAX_FILE_BYTES, MAX_TRIANGLES, MAX_VERTICES, MeshData, glb};
 use crate::diag::{Code, Diagnostic, LineIndex, Location};
@@ -205,6 +208,9 @@ struct Want {
 }
 
 const VEC3_F32: Want = Want { type_: Type::Vec3, components: &[ComponentType::F32] };
+const VEC4_F32: Want = Want { type_: Type::Vec4, components: &[ComponentType::F32] };
+/// glTF allows TEXCOORD_n as floats or as normalized unsigned integers.
+const TEXCOORDS: Want = Want { type_: Type::Vec2, components: &[ComponentType::F32, ComponentType::U8, ComponentType::U16] };
 const INDICES: Want = Want { type_: Type::Scalar, components: &[ComponentType::U8, ComponentType::U16, ComponentType::U32] };
 
 struct Flattener<'a> {
@@ -365,19 +371,27 @@ impl Flattener<'_> {
             return Err(doc.error(&attributes, format!("{path} has no POSITION attribute")));
         };
         let position_at = attributes.key("POSITION");
-        let positions = self.read_vec3(position, &position_at)?;
+        let positions = self.read_floats(position, &position_at, &VEC3_F32)?;
         let n = positions.len();
-        let normals = match primitive.attributes.get(&Checked::Valid(Semantic::Normals)) {
-            Some(&normal) => {
-                let normal_at = attributes.key("NORMAL");
-                let normals = self.read_vec3(normal, &normal_at)?;
-                if normals.len() != n {
-                    return Err(doc.error(&normal_at, format!("{path} has {} normals for {n} positions", normals.len())));
+        // An optional per-vertex attribute, one element per position.
+        let attribute =
+            |semantic: Semantic, name: &'static str, what: &str| -> Result<Option<(JsonPath, json::Index<json::Accessor>)>, Diagnostic> {
+                let Some(&accessor) = primitive.attributes.get(&Checked::Valid(semantic)) else {
+                    return Ok(None);
+                };
+                let at = attributes.key(name);
+                let count = self.root.accessors.get(accessor.value()).map_or(n, |a| a.count.0 as usize);
+                if count != n {
+                    return Err(doc.error(&at, format!("{path} has {count} {what} for {n} positions")));
                 }
-                Some(normals)
-            }
-            None => None,
-        };
+                Ok(Some((at, accessor)))
+            };
+        let normals = attribute(Semantic::Normals, "NORMAL", "normals")?.map(|(at, a)| self.read_floats(a, &at, &VEC3_F32)).transpose()?;
+        let uvs = attribute(Semantic::TexCoords(0), "TEXCOORD_0", "texture coordinates")?
+            .map(|(at, a)| self.read_texcoords(a, &at))
+            .transpose()?;
+        let tangents =
+            attribute(Semantic::Tangents, "TANGENT", "tangents")?.map(|(at, a)| self.read_floats(a, &at, &VEC4_F32)).transpose()?;
         let indices = match primitive.indices {
             Some(accessor) => {
                 let indices_at = path.field("indices");
@@ -409,26 +423,81 @@ impl Flattener<'_> {
             return Err(doc.error(path, format!("{path} has {} {what}: TRIANGLES needs a multiple of 3", indices.len())));
         }
         let normals = normals.unwrap_or_else(|| smooth_normals(&positions, &indices));
-        Ok(MeshData { positions, normals, indices })
+        // Given tangents are kept (made unit and perpendicular to the
+        // normal, as exporters round them); missing ones are generated.
+        let (uvs, tangents) = match (uvs, tangents) {
+            (uvs, Some(given)) => {
+                let tangents = given.iter().zip(&normals).map(|(&t, &n)| tangents::given(t, n)).collect();
+                (uvs.unwrap_or_else(|| vec![[0.0; 2]; n]), tangents)
+            }
+            (Some(uvs), None) => {
+                let tangents = tangents::mikktspace(&positions, &normals, &uvs, &indices);
+                (uvs, tangents)
+            }
+            (None, None) => (vec![[0.0; 2]; n], tangents::without_uvs(&normals)),
+        };
+        Ok(MeshData { positions, normals, uvs, tangents, indices })
     }
 
-    fn read_vec3(&self, accessor: json::Index<json::Accessor>, used_at: &JsonPath) -> Result<Vec<Vec3>, Diagnostic> {
-        let (path, elements) = self.accessor(accessor, used_at, &VEC3_F32)?;
-        if elements.count > self.limits.vertices {
-            let (count, limit) = (elements.count, self.limits.vertices);
-            return Err(self.doc.error(&path, format!("{path} has {count} vertices; the limit is {limit}")));
+    /// The vertex-count cap on an attribute's accessor.
+    fn check_vertex_count(&self, path: &JsonPath, count: usize) -> Result<(), Diagnostic> {
+        if count > self.limits.vertices {
+            let limit = self.limits.vertices;
+            return Err(self.doc.error(path, format!("{path} has {count} vertices; the limit is {limit}")));
         }
+        Ok(())
+    }
+
+    /// An accessor of `N` finite floats per element.
+    fn read_floats<const N: usize>(
+        &self,
+        accessor: json::Index<json::Accessor>,
+        used_at: &JsonPath,
+        want: &Want,
+    ) -> Result<Vec<[f32; N]>, Diagnostic> {
+        let (path, elements) = self.accessor(accessor, used_at, want)?;
+        self.check_vertex_count(&path, elements.count)?;
+        self.floats_of(&path, &elements, used_at)
+    }
+
+    fn floats_of<const N: usize>(&self, path: &JsonPath, elements: &Elements, used_at: &JsonPath) -> Result<Vec<[f32; N]>, Diagnostic> {
         let mut out = Vec::with_capacity(elements.count);
         for (k, e) in elements.iter().enumerate() {
-            let v = [0, 4, 8].map(|o| f32::from_le_bytes([e[o], e[o + 1], e[o + 2], e[o + 3]]));
+            let v: [f32; N] = std::array::from_fn(|c| f32::from_le_bytes([e[4 * c], e[4 * c + 1], e[4 * c + 2], e[4 * c + 3]]));
             if let Some(bad) = v.iter().find(|c| !c.is_finite()) {
                 return Err(self
                     .doc
-                    .error(&path, format!("{path} (used as {used_at}) holds {bad} in element {k}: vertex data must be finite")));
+                    .error(path, format!("{path} (used as {used_at}) holds {bad} in element {k}: vertex data must be finite")));
             }
             out.push(v);
         }
         Ok(out)
+    }
+
+    /// TEXCOORD_0: floats, or unsigned bytes or shorts that the accessor
+    /// declares normalized (to 0..1), as glTF allows.
+    fn read_texcoords(&self, accessor: json::Index<json::Accessor>, used_at: &JsonPath) -> Result<Vec<[f32; 2]>, Diagnostic> {
+        let (path, elements) = self.accessor(accessor, used_at, &TEXCOORDS)?;
+        self.check_vertex_count(&path, elements.count)?;
+        let component = elements.component;
+        if component == ComponentType::F32 {
+            return self.floats_of(&path, &elements, used_at);
+        }
+        let unorm = |bytes: usize, max: f32| -> Vec<[f32; 2]> {
+            let word = |e: &[u8], c: usize| e[c * bytes..][..bytes].iter().rev().fold(0u32, |w, &b| w << 8 | u32::from(b));
+            elements.iter().map(|e| [0, 1].map(|c| word(e, c) as f32 / max)).collect()
+        };
+        if !self.root.accessors[accessor.value()].normalized {
+            let name = component_name(component);
+            return Err(self.doc.error(
+                &path,
+                format!("{path}, used as {used_at}, holds {name} that are not normalized: set \"normalized\": true, or store FLOAT"),
+            ));
+        }
+        Ok(match component {
+            ComponentType::U8 => unorm(1, 255.0),
+            _ => unorm(2, 65535.0),
+        })
     }
 
     /// The elements of an accessor used at `used_at`, checked against
@@ -540,7 +609,12 @@ fn extend(out: &mut MeshData, part: &MeshData, m: &Mat4, doc: &Doc, at: &JsonPat
         }
         out.positions.push(q);
     }
+    let first_normal = out.normals.len();
     out.normals.extend(part.normals.iter().map(|&n| normal.apply(n)));
+    out.uvs.extend_from_slice(&part.uvs);
+    let columns = math::linear_columns(m);
+    let normals = &out.normals[first_normal..];
+    out.tangents.extend(part.tangents.iter().zip(normals).map(|(&t, &n)| tangents::transform(t, &columns, normal.mirrors, n)));
     for t in part.indices.chunks_exact(3) {
         // A mirroring transform turns counter-clockwise into clockwise.
         let [a, b, c] = if normal.mirrors { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] };

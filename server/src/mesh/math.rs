@@ -78,6 +78,12 @@ pub fn transform_point(m: &Mat4, p: Vec3) -> Vec3 {
     out
 }
 
+/// The columns of the upper 3×3: how the transform acts on directions
+/// (tangents) as opposed to normals.
+pub fn linear_columns(m: &Mat4) -> [Vec3; 3] {
+    [[m[0], m[1], m[2]], [m[4], m[5], m[6]], [m[8], m[9], m[10]]]
+}
+
 /// How a transform acts on normals.
 pub struct NormalTransform {
     /// The inverse-transpose of the upper 3×3, up to a positive factor:
@@ -91,7 +97,7 @@ pub struct NormalTransform {
 
 impl NormalTransform {
     pub fn of(m: &Mat4) -> Self {
-        let a: [Vec3; 3] = [[m[0], m[1], m[2]], [m[4], m[5], m[6]], [m[8], m[9], m[10]]];
+        let a = linear_columns(m);
         // With columns a0, a1, a2: Aᵀ · [a1×a2, a2×a0, a0×a1] = det(A) · I.
         let cof = [cross(a[1], a[2]), cross(a[2], a[0]), cross(a[0], a[1])];
         let det = dot(a[0], cof[0]);

@@ -11,6 +11,7 @@ mod import;
 mod json_path;
 mod math;
 mod shapes;
+mod tangents;
 mod uri;
 
 #[cfg(test)]
@@ -32,19 +33,27 @@ pub const MAX_VERTICES: usize = 8 << 20;
 /// its buffers may hold together.
 pub const MAX_FILE_BYTES: u64 = 256 << 20;
 
-/// Bytes per vertex in `MeshData::vertex_bytes`: position then normal, each
-/// three f32.
-pub const VERTEX_STRIDE: usize = 24;
+/// Bytes per vertex in `MeshData::vertex_bytes`: position and normal (three
+/// f32 each), UV (two) and tangent (four).
+pub const VERTEX_STRIDE: usize = 48;
 
 /// The names `shape` knows, for "unknown shape" messages.
 pub const SHAPES: [&str; 3] = ["sphere", "cube", "plane"];
 
 /// Indexed triangles in object space, counter-clockwise front faces
-/// (right-handed, +Y up). Normals are unit length, one per position.
+/// (right-handed, +Y up). Per position: a unit normal, a UV (glTF's: origin
+/// at the image's top left, v down) and a tangent.
+///
+/// Tangents follow glTF: xyz is a unit vector along increasing u,
+/// perpendicular to the normal; w = ±1 is the handedness, so that the
+/// bitangent `cross(normal, tangent.xyz) * w` points up the image
+/// (decreasing v), where a tangent-space normal map's +Y (green) points.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct MeshData {
     pub positions: Vec<[f32; 3]>,
     pub normals: Vec<[f32; 3]>,
+    pub uvs: Vec<[f32; 2]>,
+    pub tangents: Vec<[f32; 4]>,
     pub indices: Vec<u32>,
 }
 
@@ -63,12 +72,18 @@ impl MeshData {
         })
     }
 
-    /// The vertex buffer's contents: per vertex, position then normal as
-    /// f32x3 each (`VERTEX_STRIDE` bytes), in the machine's byte order as
-    /// `queue.write_buffer` expects.
+    /// The vertex buffer's contents: per vertex, position (f32x3), normal
+    /// (f32x3), UV (f32x2) and tangent (f32x4), `VERTEX_STRIDE` bytes, in
+    /// the machine's byte order as `queue.write_buffer` expects.
     pub fn vertex_bytes(&self) -> Vec<u8> {
-        let interleaved: Vec<[[f32; 3]; 2]> = self.positions.iter().zip(&self.normals).map(|(&p, &n)| [p, n]).collect();
-        bytemuck::cast_slice(&interleaved).to_vec()
+        let mut out: Vec<f32> = Vec::with_capacity(self.positions.len() * VERTEX_STRIDE / 4);
+        for (((p, n), uv), t) in self.positions.iter().zip(&self.normals).zip(&self.uvs).zip(&self.tangents) {
+            out.extend_from_slice(p);
+            out.extend_from_slice(n);
+            out.extend_from_slice(uv);
+            out.extend_from_slice(t);
+        }
+        bytemuck::cast_slice(&out).to_vec()
     }
 
     pub fn triangle_count(&self) -> usize {

@@ -13,6 +13,10 @@ use crate::diag::{Code, Diagnostic};
 use crate::testing::line_col;
 
 const NODES: &str = include_str!("fixtures/nodes.gltf");
+const TEXTURED: &str = include_str!("fixtures/textured.gltf");
+
+/// Every vertex attribute `encode` can write besides POSITION.
+const ALL: &[&str] = &["NORMAL", "TEXCOORD_0", "TANGENT"];
 
 fn close(a: Vec3, b: Vec3, eps: f32) -> bool {
     (0..3).all(|k| (a[k] - b[k]).abs() <= eps)
@@ -22,6 +26,7 @@ fn close(a: Vec3, b: Vec3, eps: f32) -> bool {
 /// seen from the side its vertex normals face.
 fn assert_consistent(m: &MeshData) {
     assert_eq!(m.positions.len(), m.normals.len());
+    assert_tangent_frames(m);
     assert_eq!(m.indices.len() % 3, 0);
     assert!(m.indices.iter().all(|&i| (i as usize) < m.positions.len()));
     for n in &m.normals {
@@ -33,6 +38,46 @@ fn assert_consistent(m: &MeshData) {
         for &i in t {
             let d = dot(geometric, m.normals[i as usize]);
             assert!(d > 0.0, "triangle {k} {t:?} is wound against vertex {i}'s normal (cos {d})");
+        }
+    }
+}
+
+/// One UV and tangent per vertex; every tangent unit length, perpendicular
+/// to its normal, with w = ±1; every UV finite.
+fn assert_tangent_frames(m: &MeshData) {
+    assert_eq!((m.uvs.len(), m.tangents.len()), (m.positions.len(), m.positions.len()));
+    for (i, (t, n)) in m.tangents.iter().zip(&m.normals).enumerate() {
+        let xyz = [t[0], t[1], t[2]];
+        assert!((dot(xyz, xyz).sqrt() - 1.0).abs() < 1e-5, "vertex {i}: tangent {t:?} is not unit length");
+        assert!(dot(xyz, *n).abs() < 1e-5, "vertex {i}: tangent {t:?} is not perpendicular to normal {n:?}");
+        assert!(t[3] == 1.0 || t[3] == -1.0, "vertex {i}: tangent handedness {}", t[3]);
+        assert!(m.uvs[i].iter().all(|c| c.is_finite()), "vertex {i}: uv {:?}", m.uvs[i]);
+    }
+}
+
+/// Each vertex's tangent lies along its triangles' dP/du (projected on its
+/// tangent plane; cosine at least `min_cos`), and its bitangent
+/// `cross(n, t) * w` along −dP/dv (up the image), for every triangle whose
+/// UVs span an area.
+fn assert_tangents_follow_uvs(m: &MeshData, min_cos: f32) {
+    for (k, t) in m.indices.chunks_exact(3).enumerate() {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as usize);
+        let (e1, e2) = (sub(m.positions[b], m.positions[a]), sub(m.positions[c], m.positions[a]));
+        let (d1, d2) = ([m.uvs[b][0] - m.uvs[a][0], m.uvs[b][1] - m.uvs[a][1]], [m.uvs[c][0] - m.uvs[a][0], m.uvs[c][1] - m.uvs[a][1]]);
+        let r = d1[0] * d2[1] - d2[0] * d1[1];
+        if r.abs() < 1e-9 {
+            continue;
+        }
+        let dp_du = scale(sub(scale(e1, d2[1]), scale(e2, d1[1])), 1.0 / r);
+        let dp_dv = scale(sub(scale(e2, d1[0]), scale(e1, d2[0])), 1.0 / r);
+        for i in [a, b, c] {
+            let (n, tangent) = (m.normals[i], m.tangents[i]);
+            let xyz = [tangent[0], tangent[1], tangent[2]];
+            let along = normalize_or_up(sub(dp_du, scale(n, dot(n, dp_du))));
+            let cos = dot(along, xyz);
+            assert!(cos >= min_cos, "triangle {k}, vertex {i}: tangent {tangent:?} is {cos} off dP/du {dp_du:?}");
+            let bitangent = scale(cross(n, xyz), tangent[3]);
+            assert!(dot(bitangent, dp_dv) < 0.0, "triangle {k}, vertex {i}: bitangent {bitangent:?} is not up the image (dP/dv {dp_dv:?})");
         }
     }
 }
@@ -58,13 +103,57 @@ fn sphere_is_a_closed_unit_sphere() {
     let s = sphere();
     assert_consistent(&s);
     assert_closed(&s);
-    assert_eq!((s.positions.len(), s.triangle_count()), (2 + 23 * 48, 2 * 48 * 23));
+    // A pole vertex per segment, and a seam column in every ring.
+    assert_eq!((s.positions.len(), s.triangle_count()), (2 * 48 + 23 * 49, 2 * 48 * 23));
     for (p, n) in s.positions.iter().zip(&s.normals) {
         assert!((dot(*p, *p).sqrt() - 1.0).abs() < 1e-6, "{p:?} is not at radius 1");
         assert_eq!(p, n);
     }
     let (lo, hi) = s.bounds();
     assert!(close(lo, [-1.0; 3], 1e-3) && close(hi, [1.0; 3], 1e-3), "{lo:?} {hi:?}");
+}
+
+/// Longitude and latitude: u = φ/2π with φ from +X towards −Z, v = θ/π from
+/// the north pole; the tangent is the unit dP/dφ, right-handed.
+#[test]
+fn sphere_uvs_are_longitude_and_latitude() {
+    let s = sphere();
+    assert_tangents_follow_uvs(&s, 0.99);
+    for (i, (p, uv)) in s.positions.iter().zip(&s.uvs).enumerate() {
+        let v = p[1].clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
+        assert!((uv[1] - v).abs() < 1e-5, "vertex {i} at {p:?}: v {} ≠ {v}", uv[1]);
+        if p[1].abs() < 0.999 {
+            let phi = (-p[2]).atan2(p[0]).rem_euclid(std::f32::consts::TAU);
+            let u = phi / std::f32::consts::TAU;
+            // The seam's second column is u = 1 where φ is 0.
+            assert!((uv[0] - u).abs() < 1e-5 || ((uv[0] - 1.0).abs() < 1e-5 && u < 1e-5), "vertex {i} at {p:?}: u {} ≠ {u}", uv[0]);
+            let east = [-phi.sin(), 0.0, -phi.cos()];
+            assert!(close([s.tangents[i][0], s.tangents[i][1], s.tangents[i][2]], east, 1e-5), "vertex {i}: {:?}", s.tangents[i]);
+        }
+    }
+    let (lo, hi) = s
+        .uvs
+        .iter()
+        .fold(([f32::MAX; 2], [f32::MIN; 2]), |(lo, hi), uv| ([lo[0].min(uv[0]), lo[1].min(uv[1])], [hi[0].max(uv[0]), hi[1].max(uv[1])]));
+    assert_eq!((lo, hi), ([0.0, 0.0], [1.0, 1.0]));
+}
+
+/// Every cube face and the plane span the UV square, corner to corner.
+#[test]
+fn cube_and_plane_faces_span_the_uv_square() {
+    for (name, m) in [("cube", cube()), ("plane", plane())] {
+        assert_tangents_follow_uvs(&m, 0.9999);
+        for (f, uvs) in m.uvs.chunks_exact(4).enumerate() {
+            let mut corners: Vec<[f32; 2]> = uvs.to_vec();
+            corners.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            assert_eq!(corners, [[0.0, 0.0], [0.0, 1.0], [1.0, 0.0], [1.0, 1.0]], "{name} face {f}");
+        }
+    }
+    // The plane's u along +X, the image's top towards −Z.
+    let p = plane();
+    for (pos, uv) in p.positions.iter().zip(&p.uvs) {
+        assert_eq!(*uv, [(pos[0] + 1.0) * 0.5, (pos[2] + 1.0) * 0.5]);
+    }
 }
 
 #[test]
@@ -102,7 +191,7 @@ fn shapes_by_name() {
 }
 
 #[test]
-fn vertex_bytes_interleave_position_and_normal() {
+fn vertex_bytes_interleave_position_normal_uv_and_tangent() {
     let c = cube();
     let bytes = c.vertex_bytes();
     assert_eq!(bytes.len(), c.positions.len() * VERTEX_STRIDE);
@@ -111,6 +200,9 @@ fn vertex_bytes_interleave_position_and_normal() {
     let read = |at: usize| [f(at), f(at + 4), f(at + 8)];
     assert_eq!(read(v * VERTEX_STRIDE), c.positions[v]);
     assert_eq!(read(v * VERTEX_STRIDE + 12), c.normals[v]);
+    assert_eq!([f(v * VERTEX_STRIDE + 24), f(v * VERTEX_STRIDE + 28)], c.uvs[v]);
+    assert_eq!(read(v * VERTEX_STRIDE + 32), c.tangents[v][..3]);
+    assert_eq!(f(v * VERTEX_STRIDE + 44), c.tangents[v][3]);
     assert_eq!(MeshData::default().bounds(), ([0.0; 3], [0.0; 3]));
 }
 
@@ -136,34 +228,60 @@ fn load_one(name: &str, bytes: &[u8]) -> Result<MeshData, Diagnostic> {
 }
 
 /// A glTF document holding `mesh` as one primitive, and its binary buffer
-/// (`buffers[0]` has no uri yet). Positions and normals are interleaved in
-/// one strided view. `index_size` is 1, 2 or 4 bytes, or `None` to write
-/// every triangle's vertices out in order, unindexed.
-fn encode(mesh: &MeshData, index_size: Option<usize>, with_normals: bool) -> (Value, Vec<u8>) {
+/// (`buffers[0]` has no uri yet). POSITION and the `attributes` named
+/// (of `ALL`) are interleaved in one strided view. `index_size` is 1, 2 or
+/// 4 bytes, or `None` to write every triangle's vertices out in order,
+/// unindexed.
+fn encode(mesh: &MeshData, index_size: Option<usize>, attributes: &[&str]) -> (Value, Vec<u8>) {
+    fn pick<T: Copy>(v: &[T], indices: &[u32]) -> Vec<T> {
+        indices.iter().filter_map(|&i| v.get(i as usize).copied()).collect()
+    }
     let mesh = match index_size {
         Some(_) => mesh.clone(),
-        None => {
-            let pick = |v: &[Vec3]| mesh.indices.iter().map(|&i| v[i as usize]).collect();
-            let count = mesh.indices.len() as u32;
-            MeshData { positions: pick(&mesh.positions), normals: pick(&mesh.normals), indices: (0..count).collect() }
-        }
+        None => MeshData {
+            positions: pick(&mesh.positions, &mesh.indices),
+            normals: pick(&mesh.normals, &mesh.indices),
+            uvs: pick(&mesh.uvs, &mesh.indices),
+            tangents: pick(&mesh.tangents, &mesh.indices),
+            indices: (0..mesh.indices.len() as u32).collect(),
+        },
     };
     let count = mesh.positions.len();
-    let (mut bin, stride) = match with_normals {
-        true => (mesh.vertex_bytes(), 24),
-        false => (bytemuck::cast_slice(&mesh.positions).to_vec(), 12),
-    };
+    fn rows<const N: usize>(v: &[[f32; N]]) -> Vec<Vec<f32>> {
+        v.iter().map(|e| e.to_vec()).collect()
+    }
+    // (name, glTF type, each element's floats)
+    let columns: Vec<(&str, &str, Vec<Vec<f32>>)> = [
+        ("POSITION", "VEC3", rows(&mesh.positions)),
+        ("NORMAL", "VEC3", rows(&mesh.normals)),
+        ("TEXCOORD_0", "VEC2", rows(&mesh.uvs)),
+        ("TANGENT", "VEC4", rows(&mesh.tangents)),
+    ]
+    .into_iter()
+    .filter(|(name, ..)| *name == "POSITION" || attributes.contains(name))
+    .collect();
+    let stride: usize = columns.iter().map(|(.., elements)| 4 * elements[0].len()).sum();
+    let mut bin = Vec::new();
+    for k in 0..count {
+        for (.., elements) in &columns {
+            bin.extend(elements[k].iter().flat_map(|f| f.to_le_bytes()));
+        }
+    }
     let (lo, hi) = mesh.bounds();
-    let mut attributes = json!({ "POSITION": 0 });
-    let mut accessors = vec![json!({
-        "bufferView": 0, "byteOffset": 0, "componentType": 5126, "count": count, "type": "VEC3", "min": lo, "max": hi
-    })];
-    if with_normals {
-        attributes["NORMAL"] = json!(1);
-        accessors.push(json!({ "bufferView": 0, "byteOffset": 12, "componentType": 5126, "count": count, "type": "VEC3" }));
+    let mut accessors = Vec::new();
+    let mut attribute_map = json!({});
+    let mut offset = 0;
+    for (name, type_, elements) in &columns {
+        attribute_map[*name] = json!(accessors.len());
+        let mut accessor = json!({ "bufferView": 0, "byteOffset": offset, "componentType": 5126, "count": count, "type": type_ });
+        if *name == "POSITION" {
+            (accessor["min"], accessor["max"]) = (json!(lo), json!(hi));
+        }
+        accessors.push(accessor);
+        offset += 4 * elements[0].len();
     }
     let mut views = vec![json!({ "buffer": 0, "byteOffset": 0, "byteLength": bin.len(), "byteStride": stride, "target": 34962 })];
-    let mut primitive = json!({ "attributes": attributes, "mode": 4 });
+    let mut primitive = json!({ "attributes": attribute_map, "mode": 4 });
     if let Some(size) = index_size {
         let start = bin.len();
         for &i in &mesh.indices {
@@ -208,8 +326,12 @@ fn assert_same_mesh(got: &MeshData, want: &MeshData) {
     assert_eq!((got.positions.len(), got.indices.len()), (want.positions.len(), want.indices.len()));
     assert_eq!(got.positions, want.positions);
     assert_eq!(got.indices, want.indices);
+    assert_eq!(got.uvs, want.uvs);
     for (g, w) in got.normals.iter().zip(&want.normals) {
         assert!(close(*g, *w, 1e-6), "{g:?} ≠ {w:?}");
+    }
+    for (g, w) in got.tangents.iter().zip(&want.tangents) {
+        assert!(close([g[0], g[1], g[2]], [w[0], w[1], w[2]], 1e-6) && g[3] == w[3], "{g:?} ≠ {w:?}");
     }
 }
 
@@ -263,7 +385,7 @@ fn bundled_torus_knot_loads_as_generated() {
     let want = torus_knot();
     let (gltf, bin) = (bundled("torus_knot.gltf"), bundled("torus_knot.bin"));
     if std::env::var_os("LOUPE_BLESS").is_some() {
-        let (mut json, bytes) = encode(&want, Some(2), true);
+        let (mut json, bytes) = encode(&want, Some(2), &["NORMAL"]);
         json["asset"]["generator"] = json!("loupe (server/src/mesh/tests.rs, torus_knot)");
         json["nodes"][0]["name"] = json!("torus_knot");
         json["meshes"][0]["name"] = json!("torus_knot");
@@ -327,20 +449,20 @@ fn files_without_a_scene_draw_every_node_tree_or_every_mesh() {
 
 #[test]
 fn glb_round_trip_with_u32_indices() {
-    let (json, bin) = encode(&sphere(), Some(4), true);
+    let (json, bin) = encode(&sphere(), Some(4), ALL);
     let got = load_one("sphere.glb", &to_glb(&json, &bin)).unwrap();
     assert_same_mesh(&got, &sphere());
 }
 
 #[test]
 fn external_bin_round_trip_with_u16_indices() {
-    let (json, bin) = encode(&cube(), Some(2), true);
+    let (json, bin) = encode(&cube(), Some(2), ALL);
     assert_same_mesh(&load_gltf_and_bin(json, &bin).unwrap(), &cube());
 }
 
 #[test]
 fn unindexed_primitives_are_indexed_in_order() {
-    let (json, bin) = encode(&cube(), None, true);
+    let (json, bin) = encode(&cube(), None, ALL);
     let got = load_gltf_and_bin(json, &bin).unwrap();
     assert_eq!((got.positions.len(), &got.indices), (36, &(0..36).collect::<Vec<u32>>()));
     assert_consistent(&got);
@@ -348,7 +470,7 @@ fn unindexed_primitives_are_indexed_in_order() {
 
 #[test]
 fn missing_normals_are_computed_smooth() {
-    let (json, bin) = encode(&sphere(), Some(2), false);
+    let (json, bin) = encode(&sphere(), Some(2), &[]);
     let got = load_gltf_and_bin(json, &bin).unwrap();
     assert_consistent(&got);
     for (p, n) in got.positions.iter().zip(&got.normals) {
@@ -369,8 +491,13 @@ fn assert_diag(d: &Diagnostic, code: Code, message: &str, file: &str, at: (u32, 
 /// the diagnostic must contain `message` and point at byte `k` of `needle`
 /// in the edited text.
 fn assert_edit_fails(from: &str, to: &str, message: &str, needle: &str, k: usize) {
-    assert!(NODES.contains(from), "{from:?} is not in the fixture");
-    let text = NODES.replacen(from, to, 1);
+    assert_fixture_edit_fails(NODES, from, to, message, needle, k);
+}
+
+/// `assert_edit_fails` on another fixture.
+fn assert_fixture_edit_fails(fixture: &str, from: &str, to: &str, message: &str, needle: &str, k: usize) {
+    assert!(fixture.contains(from), "{from:?} is not in the fixture");
+    let text = fixture.replacen(from, to, 1);
     let d = load_one("edited.gltf", text.as_bytes()).expect_err(message);
     assert_diag(&d, Code::Scene, message, "edited.gltf", line_col(&text, needle, k));
 }
@@ -516,12 +643,12 @@ fn required_compression_is_refused() {
 fn non_finite_positions_are_refused() {
     let mut m = plane();
     m.positions[2][1] = f32::NAN;
-    let (json, bin) = encode(&m, Some(1), true);
+    let (json, bin) = encode(&m, Some(1), &["NORMAL"]);
     let d = load_one("nan.glb", &to_glb(&json, &bin)).unwrap_err();
     let message = "accessors[0] (used as meshes[0].primitives[0].attributes[\"POSITION\"]) holds NaN in element 2";
     assert_diag(&d, Code::Scene, message, "nan.glb", (1, 1));
     m.positions[2][1] = f32::INFINITY;
-    let (json, bin) = encode(&m, Some(1), true);
+    let (json, bin) = encode(&m, Some(1), &["NORMAL"]);
     let d = load_gltf_and_bin(json, &bin).unwrap_err();
     assert!(d.message.contains("holds inf in element 2"), "{d}");
 }
@@ -530,7 +657,7 @@ fn non_finite_positions_are_refused() {
 fn out_of_range_indices_are_refused() {
     let mut m = plane();
     m.indices[4] = 9;
-    let (json, bin) = encode(&m, Some(2), true);
+    let (json, bin) = encode(&m, Some(2), &["NORMAL"]);
     let d = load_one("bad.glb", &to_glb(&json, &bin)).unwrap_err();
     let message = "meshes[0].primitives[0]: index 9 (element 4 of its indices) is out of range: the primitive has 4 vertices";
     assert_diag(&d, Code::Scene, message, "bad.glb", (1, 1));
@@ -549,7 +676,7 @@ fn size_limits_hold_across_instances() {
 
 #[test]
 fn broken_glb_files() {
-    let (json, bin) = encode(&cube(), Some(1), true);
+    let (json, bin) = encode(&cube(), Some(1), &["NORMAL"]);
     let good = to_glb(&json, &bin);
     let d = load_one("cut.glb", &good[..good.len() - 8]).unwrap_err();
     assert_diag(&d, Code::Scene, "header says the file is", "cut.glb", (1, 1));
@@ -567,7 +694,7 @@ fn broken_glb_files() {
 fn garbage_never_panics() {
     // Every prefix of a .gltf and of a .glb, and every byte of the .glb
     // flipped: each must load or fail with a diagnostic.
-    let (json, bin) = encode(&cube(), Some(2), true);
+    let (json, bin) = encode(&cube(), Some(2), &["NORMAL"]);
     let glb = to_glb(&json, &bin);
     for n in (0..NODES.len()).step_by(7) {
         let _ = load_one("cut.gltf", &NODES.as_bytes()[..n]);
@@ -578,4 +705,128 @@ fn garbage_never_panics() {
         flipped[n] ^= 0xA5;
         let _ = load_one("flipped.glb", &flipped);
     }
+}
+
+/// The fixture's first quad gives TEXCOORD_0 as floats and TANGENT; its
+/// second gives normalized unsigned bytes, mirrored in u, and no tangents:
+/// MikkTSpace's follow the mirror (−X, left-handed).
+#[test]
+fn texcoords_and_tangents_are_read() {
+    let m = load_one("textured.gltf", TEXTURED.as_bytes()).unwrap();
+    assert_consistent(&m);
+    assert_eq!((m.positions.len(), m.triangle_count()), (8, 4));
+    assert_eq!(m.uvs, [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.0, 0.0], [1.0, 0.0]]);
+    assert_eq!(m.tangents[..4], [[1.0, 0.0, 0.0, 1.0]; 4]);
+    for t in &m.tangents[4..] {
+        assert!(close([t[0], t[1], t[2]], [-1.0, 0.0, 0.0], 1e-6) && t[3] == -1.0, "{t:?}");
+    }
+    assert_tangents_follow_uvs(&m, 0.9999);
+}
+
+/// A mesh with UVs and no tangents gets MikkTSpace's, which on the sphere
+/// are close to its analytic ones (dP/du) away from the poles.
+#[test]
+fn missing_tangents_come_from_mikktspace() {
+    let want = sphere();
+    let (json, bin) = encode(&want, Some(2), &["NORMAL", "TEXCOORD_0"]);
+    let got = load_gltf_and_bin(json, &bin).unwrap();
+    assert_consistent(&got);
+    assert_tangents_follow_uvs(&got, 0.95);
+    for (i, (g, w)) in got.tangents.iter().zip(&want.tangents).enumerate() {
+        if want.positions[i][1].abs() < 0.99 {
+            let cos = dot([g[0], g[1], g[2]], [w[0], w[1], w[2]]);
+            // Seam vertices see the faces on one side only: within 6°.
+            assert!(cos > 0.995 && g[3] == w[3], "vertex {i}: {g:?} vs analytic {w:?}");
+        }
+    }
+}
+
+#[test]
+fn meshes_without_uvs_get_zero_uvs_and_perpendicular_tangents() {
+    let (json, bin) = encode(&cube(), Some(2), &["NORMAL"]);
+    let got = load_gltf_and_bin(json, &bin).unwrap();
+    assert_consistent(&got);
+    assert!(got.uvs.iter().all(|&uv| uv == [0.0, 0.0]));
+}
+
+/// UVs that span no area (all equal, or collapsed triangles among good
+/// ones), collapsed positions, and given tangents that are zero or along
+/// the normal: every tangent still unit and perpendicular, never NaN.
+#[test]
+fn degenerate_uvs_and_tangents_give_unit_tangents() {
+    let s = sphere();
+    let mut same = s.clone();
+    same.uvs = vec![[0.5, 0.5]; s.positions.len()];
+    let mut some = s.clone();
+    for uv in &mut some.uvs[..300] {
+        *uv = [0.0, 0.0];
+    }
+    let mut collapsed = s.clone();
+    for p in &mut collapsed.positions[200..400] {
+        *p = [0.0, 0.0, 0.0];
+    }
+    for (name, mut m) in [("equal uvs", same), ("some collapsed uvs", some), ("collapsed positions", collapsed)] {
+        m.tangents = super::tangents::mikktspace(&m.positions, &m.normals, &m.uvs, &m.indices);
+        assert!(m.tangents.iter().flatten().all(|c| c.is_finite()), "{name}");
+        assert_tangent_frames(&m);
+    }
+    for t in [[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 2.0, 1.0], [0.0, 0.0, -1.0, 0.0]] {
+        let got = super::tangents::given(t, [0.0, 0.0, 1.0]);
+        assert!((dot([got[0], got[1], got[2]], [got[0], got[1], got[2]]) - 1.0).abs() < 1e-6 && got[2] == 0.0, "{t:?} → {got:?}");
+        assert_eq!(got[3], 1.0, "w 0 reads as right-handed");
+    }
+}
+
+#[test]
+fn bad_texcoord_and_tangent_accessors_are_located() {
+    let fails = |from: &str, to: &str, message: &str, needle: &str| assert_fixture_edit_fails(TEXTURED, from, to, message, needle, 0);
+    let uvs = "{ \"name\": \"uvs\"";
+    let tangents = "{ \"name\": \"tangents\"";
+    fails(
+        "\"count\": 4, \"type\": \"VEC2\" }",
+        "\"count\": 4, \"type\": \"VEC3\" }",
+        "accessors[2], used as meshes[0].primitives[0].attributes[\"TEXCOORD_0\"], is VEC3 of FLOAT; it must be VEC2 of FLOAT or UNSIGNED_BYTE or UNSIGNED_SHORT",
+        uvs,
+    );
+    fails(
+        "\"bufferView\": 2, \"componentType\": 5126",
+        "\"bufferView\": 2, \"componentType\": 5125",
+        "is VEC2 of UNSIGNED_INT; it must be VEC2 of FLOAT or UNSIGNED_BYTE or UNSIGNED_SHORT",
+        uvs,
+    );
+    fails(
+        "\"normalized\": true, ",
+        "",
+        "accessors[5], used as meshes[0].primitives[1].attributes[\"TEXCOORD_0\"], holds UNSIGNED_BYTE that are not normalized",
+        "{ \"name\": \"mirrored uvs\"",
+    );
+    fails(
+        "\"count\": 4, \"type\": \"VEC4\"",
+        "\"count\": 4, \"type\": \"VEC3\"",
+        "accessors[3], used as meshes[0].primitives[0].attributes[\"TANGENT\"], is VEC3 of FLOAT; it must be VEC4 of FLOAT",
+        tangents,
+    );
+    fails(
+        "\"count\": 4, \"type\": \"VEC4\"",
+        "\"count\": 3, \"type\": \"VEC4\"",
+        "meshes[0].primitives[0] has 3 tangents for 4 positions",
+        "3 }, \"indices\"",
+    );
+    fails(
+        "\"byteOffset\": 128, \"byteLength\": 64",
+        "\"byteOffset\": 128, \"byteLength\": 60",
+        "accessors[3] reads 4 elements of 16 bytes every 16 from byte 0 of bufferViews[3], past its byteLength 60",
+        tangents,
+    );
+    let mut m = plane();
+    m.tangents[1][0] = f32::NAN;
+    let (json, bin) = encode(&m, Some(1), ALL);
+    let d = load_one("nan.glb", &to_glb(&json, &bin)).unwrap_err();
+    assert_diag(
+        &d,
+        Code::Scene,
+        "accessors[3] (used as meshes[0].primitives[0].attributes[\"TANGENT\"]) holds NaN in element 1",
+        "nan.glb",
+        (1, 1),
+    );
 }

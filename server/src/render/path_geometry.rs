@@ -6,8 +6,7 @@
 //!
 //! Layouts (mirroring `shaders/lib/bvh.wgsl` and `passes/path_trace.wgsl`):
 //! `nodes` and `triangles` as `crate::bvh` documents; `shading` per
-//! triangle in leaf order, three `vec4<f32>`: the vertices' world-space
-//! normals, with the material index in the first one's `w`.
+//! triangle in leaf order, one `Shading`.
 
 use std::sync::Arc;
 
@@ -15,6 +14,12 @@ use glam::Vec3;
 use wgpu::util::DeviceExt;
 
 use crate::bvh::{BuildStats, Bvh};
+
+/// One `Shading` of path_trace.wgsl, eight `vec4<f32>`: the three vertices'
+/// world-space normals (the material index in the first one's `w`), their
+/// world-space tangents (w: handedness), then their UVs (a and b in the
+/// seventh, c in the eighth's xy).
+pub type Shading = [[f32; 4]; 8];
 
 /// A world-space triangle and its `[object, primitive]`.
 pub type SourceTriangle = ([Vec3; 3], [u32; 2]);
@@ -36,12 +41,12 @@ pub struct PathGeometry {
 impl PathGeometry {
     /// Builds over `source`, or keeps `previous`'s hierarchy when it was
     /// built from the same triangles. `shade(ids)` gives each triangle's
-    /// three normals and material, in the hierarchy's order.
+    /// `Shading`, in the hierarchy's order.
     pub fn new(
         device: &wgpu::Device,
         source: Vec<SourceTriangle>,
         previous: Option<&PathGeometry>,
-        shade: impl Fn(&[[u32; 2]]) -> Vec<[[f32; 4]; 3]>,
+        shade: impl Fn(&[[u32; 2]]) -> Vec<Shading>,
     ) -> Self {
         let hierarchy = match previous {
             Some(p) if p.hierarchy.source == source => p.hierarchy.clone(),

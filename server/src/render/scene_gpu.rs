@@ -10,7 +10,7 @@ use glam::{EulerRot, Mat4, Quat, Vec3};
 use wgpu::util::DeviceExt;
 
 use super::denoise_weights::DenoiseWeights;
-use super::path_geometry::PathGeometry;
+use super::path_geometry::{PathGeometry, Shading};
 use crate::denoise::network::Network;
 use crate::material::Program;
 use crate::mesh::MeshData;
@@ -306,20 +306,30 @@ fn triangles_of(scene: &Scene, data: &[Arc<MeshData>], draws: &[usize]) -> Vec<(
 }
 
 /// Per triangle of `ids` (`[object, primitive]`), its vertices' world-space
-/// normals, the material index in the first one's `w`: what a path-traced
-/// hit shades with, interpolated as the raster interpolates them.
-fn world_shading(scene: &Scene, data: &[Arc<MeshData>], draws: &[usize], ids: &[[u32; 2]]) -> Vec<[[f32; 4]; 3]> {
-    let normal_matrices: Vec<Mat4> = scene.objects.iter().map(|o| model_matrix(o).inverse().transpose()).collect();
+/// normals and tangents and their UVs (`Shading`): what a path-traced hit
+/// shades with, interpolated as the raster interpolates them. Tangents move
+/// as geometry.wgsl's `world_tangent` moves them.
+fn world_shading(scene: &Scene, data: &[Arc<MeshData>], draws: &[usize], ids: &[[u32; 2]]) -> Vec<Shading> {
+    let models: Vec<Mat4> = scene.objects.iter().map(model_matrix).collect();
+    let normal_matrices: Vec<Mat4> = models.iter().map(|m| m.inverse().transpose()).collect();
     ids.iter()
         .map(|&[object, primitive]| {
             let (o, m) = (object as usize, &data[draws[object as usize]]);
             let material = scene.objects[o].material as f32;
-            let corner = |k: usize| {
-                let i = m.indices[3 * primitive as usize + k] as usize;
-                let n = normal_matrices[o].transform_vector3(Vec3::from(m.normals[i])).normalize_or_zero();
+            let vertex = |k: usize| m.indices[3 * primitive as usize + k] as usize;
+            let normal = |k: usize| {
+                let n = normal_matrices[o].transform_vector3(Vec3::from(m.normals[vertex(k)])).normalize_or_zero();
                 [n.x, n.y, n.z, if k == 0 { material } else { 0.0 }]
             };
-            [corner(0), corner(1), corner(2)]
+            let mirrored = models[o].determinant() < 0.0;
+            let tangent = |k: usize| {
+                let [x, y, z, w] = m.tangents[vertex(k)];
+                let t = models[o].transform_vector3(Vec3::new(x, y, z)).normalize_or_zero();
+                [t.x, t.y, t.z, if mirrored { -w } else { w }]
+            };
+            let uv = |k: usize| m.uvs[vertex(k)];
+            let [a, b, c] = [uv(0), uv(1), uv(2)];
+            [normal(0), normal(1), normal(2), tangent(0), tangent(1), tangent(2), [a[0], a[1], b[0], b[1]], [c[0], c[1], 0.0, 0.0]]
         })
         .collect()
 }
@@ -477,6 +487,34 @@ mod tests {
         let (eye, target) = (glam::Vec3::from(cam.position), glam::Vec3::from(cam.target));
         let hit = bvh.intersect(eye, (target - eye).normalize(), 1e-4, f32::INFINITY).expect("the camera looks at something");
         assert!(hit.t < (target - eye).length() * 2.0);
+    }
+
+    /// The path tracer's per-triangle data carries the raster's vertex
+    /// attributes: the UVs as they are, the tangents moved by the model
+    /// matrix and their handedness flipped by a mirroring scale, as
+    /// `world_tangent` in geometry.wgsl moves them.
+    #[test]
+    fn shading_carries_uvs_and_world_tangents() {
+        let s = crate::scene::parse(
+            "s.toml",
+            "[[materials]]\nname = \"m\"\n\
+             [[objects]]\nshape = \"plane\"\nmaterial = \"m\"\nrotation_deg = [0, 90, 0]\n\
+             [[objects]]\nshape = \"plane\"\nmaterial = \"m\"\nscale = [-1, 1, 1]\n",
+        )
+        .unwrap();
+        let (data, draws) = object_meshes(&s, &BTreeMap::new());
+        // The second triangle of each plane: vertices 0, 2, 3.
+        let shading = world_shading(&s, &data, &draws, &[[0, 1], [1, 1]]);
+        let plane = crate::mesh::plane();
+        // Turned a quarter about +Y, +X goes to −Z; mirrored in X, to −X.
+        for (sh, tangent, w) in [(&shading[0], Vec3::NEG_Z, 1.0), (&shading[1], Vec3::NEG_X, -1.0)] {
+            let uvs = [[sh[6][0], sh[6][1]], [sh[6][2], sh[6][3]], [sh[7][0], sh[7][1]]];
+            for k in 0..3 {
+                assert_eq!(uvs[k], plane.uvs[plane.indices[3 + k] as usize], "vertex {k}");
+                let (n, t) = (Vec3::from_slice(&sh[k][..3]), Vec3::from_slice(&sh[3 + k][..3]));
+                assert!(n.dot(t).abs() < 1e-6 && t.abs_diff_eq(tangent, 1e-6) && sh[3 + k][3] == w, "vertex {k}: {:?}", sh[3 + k]);
+            }
+        }
     }
 
     #[test]

@@ -580,6 +580,7 @@ mod tests {
         assert_eq!(meaning("gbuffer/normal"), ("normal", None));
         assert_eq!(meaning("gbuffer/albedo"), ("color", None));
         assert_eq!(meaning("gbuffer/material"), ("data", None));
+        assert_eq!(meaning("gbuffer/uv"), ("data", None));
         assert_eq!(meaning("tonemap/color"), ("color", None));
     }
 

@@ -235,6 +235,8 @@ choice!(
         Albedo = "albedo",
         Roughness = "roughness",
         Metallic = "metallic",
+        /// The G-buffer's UV, its fractional part in red and green.
+        Uv = "uv",
         Depth = "depth",
     }
 );

@@ -33,6 +33,7 @@ pub fn debug_view(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Hand
         DebugView::Albedo => (gb.albedo, 1),
         DebugView::Roughness => (gb.material, 2),
         DebugView::Metallic => (gb.material, 3),
+        DebugView::Uv => (gb.uv, 4),
         DebugView::Depth => (depth, 0),
     };
     let (near, far) = (scene.camera.near, scene.camera.far);

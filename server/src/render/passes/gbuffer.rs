@@ -7,10 +7,15 @@ use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Meaning, Handle, PipelineKey, TextureDesc};
 use crate::scene::Scene;
 
+/// The `uv` target's format: f32, so a texture's texel is exact at any UV
+/// range or tiling (f16 has 11 bits: a 4096² texture's texel at UV 1 would
+/// be lost).
+pub const UV: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+
 pub static GBUFFER: PipelineSpec = PipelineSpec {
     name: "geometry.gbuffer",
     shader: "geometry/gbuffer.wgsl",
-    stages: Stages::Mesh { vertex: "vs_main", fragment: Some("fs_main"), targets: &[HDR, HDR, HDR], depth: Depth::Equal },
+    stages: Stages::Mesh { vertex: "vs_main", fragment: Some("fs_main"), targets: &[HDR, HDR, HDR, UV], depth: Depth::Equal },
     groups: &[Group::always(0, &[VIEW, storage("objects", 1, ALL), MATERIAL_PARAMS, MATERIAL_INSTANCES])],
     defs: &[],
 };
@@ -20,6 +25,7 @@ pub struct GBuffer {
     pub normal: Handle,
     pub albedo: Handle,
     pub material: Handle,
+    pub uv: Handle,
 }
 
 pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle) -> GBuffer {
@@ -31,8 +37,9 @@ pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle) -> GBuffer {
         normal: p.create("normal", Meaning::Normal, d.clone(), Access::ColorTarget),
         albedo: p.create("albedo", Meaning::Color, d.clone(), Access::ColorTarget),
         material: p.create("material", Meaning::Data, d, Access::ColorTarget),
+        uv: p.create("uv", Meaning::Data, TextureDesc::d2(UV, scene.width, scene.height), Access::ColorTarget),
     };
-    let targets = [gb.normal, gb.albedo, gb.material];
+    let targets = [gb.normal, gb.albedo, gb.material, gb.uv];
     p.execute(move |ctx| {
         let s = ctx.scene;
         let [params, instances] = material_bindings(s);

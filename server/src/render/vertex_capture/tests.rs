@@ -122,7 +122,8 @@ impl Scene {
                 .concat()
             })
             .collect();
-        let vertices: Vec<f32> = positions.iter().flat_map(|p| [p.x, p.y, p.z, 0.0, 1.0, 0.0]).collect();
+        // Position, normal, UV, tangent: `MESH_VERTICES`.
+        let vertices: Vec<f32> = positions.iter().flat_map(|p| [p.x, p.y, p.z, 0.0, 1.0, 0.0, 0.5, 0.5, 1.0, 0.0, 0.0, 1.0]).collect();
         let init = |label, contents: &[u8], usage| {
             gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
         };

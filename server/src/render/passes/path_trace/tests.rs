@@ -504,7 +504,13 @@ fn degenerate_geometry_makes_no_nan_and_takes_no_light() {
     };
     let clean = write("clean.toml", stage(48, 32, &format!("{}{}{disc}", mesh("clean"), mesh("tilted"))));
     let mut degenerate = write("degenerate.toml", stage(48, 32, &format!("{}{}{disc}{speck}", mesh("degenerate"), mesh("tilted"))));
-    degenerate.meshes.insert("tilted.gltf".into(), Arc::new(MeshData { positions: tilted.to_vec(), normals: vec![[0.0; 3]; 3], indices: vec![0, 1, 2] }));
+    degenerate.meshes.insert("tilted.gltf".into(), Arc::new(MeshData {
+        positions: tilted.to_vec(),
+        normals: vec![[0.0; 3]; 3],
+        uvs: vec![[0.0; 2]; 3],
+        tangents: vec![[0.0; 4]; 3],
+        indices: vec![0, 1, 2],
+    }));
     let mut s = session(&clean);
     without_guard(&mut s);
     let want = assert_finite(&mut s, "clean", &COUNTS);
