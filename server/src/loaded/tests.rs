@@ -58,3 +58,64 @@ fn a_denoiser_without_weights_gets_the_bundled_network_for_its_mode() {
     // The two ranges are different networks: the choice is seen.
     assert!(network(Mode::Hdr) != network(Mode::Ldr));
 }
+
+/// A scene naming a material file: its definition and the instance's
+/// values (defaults, replaced by `params`); the file and what it imports
+/// are dependencies; each way the reference can be wrong is an error at
+/// the scene's line.
+#[test]
+fn material_files_are_compiled_and_their_references_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(dir.path().join("lib.mat"), "param r: float = 0.5 in [0, 1]\nmaterial base = slab { specular_roughness: r }\n").unwrap();
+    std::fs::write(
+        dir.path().join("paint.mat"),
+        "import \"lib.mat\"\nparam colour: color = rgb(0.5, 0.5, 0.5) in [0, 1]\nmaterial paint = layer(slab { base_color: grey(0.0) }, slab { base_color: colour })\nmaterial other = lib.base(r: 0.2)\n",
+    )
+    .unwrap();
+    let entry = |extra: &str| {
+        format!("[[materials]]\nname = \"m\"\nfile = \"paint.mat\"\n{extra}\n[[objects]]\nshape = \"sphere\"\nmaterial = \"m\"\n")
+    };
+    let write = |text: String| std::fs::write(&scene, text).unwrap();
+
+    write(entry("material = \"paint\"\nparams = { colour = [0.1, 0.2, 0.3] }"));
+    let loaded = load(&scene).unwrap_or_else(|d| panic!("{d}"));
+    let p = &loaded.materials;
+    assert_eq!(p.definitions.len(), 1);
+    assert_eq!(p.definitions[0].name, "paint");
+    assert_eq!(p.instances[0].values, vec![Value::Vec3([0.1, 0.2, 0.3])]);
+    for f in ["paint.mat", "lib.mat"] {
+        assert!(loaded.files.iter().any(|x| x.ends_with(f)), "{f} is a dependency: {:?}", loaded.files);
+    }
+
+    let error = |extra: &str| load_error(&scene, entry(extra));
+    let e = error("");
+    assert!(e.message.contains("defines 2 materials") && e.message.contains("paint, other"), "{e}");
+    assert_eq!(at(&e), (3, 8));
+    let e = error("material = \"nope\"");
+    assert!(e.message.contains("no material `nope`"), "{e}");
+    let e = error("material = \"paint\"\nparams = { color = [0.1, 0.2, 0.3] }");
+    assert!(e.message.contains("no parameter `color`") && e.message.contains("colour"), "{e}");
+    assert_eq!(at(&e), (5, 20));
+    let e = error("material = \"paint\"\nparams = { colour = 0.5 }");
+    assert!(e.message.contains("is a colour"), "{e}");
+    let e = error("material = \"paint\"\nparams = { colour = [0.1, 2.0, 0.3] }");
+    assert!(e.message.contains("[0, 1]") && e.message.contains('2'), "{e}");
+
+    // A broken material file: its own diagnostic, with the reference.
+    std::fs::write(dir.path().join("paint.mat"), "material paint = slab { base_color: 1 + }\n").unwrap();
+    let e = error("");
+    assert_eq!(e.code, Code::Material);
+    assert!(e.file().is_some_and(|f| f.ends_with("paint.mat")), "{e}");
+    assert!(e.labels.iter().any(|l| l.location.file.ends_with("s.toml") && l.location.line == 3), "{e:?}");
+    // A missing one: at the reference.
+    std::fs::remove_file(dir.path().join("paint.mat")).unwrap();
+    let e = error("");
+    assert!(e.message.contains("does not exist"), "{e}");
+    assert_eq!(at(&e), (3, 8));
+}
+
+fn load_error(scene: &Path, text: String) -> Diagnostic {
+    std::fs::write(scene, text).unwrap();
+    load(scene).unwrap_err()
+}

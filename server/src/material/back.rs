@@ -375,7 +375,9 @@ fn dispatch(w: &mut String, count: usize) {
     for i in 1..count {
         let _ = writeln!(w, "        case {i}u: {{ return material_{i}_init(header.y, n, v); }}");
     }
-    w.push_str("        default: { return material_0_init(header.y, n, v); }\n    }\n}\n\n");
+    // A scene without materials (media alone) still links: no closures.
+    let fallback = if count == 0 { "var none: Surface;\n            return none;" } else { "return material_0_init(header.y, n, v);" };
+    let _ = writeln!(w, "        default: {{\n            {fallback}\n        }}\n    }}\n}}\n");
 }
 
 /// The per-closure loops: the same text for every program, with the

@@ -199,3 +199,47 @@ fn a_mix_evaluates_as_its_weights_say() {
         }
     }
 }
+
+#[test]
+fn a_program_without_materials_links() {
+    // Media alone: the module still composes, and a surface has no closures.
+    let (file, [params, instances]) = module(&Program::default());
+    let gpu = shared();
+    let kernel = Kernel::with_modules(gpu, SHADER, "main", &[file]).unwrap();
+    let q = queries(1);
+    let out: Vec<Out> = kernel.run_bound(gpu, &q, q.len(), &[], &[&params, &instances]).unwrap();
+    assert!(out.iter().all(|o| o.material == [0.0; 4]), "no closures reflect nothing");
+}
+
+/// The generated WGSL of each file of the starter library, as the renderer
+/// binds it, against `tests/golden/materials/generated/FILE.wgsl`;
+/// `LOUPE_BLESS=1` rewrites them.
+#[test]
+fn the_starter_library_generates_its_golden_wgsl() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let golden = root.join("tests/golden/materials/generated");
+    let bless = std::env::var_os("LOUPE_BLESS").is_some();
+    let mut files: Vec<_> = std::fs::read_dir(root.join("scenes/materials")).unwrap().map(|e| e.unwrap().path()).collect();
+    files.sort();
+    assert!(files.len() >= 7, "{files:?}");
+    for path in files {
+        let loaded = super::front::load(&path).unwrap_or_else(|d| panic!("{d:?}"));
+        let definitions: Vec<Definition> = loaded.definitions.iter().map(|d| super::analysed(d).unwrap().def).collect();
+        // (Locations in the header are relative to the crate's directory,
+        // where cargo runs its tests.)
+        let text = back::wgsl(&definitions, Bindings::RENDERER);
+        let stem = path.file_stem().unwrap().to_string_lossy().into_owned();
+        let expected = golden.join(format!("{stem}.wgsl"));
+        if bless {
+            std::fs::create_dir_all(&golden).unwrap();
+            std::fs::write(&expected, &text).unwrap();
+            continue;
+        }
+        let want = std::fs::read_to_string(&expected).unwrap_or_else(|e| panic!("{}: {e} (LOUPE_BLESS=1 writes it)", expected.display()));
+        assert!(
+            want == text,
+            "{stem}: the generated WGSL changed; LOUPE_BLESS=1 cargo test -p loupe --lib material:: rewrites {}",
+            expected.display()
+        );
+    }
+}

@@ -77,7 +77,7 @@ fn the_gpu_traversal_hits_what_the_cpu_traversal_hits() {
     let gpu = crate::gpu::testing::device();
     let source = knot();
     let cpu = Bvh::build(&source);
-    let geometry = PathGeometry::new(&gpu.device, source.clone(), None, |ids| vec![[[0.0; 4]; 3]; ids.len()]);
+    let geometry = PathGeometry::new(&gpu.device, source.clone(), None, |ids| vec![[[0.0; 4]; 8]; ids.len()]);
     assert_eq!(geometry.stats(), &cpu.stats, "the uploaded hierarchy is this build");
     let (lo, hi) = (Vec3::from(cpu.nodes[0].min), Vec3::from(cpu.nodes[0].max));
     let centre = (lo + hi) * 0.5;
