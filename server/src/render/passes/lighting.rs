@@ -4,7 +4,7 @@
 //! GGX table of `render/dfg.rs`); the environment behind the geometry.
 
 use super::gbuffer::GBuffer;
-use super::{LIGHTS, MEDIA, SHADOW_GROUP, SHADOWS, TWO_TRIANGLES, VIEW, fullscreen_key};
+use super::{ENERGY_COMPENSATION, LIGHTS, MEDIA, SHADOW_GROUP, SHADOWS, TWO_TRIANGLES, VIEW, fullscreen_key};
 use crate::gpu::pipeline::{Group, HDR, PipelineSpec, Stages, depth_texture, texture};
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Meaning, Handle, TextureDesc};
@@ -28,7 +28,7 @@ pub static DEFERRED: PipelineSpec = PipelineSpec {
         Group::when(2, LIGHT_RECT, &[texture("ltc_matrix", 0), texture("ltc_amplitude", 1)]),
         Group::when(3, MEDIA_SHADOWS, MEDIA),
     ],
-    defs: &[TWO_TRIANGLES, SHADOWS, LIGHT_RECT, RECT_SAMPLED, MEDIA_SHADOWS],
+    defs: &[TWO_TRIANGLES, SHADOWS, LIGHT_RECT, RECT_SAMPLED, MEDIA_SHADOWS, ENERGY_COMPENSATION],
 };
 pub const SPECS: &[&PipelineSpec] = &[&DEFERRED];
 
@@ -36,7 +36,13 @@ pub fn lighting(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle
     let media = !scene.media.is_empty();
     let mut p = g.pass("lighting", PassKind::Raster);
     let sampled = scene.has_rect_lights() && scene.quality.rect_lights == RectLights::Sampled;
-    let defs = [(SHADOWS, shadows.is_some()), (LIGHT_RECT, ltc.is_some()), (RECT_SAMPLED, sampled), (MEDIA_SHADOWS, media)];
+    let defs = [
+        (SHADOWS, shadows.is_some()),
+        (LIGHT_RECT, ltc.is_some()),
+        (RECT_SAMPLED, sampled),
+        (MEDIA_SHADOWS, media),
+        (ENERGY_COMPENSATION, scene.quality.energy_compensation),
+    ];
     let key = p.pipeline(fullscreen_key(&DEFERRED, scene, &defs));
     let inputs = [("gbuffer_normal", gb.normal), ("gbuffer_albedo", gb.albedo), ("gbuffer_material", gb.material), ("depth", depth)];
     for (_, h) in inputs {

@@ -66,6 +66,10 @@ pub fn spec(name: &str) -> Option<&'static PipelineSpec> {
 
 /// The def that turns on shadow-map lookups (`lib/shadows.wgsl`).
 pub const SHADOWS: &str = "SHADOWS";
+/// The def that turns on the GGX lobes' energy compensation
+/// (`lib/multiscatter.wgsl`, `quality.energy_compensation`) in the lighting
+/// pass and the path tracer.
+pub const ENERGY_COMPENSATION: &str = "ENERGY_COMPENSATION";
 
 /// The camera, as `lib/view.wgsl` declares it.
 pub const VIEW: Binding = uniform("view", 0, ALL, sizes::VIEW);

@@ -6,7 +6,7 @@
 //! denoiser takes), and `samples`. The session forgets the history, so
 //! accumulation restarts, whenever the scene or its pipeline changes.
 
-use super::{LIGHTS, MEDIA, VIEW};
+use super::{ENERGY_COMPENSATION, LIGHTS, MEDIA, VIEW};
 use crate::gpu::pipeline::{COMPUTE, Group, HDR, PipelineSpec, Stages, sizes, storage, storage_rw, storage_texture, uniform};
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Meaning, Element, Handle, PipelineKey, TensorLayout, TextureDesc};
@@ -45,7 +45,7 @@ pub static PATH_TRACE: PipelineSpec = PipelineSpec {
         Group::always(1, &[storage("nodes", 0, COMPUTE), storage("triangles", 1, COMPUTE)]),
         Group::when(3, MEDIA_DEF, MEDIA),
     ],
-    defs: &[MEDIA_DEF],
+    defs: &[MEDIA_DEF, ENERGY_COMPENSATION],
 };
 pub const SPECS: &[&PipelineSpec] = &[&PATH_TRACE];
 
@@ -65,7 +65,8 @@ pub fn path_trace(g: &mut GraphBuilder, scene: &Scene) -> Option<Traced> {
     }
     let (w, h) = (scene.width, scene.height);
     let mut p = g.pass("path_trace", PassKind::Compute);
-    let key = p.pipeline(PipelineKey::new(&PATH_TRACE, &[(MEDIA_DEF, !scene.media.is_empty())]));
+    let defs = [(MEDIA_DEF, !scene.media.is_empty()), (ENERGY_COMPENSATION, scene.quality.energy_compensation)];
+    let key = p.pipeline(PipelineKey::new(&PATH_TRACE, &defs));
     let accumulated = p.history("accumulated", Meaning::Data, TensorLayout::new(&[("pixel", w * h), ("channel", ACCUMULATED)], Element::F32), Access::StorageWrite);
     let color = p.create("color", Meaning::Color, TextureDesc::d2(COLOR, w, h), Access::StorageWrite);
     let albedo = p.create("albedo", Meaning::Color, TextureDesc::d2(HDR, w, h), Access::StorageWrite);
