@@ -1,7 +1,7 @@
 //! `shaders/lib/multiscatter.wgsl` on the device: its fit of the GGX
 //! directional albedo against `render::dfg::albedo`, within the error its
 //! header states, and Turquin's factor. With `LOUPE_BLESS=1` the test
-//! refits the spline (least squares over a grid twice as fine as its
+//! refits the spline (least squares over a grid four times as fine as its
 //! intervals) and rewrites the control points in the WGSL first.
 
 use crate::gpu::testing::{self, Kernel};
@@ -47,7 +47,7 @@ fn basis(x: f64, y: f64) -> Vec<(usize, f64)> {
 /// normal equations (the B-spline basis is well conditioned) by Cholesky.
 fn fit() -> Vec<f64> {
     let n = POINTS * POINTS;
-    let grid = 2 * INTERVALS;
+    let grid = 4 * INTERVALS;
     let (mut ata, mut atb) = (vec![0.0; n * n], vec![0.0; n]);
     for a in 0..=grid {
         for b in 0..=grid {
