@@ -102,7 +102,7 @@ fn brdf_sample_draws_from_brdf_pdf() {
 }
 
 /// How far a white metal's compensated albedo may sit from 1: the fit's
-/// error (3e-3, `shaders/lib/multiscatter.wgsl`) and the quadrature's.
+/// error (2e-3, `shaders/lib/multiscatter.wgsl`) and the quadrature's.
 const FURNACE: f64 = 5e-3;
 
 /// The white furnace of the energy compensation: a white metal (f0 = 1)

@@ -100,29 +100,16 @@ pub enum NodeKind {
     Slab(Slab),
     /// Horizontal mix: `b` with weight `weight` (clamped to [0, 1]), `a`
     /// with `1 - weight`.
-    Mix {
-        a: NodeId,
-        b: NodeId,
-        weight: ExprId,
-    },
+    Mix { a: NodeId, b: NodeId, weight: ExprId },
     /// Vertical layering: `top` over `base`; the base is weighted by what
     /// the top lets through (`f = f_top + (1 - E_top) T f_base`), with the
     /// top's `thickness` and `transmission_color` giving `T`.
-    Layer {
-        top: NodeId,
-        base: NodeId,
-    },
+    Layer { top: NodeId, base: NodeId },
     /// `a` covering a fraction `weight` of the pixel; the rest is empty
     /// (transmits).
-    Coverage {
-        a: NodeId,
-        weight: ExprId,
-    },
+    Coverage { a: NodeId, weight: ExprId },
     /// `a + b`: not energy-conserving, and the report says so.
-    Add {
-        a: NodeId,
-        b: NodeId,
-    },
+    Add { a: NodeId, b: NodeId },
 }
 
 /// One slab of matter: an interface over a medium, with fuzz on top and
@@ -239,7 +226,9 @@ impl Field {
             Field::BaseColor => Value::Vec3([0.8; 3]),
             Field::BaseMetalness => Value::Float(0.0),
             Field::SpecularWeight => Value::Float(1.0),
-            Field::SpecularColor | Field::SpecularEdgeColor | Field::FuzzColor | Field::TransmissionColor => Value::Vec3([1.0; 3]),
+            Field::SpecularColor | Field::SpecularEdgeColor | Field::FuzzColor | Field::TransmissionColor => {
+                Value::Vec3([1.0; 3])
+            }
             Field::SpecularIor => Value::Float(1.5),
             Field::SpecularRoughness => Value::Float(0.5),
             Field::HazeWeight | Field::FuzzWeight | Field::EmissionLuminance | Field::Thickness => Value::Float(0.0),
