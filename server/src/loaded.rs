@@ -95,7 +95,11 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Pro
                     program.definitions.push(crate::material::shorthand(Location::file_start(&display_path(path))));
                     program.definitions.len() as u32 - 1
                 });
-                Instance { definition, values: vec![Value::Vec3(*base_color), Value::Float(*metallic), Value::Float(*roughness)] }
+                Instance {
+                    definition,
+                    values: vec![Value::Vec3(*base_color), Value::Float(*metallic), Value::Float(*roughness)],
+                    compensated: false,
+                }
             }
             MaterialSource::File { file, material, params, at } => {
                 let file_path = dir.join(file);
@@ -126,7 +130,8 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Pro
                         i
                     }
                 };
-                Instance { definition, values }
+                let compensated = scene.quality.energy_compensation && program.definitions[definition as usize].energy_compensation;
+                Instance { definition, values, compensated }
             }
         };
         program.instances.push(instance);

@@ -10,6 +10,7 @@
 //! fixtures the library makes public under its `testing` feature.
 
 mod chi2;
+mod furnace;
 mod half;
 mod inputs;
 mod sampling;
@@ -97,6 +98,39 @@ fn brdf_sample_draws_from_brdf_pdf() {
         "{} cases: worst p {worst_p:.3e} (threshold {threshold:.3e}), worst weight error {worst_weight:.1e}, largest weight {largest_weight:.3}, max albedo {max_albedo:.5}",
         cases.len()
     );
+    all_pass(&failures);
+}
+
+/// How far a white metal's compensated albedo may sit from 1: the fit's
+/// error (2e-3, `shaders/lib/multiscatter.wgsl`) and the quadrature's.
+const FURNACE: f64 = 5e-3;
+
+/// The white furnace of the energy compensation: a white metal (f0 = 1)
+/// returns 1 within `FURNACE`; without compensation, at most what single
+/// scattering keeps (`render::dfg::albedo`, + `ALBEDO_SLACK`), which fails
+/// if the compensation were on; a white dielectric (f0 = 0.04, with its
+/// diffuse) at most 1.
+#[test]
+fn energy_compensation_returns_a_white_metals_light() {
+    let gpu = testing::device();
+    let kernels = sampling::Kernels::new(&gpu);
+    let mut failures = Vec::new();
+    let (mut worst, mut max_dielectric) = (0.0f64, 0.0f64);
+    for case in furnace::cases(1.0) {
+        let albedo = furnace::compensated(&gpu, &case).albedo[0];
+        let single = sampling::density(&gpu, &kernels, &case).albedo[0];
+        let kept = loupe::render::dfg::albedo(case.cos_v, f64::from(case.roughness));
+        eprintln!("{case}: compensated {albedo:.5}, single scattering {single:.5} (E {kept:.5})");
+        failures.extend(at_most(&format!("{case}: compensated albedo against 1"), (albedo - 1.0).abs(), FURNACE).err());
+        failures.extend(at_most(&format!("{case}: uncompensated albedo against E = {kept}"), single, kept + ALBEDO_SLACK).err());
+        worst = worst.max((albedo - 1.0).abs());
+    }
+    for case in furnace::cases(0.0) {
+        let albedo = furnace::compensated(&gpu, &case).albedo[0];
+        failures.extend(at_most(&format!("{case}: compensated albedo"), albedo, 1.0 + ALBEDO_SLACK).err());
+        max_dielectric = max_dielectric.max(albedo);
+    }
+    eprintln!("furnace: white metal within {worst:.1e} of 1; white dielectric at most {max_dielectric:.5}");
     all_pass(&failures);
 }
 

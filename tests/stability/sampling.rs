@@ -125,9 +125,14 @@ pub struct Kernels {
 
 impl Kernels {
     pub fn new(gpu: &Gpu) -> Kernels {
-        let build = |body: &str| Kernel::new(gpu, &format!("{PRELUDE}{body}"), "main").unwrap_or_else(|e| panic!("{e}"));
-        Kernels { sample: build(SAMPLE), density: build(DENSITY), reciprocal: build(RECIPROCAL) }
+        Kernels { sample: kernel(gpu, SAMPLE), density: kernel(gpu, DENSITY), reciprocal: kernel(gpu, RECIPROCAL) }
     }
+}
+
+/// A kernel of `body` after the prelude (the view, material and operands
+/// it reads), entry point `main`.
+pub fn kernel(gpu: &Gpu, body: &str) -> Kernel {
+    Kernel::new(gpu, &format!("{PRELUDE}{body}"), "main").unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn header(case: &Case) -> [[f32; 4]; 2] {
@@ -169,6 +174,12 @@ pub struct Density {
 }
 
 pub fn density(gpu: &Gpu, k: &Kernels, case: &Case) -> Density {
+    quadrature(gpu, &k.density, case)
+}
+
+/// `density` of a kernel written as `DENSITY` is: (pdf, reflected light ×
+/// cosine) of direction `input[2 + i].xyz`.
+pub fn quadrature(gpu: &Gpu, kernel: &Kernel, case: &Case) -> Density {
     let (cos, phi) = axes(case);
     let mut points = Vec::with_capacity(cos.cells * phi.cells * GAUSS.len().pow(2));
     let mut weights = Vec::with_capacity(points.capacity());
@@ -187,7 +198,7 @@ pub fn density(gpu: &Gpu, k: &Kernels, case: &Case) -> Density {
             }
         }
     }
-    let out: Vec<[f32; 4]> = k.density.run(gpu, &input, points.len(), &[]).unwrap();
+    let out: Vec<[f32; 4]> = kernel.run(gpu, &input, points.len(), &[]).unwrap();
     let mut cells = vec![0.0; cos.cells * phi.cells];
     let mut albedo = [0.0; 3];
     for ((o, cell), w) in out.iter().zip(&points).zip(&weights) {

@@ -50,6 +50,9 @@ pub struct Features {
     pub emission: bool,
     /// A layer whose top absorbs (thickness and transmission colour).
     pub absorption: bool,
+    /// A definition with multiple-scattering compensation (applied where
+    /// its instance says so: `quality.energy_compensation`).
+    pub compensated: bool,
 }
 
 impl Features {
@@ -65,16 +68,26 @@ impl Features {
                 f.emission |= set(Field::EmissionLuminance);
                 f.absorption |= set(Field::Thickness) && set(Field::TransmissionColor);
             }
+            // Compensation scales F0 and F90 alike: F90 must be a field.
+            f.compensated |= d.energy_compensation;
+            f.edge |= d.energy_compensation;
         }
         f
     }
 
     /// The names of the features on, for reports and the module's header.
     pub fn names(self) -> Vec<&'static str> {
-        [(self.edge, "edge"), (self.haze, "haze"), (self.fuzz, "fuzz"), (self.emission, "emission"), (self.absorption, "absorption")]
-            .into_iter()
-            .filter_map(|(on, name)| on.then_some(name))
-            .collect()
+        [
+            (self.edge, "edge"),
+            (self.haze, "haze"),
+            (self.fuzz, "fuzz"),
+            (self.emission, "emission"),
+            (self.absorption, "absorption"),
+            (self.compensated, "energy compensation"),
+        ]
+        .into_iter()
+        .filter_map(|(on, name)| on.then_some(name))
+        .collect()
     }
 }
 
@@ -102,7 +115,7 @@ pub fn wgsl(definitions: &[Definition], bindings: Bindings) -> String {
     for (i, d) in definitions.iter().enumerate() {
         Init { d, w: &mut w, next: 0, temps: 0 }.function(i);
     }
-    dispatch(&mut w, definitions.len());
+    dispatch(&mut w, definitions.len(), features.compensated);
     w.push_str(&common(features));
     w
 }
@@ -120,10 +133,13 @@ fn header(w: &mut String, definitions: &[Definition], f: Features, max: usize, b
     if f.fuzz {
         w.push_str("#import loupe::fuzz::fuzz_cos\n");
     }
+    if f.compensated {
+        w.push_str("#import loupe::multiscatter::energy_compensation\n");
+    }
     w.push_str("#ifdef LIGHT_RECT\n#import loupe::ltc::ltc_rect\n#endif\n\n");
     let _ = writeln!(w, "// A float parameter in .x, a colour or vector in .xyz; each instance's block starts at its slot.");
     let _ = writeln!(w, "@group({}) @binding({}) var<storage, read> material_params: array<vec4<f32>>;", b.group, b.params);
-    let _ = writeln!(w, "// Per instance: x = definition, y = first parameter slot.");
+    let _ = writeln!(w, "// Per instance: x = definition, y = first parameter slot, z = 1: energy compensation on.");
     let _ = writeln!(w, "@group({}) @binding({}) var<storage, read> material_instances: array<vec4<u32>>;\n", b.group, b.instances);
     let _ = writeln!(w, "const MATERIAL_CLOSURES: u32 = {max}u;\n");
 }
@@ -369,15 +385,24 @@ fn value(v: Value) -> String {
     }
 }
 
-fn dispatch(w: &mut String, count: usize) {
+fn dispatch(w: &mut String, count: usize, compensated: bool) {
     w.push_str("// The surface of `instance` at a point with normal `n`, seen from `v`.\nfn material_init(instance: u32, n: vec3<f32>, v: vec3<f32>) -> Surface {\n");
-    w.push_str("    let header = material_instances[instance];\n    switch header.x {\n");
+    w.push_str("    let header = material_instances[instance];\n    var s: Surface;\n    switch header.x {\n");
     for i in 1..count {
-        let _ = writeln!(w, "        case {i}u: {{ return material_{i}_init(header.y, n, v); }}");
+        let _ = writeln!(w, "        case {i}u: {{ s = material_{i}_init(header.y, n, v); }}");
     }
     // A scene without materials (media alone) still links: no closures.
-    let fallback = if count == 0 { "var none: Surface;\n            return none;" } else { "return material_0_init(header.y, n, v);" };
-    let _ = writeln!(w, "        default: {{\n            {fallback}\n        }}\n    }}\n}}\n");
+    let fallback = if count == 0 { "" } else { "s = material_0_init(header.y, n, v);" };
+    let _ = writeln!(w, "        default: {{ {fallback} }}\n    }}");
+    if compensated {
+        // Once, after the operators, for every closure: one copy of the
+        // fit in the module, not one per slab (with one per slab,
+        // lavapipe's pipeline compiles took four times as long).
+        w.push_str(
+            "    if header.z != 0u {\n        let n_v = max(dot(n, v), 1e-4);\n        for (var k = 0u; k < s.count; k++) {\n            // Turquin's factor scales the whole lobe: F0 and F90 alike.\n            let e = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness);\n            s.closures[k].reflectance *= e;\n            s.closures[k].edge *= e;\n        }\n    }\n",
+        );
+    }
+    w.push_str("    return s;\n}\n\n");
 }
 
 /// The per-closure loops: the same text for every program, with the

@@ -32,6 +32,10 @@ pub struct Instance {
     pub definition: u32,
     /// One per `Definition::params`.
     pub values: Vec<Value>,
+    /// Whether its GGX lobes are compensated for multiple scattering: the
+    /// definition asks for it and `quality.energy_compensation` is on. A
+    /// value, so the setting rebuilds no pipeline.
+    pub compensated: bool,
 }
 
 impl Program {
@@ -47,7 +51,7 @@ impl Program {
         let mut params = Vec::new();
         let mut instances = Vec::new();
         for i in &self.instances {
-            instances.push([i.definition, params.len() as u32, 0, 0]);
+            instances.push([i.definition, params.len() as u32, u32::from(i.compensated), 0]);
             params.extend(i.values.iter().map(|v| match *v {
                 Value::Float(x) => [x, 0.0, 0.0, 0.0],
                 Value::Vec3([r, g, b]) => [r, g, b, 0.0],

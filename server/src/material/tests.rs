@@ -102,8 +102,11 @@ fn shorthand_program() -> Program {
     for base in [[0.0, 0.0, 0.0], [0.9, 0.5, 0.1], [1.0, 1.0, 1.0]] {
         for metallic in [0.0, 0.3, 1.0] {
             for roughness in [0.0, 0.05, 0.4, 1.0] {
-                instances
-                    .push(Instance { definition: 0, values: vec![Value::Vec3(base), Value::Float(metallic), Value::Float(roughness)] });
+                instances.push(Instance {
+                    definition: 0,
+                    values: vec![Value::Vec3(base), Value::Float(metallic), Value::Float(roughness)],
+                    compensated: false,
+                });
             }
         }
     }
@@ -182,7 +185,7 @@ fn a_mix_evaluates_as_its_weights_say() {
     };
     let program = Program {
         definitions: vec![only(&mix, 0), only(&mix, 1), mix],
-        instances: (0..3).map(|definition| Instance { definition, values: vec![] }).collect(),
+        instances: (0..3).map(|definition| Instance { definition, values: vec![], compensated: false }).collect(),
     };
     let (file, [params, instances]) = module(&program);
     let gpu = shared();

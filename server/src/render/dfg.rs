@@ -32,6 +32,9 @@ use std::sync::OnceLock;
 pub const SIZE: u32 = super::ltc::SIZE;
 pub const FORMAT: wgpu::TextureFormat = super::ltc::FORMAT;
 const SAMPLES: u32 = 1024;
+/// Samples of `albedo`: the energy compensation's fit is held to it at a
+/// few parts in 10⁴, below the table's 1024 points' noise at grazing views.
+const ALBEDO_SAMPLES: u32 = 16384;
 
 /// GGX alpha for a perceptual roughness, as `alpha` in brdf.wgsl.
 pub fn alpha(roughness: f64) -> f64 {
@@ -62,11 +65,23 @@ fn sample_h(u: (f64, f64), a: f64) -> [f64; 3] {
 
 /// `(scale, bias)` of f0 for one view angle and roughness.
 pub fn dfg(n_v: f64, roughness: f64) -> [f64; 2] {
+    integrate(n_v, roughness, SAMPLES)
+}
+
+/// The directional albedo `E(n·v, roughness)` of the specular with `F = 1`
+/// (`scale + bias`): what single scattering keeps of the light, the
+/// energy compensation's `E` (`shaders/lib/multiscatter.wgsl` fits it).
+pub fn albedo(n_v: f64, roughness: f64) -> f64 {
+    integrate(n_v, roughness, ALBEDO_SAMPLES).iter().sum()
+}
+
+/// `dfg` over `samples` Hammersley points.
+fn integrate(n_v: f64, roughness: f64, samples: u32) -> [f64; 2] {
     let a = alpha(roughness);
     let v = [(1.0 - n_v * n_v).max(0.0).sqrt(), 0.0, n_v];
     let mut sum = [0.0; 2];
-    for k in 0..SAMPLES {
-        let h = sample_h(hammersley(k, SAMPLES), a);
+    for k in 0..samples {
+        let h = sample_h(hammersley(k, samples), a);
         let v_h = v[0] * h[0] + v[2] * h[2];
         let n_l = 2.0 * v_h * h[2] - v[2];
         if n_l <= 0.0 || v_h <= 0.0 {
@@ -78,7 +93,7 @@ pub fn dfg(n_v: f64, roughness: f64) -> [f64; 2] {
         sum[0] += w * (1.0 - fc);
         sum[1] += w * fc;
     }
-    sum.map(|s| s / f64::from(SAMPLES))
+    sum.map(|s| s / f64::from(samples))
 }
 
 /// `k(roughness)`: the `n·l`-weighted mean of `l·r` over the GGX lobe

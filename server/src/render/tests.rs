@@ -1,5 +1,7 @@
 //! The shader library's modules the renderer's passes share, tested on
-//! the device: the BRDF's sampling and random numbers.
+//! the device: the BRDF's sampling, its energy compensation and random
+//! numbers.
 
 mod brdf;
+mod multiscatter;
 mod random;

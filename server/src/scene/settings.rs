@@ -462,6 +462,12 @@ settings! {
         /// How the raster integrates a rect light: linearly transformed
         /// cosines, or 16 × 16 points through the BRDF (the reference).
         rect_lights: RectLights = RectLights::Ltc, Choice(RectLights::NAMES), "Rect lights", affects ["ltc_tables", "lighting"], shown_when raster_rect;
+        /// Scale each GGX lobe by Turquin's factor for the light it loses to
+        /// multiple scattering (`shaders/lib/multiscatter.wgsl`), so a white
+        /// rough metal stays white. On, it applies to the materials of
+        /// `.mat` files only, never to the scene file's shorthand materials
+        /// (today's scenes keep their look); off, it applies nowhere.
+        energy_compensation: bool = true, Toggle, "Energy compensation (multiple scattering)", affects ["lighting", "path_trace"];
         /// Ray-march steps per pixel through the media.
         volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volume_march", "volumes"], shown_when raster_media;
         /// Steps of the march toward each light (self-shadowing), from each
