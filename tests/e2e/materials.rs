@@ -82,7 +82,7 @@ fn a_material_edit_reaches_the_frame_and_a_broken_one_keeps_the_last_good_until_
     assert_eq!(frame_png(&s), hazy, "the last good material still renders");
 
     // Fixed: the error clears and the frame is the good one again.
-    p.save_by_rename(MATERIAL, &paint("rgb(0.2, 0.45, 0.8)", ""));
+    p.save_by_rename(MATERIAL, paint("rgb(0.2, 0.45, 0.8)", ""));
     s.wait_for("the error to clear", LIMIT, || s.get_json("/api/diagnostics")["diagnostics"].as_array()?.is_empty().then_some(()));
     s.wait_for("the first frame's image again", LIMIT, || (frame_png(&s) == blue).then_some(()));
 }

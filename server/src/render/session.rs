@@ -548,6 +548,19 @@ fn output_summary(graph: &Graph, h: super::resource::Handle, camera: &Camera) ->
     }
 }
 
+/// Puts `program`'s `loupe::material` module into `lib` (generated, never
+/// on disk; it sits among the shaders as `material::back::DISPLAY`).
+/// Returns whether the library's text of it changed.
+pub fn material_module(lib: &mut Library, shader_root: &Path, program: &Program) -> bool {
+    let text = program.wgsl();
+    if lib.get(material::back::DISPLAY).is_some_and(|f| *f.text == *text) {
+        return false;
+    }
+    let display = material::back::DISPLAY.to_owned();
+    lib.upsert(SourceFile::from_text(display, shader_root.join(material::back::DISPLAY), text.into()));
+    true
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -686,17 +699,4 @@ mod tests {
         let missing: BTreeSet<String> = s.missing().iter().map(PipelineKey::label).collect();
         assert_eq!(missing, one, "switching back builds them again");
     }
-}
-
-/// Puts `program`'s `loupe::material` module into `lib` (generated, never
-/// on disk; it sits among the shaders as `material::back::DISPLAY`).
-/// Returns whether the library's text of it changed.
-pub fn material_module(lib: &mut Library, shader_root: &Path, program: &Program) -> bool {
-    let text = program.wgsl();
-    if lib.get(material::back::DISPLAY).is_some_and(|f| *f.text == *text) {
-        return false;
-    }
-    let display = material::back::DISPLAY.to_owned();
-    lib.upsert(SourceFile::from_text(display, shader_root.join(material::back::DISPLAY), text.into()));
-    true
 }
