@@ -85,12 +85,13 @@ impl PathGeometry {
     }
 }
 
-/// A read-only storage buffer; an empty one gets a zeroed element, as
-/// bindings may not be empty.
+/// A read-only storage buffer; an empty one gets zeroed room for one
+/// element of the largest kind (`Shading`), as bindings may not be empty
+/// and a dispatch checks a binding against the shader's element size.
 fn storage(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
     let padded;
     let contents = if bytes.is_empty() {
-        padded = vec![0u8; 48];
+        padded = vec![0u8; size_of::<Shading>()];
         &padded
     } else {
         bytes

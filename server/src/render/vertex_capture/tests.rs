@@ -27,8 +27,16 @@ fn compose(lib: &Library, key: &PipelineKey) -> naga::Module {
     pipelines::compose(&NagaOil, lib, key, &display).unwrap_or_else(|e| panic!("{e:?}")).composed.module
 }
 
+/// The shader tree, with the material module of the scene file's
+/// shorthand (the G-buffer imports it).
 fn repository_library() -> Library {
-    library::read_tree(&shader_root()).unwrap()
+    let mut lib = library::read_tree(&shader_root()).unwrap();
+    let program = crate::material::Program {
+        definitions: vec![crate::material::shorthand(crate::diag::Location::file_start("test.toml"))],
+        instances: Vec::new(),
+    };
+    crate::render::session::material_module(&mut lib, &shader_root(), &program);
+    lib
 }
 
 /// The G-buffer pipeline's key and a capture of its vertex stage,
