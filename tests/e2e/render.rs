@@ -537,9 +537,9 @@ fn sphere_uv(x: u32, y: u32, size: u32) -> [f32; 2] {
 /// sphere, up to its tessellation.
 #[test]
 fn the_uv_debug_view_shows_where_each_pixel_sits_on_the_sphere() {
-    let p = Project::empty("render-uv");
-    p.write("uv.toml", UV_SCENE);
-    let (run, report) = render_at(&p, "uv.toml", "64x64", &[]);
+    let p = Project::copy_of_repo("render-uv");
+    p.write("scenes/uv.toml", UV_SCENE);
+    let (run, report) = render_at(&p, "scenes/uv.toml", "64x64", &[]);
     run.code(0);
     let r = report.expect("report.json written");
     let gbuffer = r["passes"].as_array().unwrap().iter().find(|p| p["name"] == "gbuffer").unwrap();

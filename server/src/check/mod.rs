@@ -119,7 +119,11 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
         .filter_map(|(_, l)| l.as_ref())
         .flat_map(|l| l.materials.definitions.iter())
         .chain(materials.iter().flat_map(|(_, d)| d.iter()));
-    crate::render::session::material_module(&mut lib, &opts.shader_root, &project_materials(definitions));
+    // Only a tree that imports the module gets it: someone else's WGSL is
+    // checked as it is.
+    if lib.files().any(|f| f.imports.iter().any(|(m, _)| m == crate::material::back::IMPORT_PATH)) {
+        crate::render::session::material_module(&mut lib, &opts.shader_root, &project_materials(definitions));
+    }
     let specs_by_file = specs_by_display(&lib, &shader_root);
 
     // The device first: without a capability list, sources are judged by

@@ -12,7 +12,7 @@ use notify::EventKind;
 use notify::event::{AccessKind, AccessMode, CreateKind, ModifyKind, RemoveKind, RenameMode};
 
 /// Whether `path` names a file the daemon cares about: `.wgsl`, `.toml`
-/// (scenes, materials), `.gltf`, `.glb`, `.bin` — and not an editor's
+/// (scenes), `.mat` (materials), `.gltf`, `.glb`, `.bin` — and not an editor's
 /// temporary or backup file (`*.swp`, `*.swx`, `*~`, `4913`, `.#*`, `*.tmp`,
 /// or any name starting with `.`). Looks at the file name only.
 pub fn is_source_file(path: &Path) -> bool {
@@ -24,7 +24,7 @@ pub fn is_source_file(path: &Path) -> bool {
         return false;
     }
     match Path::new(name).extension().and_then(|e| e.to_str()) {
-        Some(ext) => ["wgsl", "toml", "gltf", "glb", "bin"].iter().any(|want| ext.eq_ignore_ascii_case(want)),
+        Some(ext) => ["wgsl", "toml", "mat", "gltf", "glb", "bin"].iter().any(|want| ext.eq_ignore_ascii_case(want)),
         None => false,
     }
 }

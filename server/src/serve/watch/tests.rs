@@ -109,7 +109,7 @@ impl Session {
 
 #[test]
 fn source_file_names() {
-    for yes in ["a.wgsl", "dir/b.WGSL", "scene.toml", "m.gltf", "m.glb", "m.bin", "x.y.wgsl"] {
+    for yes in ["a.wgsl", "dir/b.WGSL", "scene.toml", "paint.mat", "m.gltf", "m.glb", "m.bin", "x.y.wgsl"] {
         assert!(is_source_file(Path::new(yes)), "{yes}");
     }
     for no in [
