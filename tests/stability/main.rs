@@ -106,23 +106,18 @@ fn brdf_sample_draws_from_brdf_pdf() {
 const FURNACE: f64 = 5e-3;
 
 /// The white furnace of the energy compensation: a white metal (f0 = 1)
-/// returns 1 within `FURNACE`; without compensation, at most what single
-/// scattering keeps (`render::dfg::albedo`, + `ALBEDO_SLACK`), which fails
-/// if the compensation were on; a white dielectric (f0 = 0.04, with its
-/// diffuse) at most 1.
+/// returns 1 within `FURNACE` (uncompensated it keeps only
+/// `render::dfg::albedo`: 0.31 at roughness 1 seen head-on); a white
+/// dielectric (f0 = 0.04, with its diffuse) at most 1.
 #[test]
 fn energy_compensation_returns_a_white_metals_light() {
     let gpu = testing::device();
-    let kernels = sampling::Kernels::new(&gpu);
     let mut failures = Vec::new();
     let (mut worst, mut max_dielectric) = (0.0f64, 0.0f64);
     for case in furnace::cases(1.0) {
         let albedo = furnace::compensated(&gpu, &case).albedo[0];
-        let single = sampling::density(&gpu, &kernels, &case).albedo[0];
-        let kept = loupe::render::dfg::albedo(case.cos_v, f64::from(case.roughness));
-        eprintln!("{case}: compensated {albedo:.5}, single scattering {single:.5} (E {kept:.5})");
+        eprintln!("{case}: compensated {albedo:.5}");
         failures.extend(at_most(&format!("{case}: compensated albedo against 1"), (albedo - 1.0).abs(), FURNACE).err());
-        failures.extend(at_most(&format!("{case}: uncompensated albedo against E = {kept}"), single, kept + ALBEDO_SLACK).err());
         worst = worst.max((albedo - 1.0).abs());
     }
     for case in furnace::cases(0.0) {
