@@ -85,8 +85,10 @@ pub fn materials_of(scene: &Scene) -> Arc<Program> {
 fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Program, Diagnostic> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut program = Program { definitions: Vec::new(), instances: Vec::new() };
-    // Definition index by (material file, material name).
+    // Definition index by (material file, material name); each file read
+    // once, however many entries name it.
     let mut known: BTreeMap<(PathBuf, String), u32> = BTreeMap::new();
+    let mut read: BTreeMap<PathBuf, crate::material::front::Loaded> = BTreeMap::new();
     let mut shorthand = None;
     for m in &scene.materials {
         let instance = match &m.source {
@@ -103,7 +105,10 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Pro
             }
             MaterialSource::File { file, material, params, at } => {
                 let file_path = dir.join(file);
-                let loaded = material_file(&file_path, at, files)?;
+                if !read.contains_key(&file_path) {
+                    read.insert(file_path.clone(), material_file(&file_path, at, files)?);
+                }
+                let loaded = &read[&file_path];
                 let chosen = match material {
                     Some(name) => loaded.definitions.iter().find(|d| &d.name == name),
                     None if loaded.definitions.len() == 1 => loaded.definitions.first(),
@@ -187,10 +192,7 @@ fn param_values(d: &Definition, params: &[(String, ParamValue, Location)], mater
             (Type::Float, _) => return Err(error(format!("`{name}` is a number"))),
             (_, _) => return Err(error(format!("`{name}` is a colour: three numbers, [r, g, b]"))),
         };
-        let parts: Vec<f32> = match v {
-            Value::Float(x) => vec![x],
-            Value::Vec3(c) => c.to_vec(),
-        };
+        let parts = crate::material::analysis::channels(v);
         if let Some(bad) = parts.iter().find(|x| !x.is_finite()) {
             return Err(error(format!("`{name}` must be finite, not {bad}")));
         }
