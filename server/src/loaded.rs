@@ -5,10 +5,12 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::Instant;
 
 use crate::denoise::network::{Inputs, Network};
 use crate::denoise::{bundled, tza};
 use crate::diag::{Code, Diagnostic, Location, display_path};
+use crate::material::report::Report;
 use crate::material::tree::{Definition, Type, Value};
 use crate::material::{Instance, Program};
 use crate::mesh::MeshData;
@@ -26,6 +28,9 @@ pub struct Loaded {
     /// The scene's materials compiled: the definitions its
     /// `[[materials]]` use and one instance per entry.
     pub materials: Arc<Program>,
+    /// The compile report of each of `materials`' definitions, in their
+    /// order, with the size of its generated WGSL and its compile time.
+    pub reports: Arc<Vec<Report>>,
     /// Every file this scene was read from (itself, its meshes, material
     /// files and weights), for the watcher's dependency graph.
     pub files: Vec<PathBuf>,
@@ -41,9 +46,9 @@ pub fn load(path: &Path) -> Result<Loaded, Diagnostic> {
 pub fn load_with(path: &Path, overrides: &Overrides) -> Result<Loaded, Diagnostic> {
     let scene::Read { scene, meshes, mut files } = scene::load_with(path, overrides)?;
     let dir = path.parent().unwrap_or(Path::new("."));
-    let materials = Arc::new(materials(path, &scene, &mut files)?);
+    let (materials, reports) = materials(path, &scene, &mut files)?;
     let denoiser = scene.denoiser.as_ref().map(|d| network(dir, d, &mut files)).transpose()?.map(Arc::new);
-    Ok(Loaded { scene, meshes, materials, denoiser, files })
+    Ok(Loaded { scene, meshes, materials: Arc::new(materials), reports: Arc::new(reports), denoiser, files })
 }
 
 /// The network of `[denoiser]`: without `weights`, the bundled one for its
@@ -75,26 +80,34 @@ fn network(dir: &Path, d: &Denoiser, files: &mut Vec<PathBuf>) -> Result<Network
 /// relative to the working directory; a failure panics.
 #[cfg(any(test, feature = "testing"))]
 pub fn materials_of(scene: &Scene) -> Arc<Program> {
-    Arc::new(materials(Path::new("scene.toml"), scene, &mut Vec::new()).unwrap_or_else(|d| panic!("{d}")))
+    Arc::new(materials(Path::new("scene.toml"), scene, &mut Vec::new()).unwrap_or_else(|d| panic!("{d}")).0)
 }
 
 /// The scene's materials compiled: the shorthand's one definition (when
 /// any entry uses it) and each material file's, once each. A material file
 /// and its imports join the scene's dependencies; a bad one is its own
-/// diagnostic with the scene line that names it as a second label.
-fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Program, Diagnostic> {
+/// diagnostic with the scene line that names it as a second label. Each
+/// definition's report comes with it (`compiled`).
+fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<(Program, Vec<Report>), Diagnostic> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut program = Program { definitions: Vec::new(), instances: Vec::new() };
+    let mut reports = Vec::new();
     // Definition index by (material file, material name); each file read
-    // once, however many entries name it.
+    // once, however many entries name it, with how long parsing took.
     let mut known: BTreeMap<(PathBuf, String), u32> = BTreeMap::new();
-    let mut read: BTreeMap<PathBuf, crate::material::front::Loaded> = BTreeMap::new();
+    let mut read: BTreeMap<PathBuf, (crate::material::front::Loaded, f64)> = BTreeMap::new();
     let mut shorthand = None;
     for m in &scene.materials {
         let instance = match &m.source {
             MaterialSource::Shorthand { base_color, metallic, roughness } => {
                 let definition = *shorthand.get_or_insert_with(|| {
-                    program.definitions.push(crate::material::shorthand(Location::file_start(&display_path(path))));
+                    let start = Instant::now();
+                    let def = crate::material::shorthand(Location::file_start(&display_path(path)));
+                    // The module keeps the shorthand as written (it renders
+                    // what loupe rendered before materials); the report is
+                    // of its analysis, which finds nothing to fold.
+                    reports.push(compiled(crate::material::analysis::analyse(&def), start, 0.0).1);
+                    program.definitions.push(def);
                     program.definitions.len() as u32 - 1
                 });
                 Instance {
@@ -106,9 +119,11 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Pro
             MaterialSource::File { file, material, params, at } => {
                 let file_path = dir.join(file);
                 if !read.contains_key(&file_path) {
-                    read.insert(file_path.clone(), material_file(&file_path, at, files)?);
+                    let start = Instant::now();
+                    let loaded = material_file(&file_path, at, files)?;
+                    read.insert(file_path.clone(), (loaded, start.elapsed().as_secs_f64() * 1e3));
                 }
-                let loaded = &read[&file_path];
+                let (loaded, parse_ms) = &read[&file_path];
                 let chosen = match material {
                     Some(name) => loaded.definitions.iter().find(|d| &d.name == name),
                     None if loaded.definitions.len() == 1 => loaded.definitions.first(),
@@ -128,8 +143,11 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Pro
                 let definition = match known.get(&key) {
                     Some(&i) => i,
                     None => {
+                        let start = Instant::now();
                         let analysed = crate::material::analysed(d).map_err(|ds| first_of(ds, at))?;
-                        program.definitions.push(analysed.def);
+                        let (def, report) = compiled(analysed, start, *parse_ms);
+                        program.definitions.push(def);
+                        reports.push(report);
                         let i = program.definitions.len() as u32 - 1;
                         known.insert(key, i);
                         i
@@ -141,7 +159,19 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Pro
         };
         program.instances.push(instance);
     }
-    Ok(program)
+    Ok((program, reports))
+}
+
+/// An analysed definition and its report, whose WGSL size is that of the
+/// module generated for it alone (its `init` with the shared loops) and
+/// whose compile time runs from `start` (before the analysis) through the
+/// back end, plus `parse_ms`, the time its file took to parse.
+fn compiled(analysis: crate::material::analysis::Analysis, start: Instant, parse_ms: f64) -> (Definition, Report) {
+    let mut report = Report::new(&analysis, crate::render::passes::gbuffer::BYTES_PER_PIXEL);
+    let wgsl = crate::material::back::wgsl(std::slice::from_ref(&analysis.def), crate::material::back::Bindings::RENDERER);
+    report.wgsl_bytes = Some(wgsl.len());
+    report.compile_ms = Some(parse_ms + start.elapsed().as_secs_f64() * 1e3);
+    (analysis.def, report)
 }
 
 /// A material file and its imports, read and lowered; every file read

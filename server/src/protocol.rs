@@ -251,6 +251,56 @@ pub enum ServerEvent {
     /// A frame's quad statistics (also `GET /api/quads`), for every frame
     /// while some client asks for them (`quad_statistics`).
     Quads(QuadReport),
+    /// The scene's materials and their compile reports (also `GET
+    /// /api/materials`), whenever the scene is (re)installed: a material
+    /// file or scene edit, or an override.
+    Materials(MaterialsReport),
+}
+
+/// `GET /api/materials`: the scene's material instances, one per
+/// `[[materials]]` entry in order (the G-buffer's material index), and the
+/// compile report of each definition they use.
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct MaterialsReport {
+    pub scene: String,
+    pub materials: Vec<MaterialEntry>,
+    /// By definition id (`MaterialEntry::definition`).
+    pub definitions: Vec<crate::material::report::Report>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct MaterialEntry {
+    /// The entry's index in the scene, as the G-buffer stores it.
+    pub index: u32,
+    /// The entry's `name`.
+    pub name: String,
+    /// The material file as the scene writes it; `null` for the shorthand.
+    pub file: Option<String>,
+    /// The definition's name (`shorthand` for the scene file's own).
+    pub material: String,
+    pub definition: u32,
+    pub params: Vec<MaterialParam>,
+}
+
+/// One parameter of an instance: its value and how a control edits it.
+#[derive(Debug, Clone, Serialize)]
+pub struct MaterialParam {
+    pub name: String,
+    /// The scene override path that sets it (`materials[2].params.NAME`;
+    /// the shorthand's `materials[0].roughness`).
+    pub path: String,
+    /// `float`, `color` or `vec3`.
+    #[serde(rename = "type")]
+    pub ty: &'static str,
+    /// A number, or `[r, g, b]` for a colour or vector.
+    pub value: serde_json::Value,
+    /// The definition's default, in the same form.
+    pub default: serde_json::Value,
+    /// Inclusive bounds of each component; `null`: any finite value.
+    pub min: Option<f32>,
+    pub max: Option<f32>,
+    pub unit: Option<String>,
+    pub doc: Option<String>,
 }
 
 /// The subscription member that stands for quad statistics in a client's

@@ -119,3 +119,40 @@ fn load_error(scene: &Path, text: String) -> Diagnostic {
     std::fs::write(scene, text).unwrap();
     load(scene).unwrap_err()
 }
+
+/// A browser control's override of a material parameter: the path
+/// `materials[I].params.NAME` reaches the instance's values whether the
+/// entry has an inline `params` table, a `[materials.params]` sub-table or
+/// none yet, and a value of the wrong type or out of range is refused with
+/// the parameter named. Each definition has its compile report.
+#[test]
+fn material_parameter_overrides_reach_the_instance_and_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(
+        dir.path().join("m.mat"),
+        "param tint: color = rgb(0.5, 0.5, 0.5) in [0, 1]\nparam rough: float = 0.5 in [0, 1]\nmaterial m = slab { base_color: tint, specular_roughness: rough }\n",
+    )
+    .unwrap();
+    let entry = |params: &str| {
+        format!("[[materials]]\nname = \"m\"\nfile = \"m.mat\"\n{params}\n[[objects]]\nshape = \"sphere\"\nmaterial = \"m\"\n")
+    };
+    let set = |path: &str, value: crate::scene::settings::Value| Overrides::from([(path.to_owned(), value)]);
+    let rough = |v: f64| set("materials[0].params.rough", crate::scene::settings::Value::Float(v));
+    for params in ["params = { tint = [0.1, 0.2, 0.3] }", "[materials.params]\ntint = [0.1, 0.2, 0.3]", ""] {
+        std::fs::write(&scene, entry(params)).unwrap();
+        let loaded = load_with(&scene, &rough(0.25)).unwrap_or_else(|d| panic!("{params}: {d}"));
+        assert_eq!(loaded.materials.instances[0].values[1], Value::Float(0.25), "{params}");
+        let tint = set("materials[0].params.tint", crate::scene::settings::Value::List(vec![0.0, 1.0, 0.5]));
+        let loaded = load_with(&scene, &tint).unwrap_or_else(|d| panic!("{params}: {d}"));
+        assert_eq!(loaded.materials.instances[0].values[0], Value::Vec3([0.0, 1.0, 0.5]), "{params}");
+        let e = load_with(&scene, &rough(1.5)).unwrap_err();
+        assert!(e.message.contains("`rough` must lie in [0, 1], not 1.5"), "{params}: {e}");
+        let e = load_with(&scene, &set("materials[0].params.tint", crate::scene::settings::Value::Float(0.5))).unwrap_err();
+        assert!(e.message.contains("`tint` is a colour"), "{params}: {e}");
+    }
+    let report = &load(&scene).unwrap().reports[0];
+    assert_eq!(report.material, "m");
+    assert_eq!(report.closures, [0]);
+    assert!(report.wgsl_bytes.is_some_and(|b| b > 1000) && report.compile_ms.is_some_and(|ms| ms > 0.0), "{report:?}");
+}

@@ -48,6 +48,7 @@ fn toml_value(v: &Value) -> TomlValue {
         Value::Int(i) => (*i).into(),
         Value::Float(f) => (*f).into(),
         Value::Text(s) => s.as_str().into(),
+        Value::List(l) => l.iter().copied().collect::<toml_edit::Array>().into(),
     }
 }
 
@@ -60,24 +61,20 @@ pub fn apply(text: &str, overrides: &Overrides) -> Result<String, String> {
         // rest are checked when the scene is read.
         let segs = parse_path(path)?;
         settings::find(path).map_or(Ok(()), |s| s.check(value)).map_err(|e| format!("{path}: {e}"))?;
-        set(doc.as_table_mut(), &segs, value).map_err(|e| format!("{path}: {e}"))?;
+        set(doc.as_table_mut(), &segs, value, false).map_err(|e| format!("{path}: {e}"))?;
     }
     Ok(doc.to_string())
 }
 
-fn set(table: &mut Table, path: &[Seg], value: &Value) -> Result<(), String> {
+/// Sets `path` below `table`; `in_entry`: `table` is an entry of an array
+/// of tables (`[[materials]]`), where a missing table is written inline
+/// (`params = { roughness = 0.3 }`), as such entries write them.
+fn set(table: &mut Table, path: &[Seg], value: &Value, in_entry: bool) -> Result<(), String> {
     let Some((Seg::Key(key), rest)) = path.split_first() else { return Err("a path starts with a key".into()) };
     if rest.is_empty() {
-        let mut new = toml_value(value);
+        let new = toml_value(value);
         match table.get_mut(key) {
-            Some(Item::Value(old)) => {
-                // JSON has one number type: a whole number set where the file
-                // has a float stays a float (`1.0`, not `1`).
-                if let (TomlValue::Float(_), Value::Int(i)) = (&*old, value) {
-                    new = (*i as f64).into();
-                }
-                replace(old, new);
-            }
+            Some(Item::Value(old)) => replace_number(old, new, value),
             Some(_) => return Err(format!("`{key}` is a table, not a value")),
             None => {
                 table.insert(key, Item::Value(new));
@@ -88,23 +85,47 @@ fn set(table: &mut Table, path: &[Seg], value: &Value) -> Result<(), String> {
     match (rest.first(), table.get_mut(key)) {
         (Some(Seg::Index(i)), Some(Item::ArrayOfTables(a))) => {
             let t = a.get_mut(*i).ok_or_else(|| format!("`{key}` has no entry {i}"))?;
-            set(t, &rest[1..], value)
+            set(t, &rest[1..], value, true)
         }
         (Some(Seg::Index(i)), Some(Item::Value(TomlValue::Array(a)))) if rest.len() == 1 => {
             let slot = a.get_mut(*i).ok_or_else(|| format!("`{key}` has no element {i}"))?;
             replace(slot, toml_value(value));
             Ok(())
         }
-        (Some(Seg::Key(_)), Some(Item::Table(t))) => set(t, rest, value),
+        (Some(Seg::Key(name)), Some(Item::Value(TomlValue::InlineTable(t)))) if rest.len() == 1 => {
+            match t.get_mut(name) {
+                Some(old) => replace_number(old, toml_value(value), value),
+                None => {
+                    t.insert(name, toml_value(value));
+                }
+            }
+            Ok(())
+        }
+        (Some(Seg::Key(name)), None) if in_entry && rest.len() == 1 => {
+            let mut t = toml_edit::InlineTable::new();
+            t.insert(name, toml_value(value));
+            table.insert(key, Item::Value(t.into()));
+            Ok(())
+        }
+        (Some(Seg::Key(_)), Some(Item::Table(t))) => set(t, rest, value, false),
         (Some(Seg::Key(_)), None) => {
             let mut t = Table::new();
             t.set_implicit(false);
             table.insert(key, Item::Table(t));
             let Some(Item::Table(t)) = table.get_mut(key) else { unreachable!("inserted above") };
-            set(t, rest, value)
+            set(t, rest, value, false)
         }
         _ => Err(format!("`{key}` does not have that shape")),
     }
+}
+
+/// `replace`, but a whole number set where the file has a float stays a
+/// float (`1.0`, not `1`): JSON has one number type.
+fn replace_number(old: &mut TomlValue, mut new: TomlValue, value: &Value) {
+    if let (TomlValue::Float(_), Value::Int(i)) = (&*old, value) {
+        new = (*i as f64).into();
+    }
+    replace(old, new);
 }
 
 /// Puts `new` in `old`'s place with `old`'s comment and spacing. A
@@ -286,6 +307,31 @@ mod tests {
         o.insert("post.two_triangles".into(), Value::Bool(true));
         let kept = without_file_values(o, &file);
         assert_eq!(kept.keys().collect::<Vec<_>>(), ["post.two_triangles"]);
+    }
+
+    /// A material parameter's path reaches an inline `params` table (its
+    /// layout kept), a `[materials.params]` sub-table, or an entry with
+    /// none yet (written inline); a colour is an array.
+    #[test]
+    fn material_parameters_are_set_in_any_params_table() {
+        let entry = |params: &str| {
+            format!("# lib\n[[materials]]\nname = \"a\"\n\n[[materials]]\nname = \"b\" # second\nfile = \"m.mat\"\n{params}")
+        };
+        let mut o = Overrides::new();
+        o.insert("materials[1].params.rough".into(), Value::Int(1));
+        o.insert("materials[1].params.tint".into(), Value::List(vec![0.5, 0.25, 1.0]));
+        let out = apply(&entry("params = { rough = 0.5, other = 2.0 } # p\n"), &o).unwrap();
+        assert!(
+            out.ends_with("name = \"b\" # second\nfile = \"m.mat\"\nparams = { rough = 1.0, other = 2.0 , tint = [0.5, 0.25, 1.0] } # p\n"),
+            "{out}"
+        );
+        let out = apply(&entry("\n[materials.params]\nrough = 0.5 # r\n"), &o).unwrap();
+        assert!(out.ends_with("[materials.params]\nrough = 1.0 # r\ntint = [0.5, 0.25, 1.0]\n"), "{out}");
+        let out = apply(&entry(""), &o).unwrap();
+        assert!(out.ends_with("file = \"m.mat\"\nparams = { rough = 1, tint = [0.5, 0.25, 1.0] }\n"), "{out}");
+        assert!(out.starts_with("# lib\n[[materials]]\nname = \"a\"\n"), "{out}");
+        o.insert("materials[2].params.rough".into(), Value::Float(1.0));
+        assert_eq!(apply(&entry(""), &o).unwrap_err(), "materials[2].params.rough: `materials` has no entry 2");
     }
 
     #[test]

@@ -18,6 +18,8 @@ pub enum Value {
     Int(i64),
     Float(f64),
     Text(String),
+    /// A colour or vector: a material parameter's `[r, g, b]`.
+    List(Vec<f64>),
 }
 
 /// As TOML writes it (`true`, `2`, `1.5`, `"aces"`), for messages.
@@ -28,6 +30,7 @@ impl std::fmt::Display for Value {
             Value::Int(i) => write!(f, "{i}"),
             Value::Float(x) => write!(f, "{x:?}"),
             Value::Text(t) => write!(f, "{t:?}"),
+            Value::List(l) => write!(f, "[{}]", l.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ")),
         }
     }
 }

@@ -9,6 +9,7 @@ pub mod daemon;
 pub mod event;
 pub mod http;
 pub mod inbox;
+pub mod materials;
 pub mod shared;
 pub mod watch;
 

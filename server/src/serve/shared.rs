@@ -9,7 +9,7 @@ use tokio::sync::{broadcast, watch};
 
 use super::inbox::Clients;
 use crate::diag::Diagnostic;
-use crate::protocol::{ControlsReport, Encoding, NanReport, PassInfo, PipelineInfo, QuadReport, ServerEvent, Status};
+use crate::protocol::{ControlsReport, Encoding, MaterialsReport, NanReport, PassInfo, PipelineInfo, QuadReport, ServerEvent, Status};
 use crate::render::capture::{CapturedImage, CapturedTensor};
 
 /// How many events a slow WebSocket client may fall behind before it
@@ -51,6 +51,9 @@ pub struct Shared {
     /// hashes them: which results are this scene's, and current.
     pub measured: RwLock<crate::tradeoffs::Provenance>,
     pub controls: RwLock<ControlsReport>,
+    /// The newest good scene's materials: a broken material file leaves
+    /// the last good report here (the diagnostics carry the error).
+    pub materials: RwLock<Arc<MaterialsReport>>,
 }
 
 /// One encoding of one image, made once by whichever client asks first.
@@ -110,6 +113,7 @@ impl Shared {
             tradeoffs,
             measured: RwLock::new(Default::default()),
             controls: RwLock::new(ControlsReport::default()),
+            materials: RwLock::new(Arc::default()),
         })
     }
 

@@ -77,6 +77,7 @@ pub fn denoise(gpu: Gpu, shader_root: &Path, net: Arc<Network>, images: &TileIma
         scene: scene.clone(),
         meshes: Default::default(),
         materials: Default::default(),
+        reports: Default::default(),
         denoiser: Some(net.clone()),
         files: vec![],
     };

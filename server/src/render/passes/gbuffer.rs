@@ -12,6 +12,12 @@ use crate::scene::Scene;
 /// be lost).
 pub const UV: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
+/// What the G-buffer spends per pixel, on every material alike: normal,
+/// albedo and material at `HDR` (8 bytes each) and `uv` at `UV` (8); the
+/// compile report's `gbuffer_bytes_per_pixel`. A test checks it against
+/// the formats.
+pub const BYTES_PER_PIXEL: u32 = 32;
+
 pub static GBUFFER: PipelineSpec = PipelineSpec {
     name: "geometry.gbuffer",
     shader: "geometry/gbuffer.wgsl",
@@ -47,4 +53,14 @@ pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle) -> GBuffer {
         ctx.draw_objects(&key, &bindings, &targets, Some(DepthTarget { texture: depth, layer: 0, clear: false }));
     });
     gb
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn bytes_per_pixel_are_the_targets_formats() {
+        let targets = [super::HDR, super::HDR, super::HDR, super::UV];
+        let sum: u32 = targets.iter().map(|f| f.block_copy_size(None).expect("a colour format")).sum();
+        assert_eq!(super::BYTES_PER_PIXEL, sum);
+    }
 }

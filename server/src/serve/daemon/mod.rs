@@ -145,6 +145,7 @@ impl Daemon {
                         scene: empty,
                         meshes: Default::default(),
                         materials: Default::default(),
+                        reports: Default::default(),
                         denoiser: None,
                         files: vec![config.scene_path.clone()],
                     },
@@ -160,6 +161,7 @@ impl Daemon {
             .expect("compile worker threads");
         let wall_clock = timing::wall_clock_needed(gpu.is_cpu(), gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY));
         config.watch_files.set(&loaded.files);
+        shared::write(&shared.materials, publish::materials_report(&config.scene_path, &loaded));
         let mut session =
             Session::new(gpu, &config.shader_root, lib, &loaded).with_options(FrameOptions { nan_watch: true, ..FrameOptions::default() });
         session.set_serial(wall_clock);
@@ -370,6 +372,7 @@ impl Daemon {
     /// generated material module).
     fn install_scene(&mut self, l: crate::loaded::Loaded) -> BTreeSet<String> {
         self.trace_stale = true;
+        self.publish_materials(&l);
         let changed = self.session.set_scene(&l);
         self.scene_files = l.files;
         self.config.watch_files.set(&self.scene_files);

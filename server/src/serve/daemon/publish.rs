@@ -3,10 +3,12 @@
 //! and whenever the state they describe changes.
 
 use std::collections::BTreeMap;
+use std::path::Path;
 use std::sync::Arc;
 
 use super::{Daemon, InFlight, RenderMode};
 use crate::diag::{Diagnostic, Severity, display_path};
+use crate::loaded::Loaded;
 use crate::protocol::{
     self, ControlsReport, PassInfo, PassQuadReport, PassStatus, PassTime, PassTiming, QuadReport, ReloadTimings, ServerEvent, Status,
 };
@@ -15,6 +17,10 @@ use crate::render::passes;
 use crate::render::session::PassState;
 use crate::scene;
 use crate::serve::shared::{self, FrameImages};
+
+pub(super) fn materials_report(scene_path: &Path, loaded: &Loaded) -> Arc<protocol::MaterialsReport> {
+    Arc::new(crate::serve::materials::report(&display_path(scene_path), loaded))
+}
 
 impl Daemon {
     pub(super) fn publish_controls(&self) {
@@ -25,6 +31,15 @@ impl Daemon {
         };
         shared::write(&self.shared.controls, report.clone());
         self.shared.publish(ServerEvent::Controls(report));
+    }
+
+    /// The materials of a scene being installed (`/api/materials` and the
+    /// `materials` event). Only a good scene gets here, so a broken
+    /// material file leaves the last good report.
+    pub(super) fn publish_materials(&self, loaded: &Loaded) {
+        let report = materials_report(&self.config.scene_path, loaded);
+        shared::write(&self.shared.materials, report.clone());
+        self.shared.publish(ServerEvent::Materials((*report).clone()));
     }
 
     /// What `/api/tradeoffs` compares results with: after the scene file

@@ -1,6 +1,6 @@
-//! The JSON API (status, passes, pipelines, diagnostics, controls), the
-//! capture list and downloads, and the requests that go to the daemon
-//! (reload, save, the debug API's lose-device).
+//! The JSON API (status, passes, pipelines, diagnostics, controls,
+//! materials), the capture list and downloads, and the requests that go to
+//! the daemon (reload, save, the debug API's lose-device).
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -184,6 +184,10 @@ pub(super) async fn reload(State(st): State<Arc<AppState>>) -> Response {
 
 pub(super) async fn controls(State(st): State<Arc<AppState>>) -> Response {
     json(&read(&st.shared.controls))
+}
+
+pub(super) async fn materials(State(st): State<Arc<AppState>>) -> Response {
+    json(&*read(&st.shared.materials))
 }
 
 pub(super) async fn save_scene(State(st): State<Arc<AppState>>) -> Response {

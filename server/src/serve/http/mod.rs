@@ -135,6 +135,7 @@ fn build(shared: Arc<Shared>, allowed_hosts: Vec<String>) -> (Router, watch::Sen
         .route("/api/sources/{*path}", get(sources::source))
         .route("/api/reload", post(api::reload))
         .route("/api/controls", get(api::controls))
+        .route("/api/materials", get(api::materials))
         .route("/api/tradeoffs", get(tradeoffs::results))
         .route("/api/tradeoffs/points/{file}", get(tradeoffs::point))
         .route("/api/scene/save", post(api::save_scene))

@@ -1,0 +1,65 @@
+//! The materials report (`GET /api/materials`, the `materials` event): the
+//! scene's material instances with their parameters, each saying which
+//! scene override path sets it, beside their definitions' compile reports.
+
+use crate::loaded::Loaded;
+use crate::material::tree::{Param, Type, Value};
+use crate::protocol::{MaterialEntry, MaterialParam, MaterialsReport};
+use crate::scene::MaterialSource;
+
+/// The report of `loaded`'s materials; `scene` is the scene file as shown.
+pub fn report(scene: &str, loaded: &Loaded) -> MaterialsReport {
+    let program = &loaded.materials;
+    let materials = loaded
+        .scene
+        .materials
+        .iter()
+        .zip(&program.instances)
+        .enumerate()
+        .map(|(i, (m, instance))| {
+            let def = &program.definitions[instance.definition as usize];
+            // The shorthand's parameters are the entry's own keys; a
+            // material file's live in its `params` table.
+            let (file, prefix) = match &m.source {
+                MaterialSource::Shorthand { .. } => (None, format!("materials[{i}]")),
+                MaterialSource::File { file, .. } => (Some(file.clone()), format!("materials[{i}].params")),
+            };
+            let params = def.params.iter().zip(&instance.values).map(|(p, v)| param(p, *v, &prefix)).collect();
+            MaterialEntry {
+                index: i as u32,
+                name: m.name.clone(),
+                file,
+                material: def.name.clone(),
+                definition: instance.definition,
+                params,
+            }
+        })
+        .collect();
+    MaterialsReport { scene: scene.to_owned(), materials, definitions: loaded.reports.to_vec() }
+}
+
+fn param(p: &Param, value: Value, prefix: &str) -> MaterialParam {
+    let ty = match p.ty {
+        Type::Float => "float",
+        Type::Color => "color",
+        Type::Vec3 => "vec3",
+    };
+    MaterialParam {
+        name: p.name.clone(),
+        path: format!("{prefix}.{}", p.name),
+        ty,
+        value: json(value),
+        default: json(p.default),
+        min: p.range.map(|r| r.0),
+        max: p.range.map(|r| r.1),
+        unit: p.unit.clone(),
+        doc: p.doc.clone(),
+    }
+}
+
+fn json(v: Value) -> serde_json::Value {
+    match v {
+        Value::Float(x) => x.into(),
+        Value::Vec3(c) => c.to_vec().into(),
+    }
+}
