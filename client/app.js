@@ -36,6 +36,7 @@ import { Inspector } from './inspector.js';
 import { LiveFrame } from './live.js';
 import { TensorView } from './tensor.js';
 import { ControlsPanel } from './controls.js';
+import { MaterialsPanel } from './materials.js';
 import { QuadView } from './quads.js';
 import { PathView, TRACED } from './path.js';
 import { TradeoffsView } from './tradeoffs.js';
@@ -356,6 +357,7 @@ function applyPipelines(list) {
 const refetchStatus = latestOnly(api.status, fetched('status', applyStatus), fetchFailed('status'));
 const refetchPasses = latestOnly(api.passes, fetched('passes', applyPasses), fetchFailed('passes'));
 const refetchPipelines = latestOnly(api.pipelines, fetched('pipelines', applyPipelines), fetchFailed('pipelines'));
+const refetchMaterials = latestOnly(() => api.getJson('/api/materials'), fetched('materials', (r) => materials.apply(r)), fetchFailed('materials'));
 const refetchControls = latestOnly(() => api.getJson('/api/controls'), fetched('controls', applyControls), fetchFailed('controls'));
 const refetchDiagnostics = latestOnly(
   api.diagnostics,
@@ -373,6 +375,7 @@ const resyncAll = coalesce(() => {
   refetchPipelines();
   refetchDiagnostics();
   refetchControls();
+  refetchMaterials();
   loadCaptures();
 });
 const refetchCapturesSoon = coalesce(() => loadCaptures(), 100);
@@ -424,6 +427,9 @@ function onEvent(ev) {
   switch (ev.type) {
     case 'controls':
       applyControls(ev);
+      break;
+    case 'materials':
+      materials.apply(ev);
       break;
     case 'hello':
       state.protocol = ev.protocol;
@@ -513,6 +519,7 @@ function onBinary(hdr, bytes) {
   else if (hdr.kind === 'capture') {
     inspector.onCapture(hdr, bytes);
     pathView.onCapture(hdr, bytes);
+    materials.onCapture(hdr, bytes);
   }
 }
 
@@ -597,6 +604,11 @@ bindShortcuts(inspector);
 
 const controls = new ControlsPanel($('scene-panel'), (message) => conn.send(message));
 
+// ---- materials: tree, report, parameters; the pinned pixel's material -----
+
+const materials = new MaterialsPanel({ send: (message) => conn.send(message), want: (wanted) => conn?.want('materials', wanted) });
+inspector.onPin = (p, a) => materials.pin(p, a && { width: a.width, height: a.height });
+
 // ---- renderer switch, samples, path − raster -----------------------------
 
 const pathView = new PathView({
@@ -673,7 +685,9 @@ window.loupe = {
   valueText: (x, y, which = 'a') => inspector.valueAt(x, y, which)?.map(String) ?? null,
   /** Display RGBA8 at (x, y) after exposure, range, channel and overlays. */
   displayedAt: (x, y, which) => inspector.displayedAt(x, y, which),
-  /** Puts the readout on pixel (x, y), as the mouse would. */
+  /** Centres and pins pixel (x, y), as a click does. */
+  pin: (x, y) => inspector.goTo(x, y),
+    /** Puts the readout on pixel (x, y), as the mouse would. */
   hover: (x, y) => inspector.hoverPixel(x, y),
   /** Compare mode 'off' | 'split' | 'diff' against B ('last_good', 'raster_reference' or 'pass/output'). */
   compare: (mode, b = 'last_good') => {

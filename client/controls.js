@@ -70,39 +70,47 @@ export class ControlsPanel {
     this.status.textContent = error ? `could not save ${file}: ${error}` : `saved to ${file}`;
   }
 
-  /** The typed entry beside slider `c`, sending through `send`. */
-  entry(c, send) {
-    const entry = el('input', { type: 'text', inputmode: 'decimal', class: 'num entry', 'data-entry': c.path, 'aria-label': `${c.label}, ${rangeText(c)}` });
-    const message = el('span', { class: 'entry-error', role: 'alert', hidden: true });
-    entry.addEventListener('change', () => {
-      const read = parseEntry(entry.value, c);
-      message.hidden = read.error === undefined;
-      message.textContent = read.error ?? '';
-      entry.toggleAttribute('aria-invalid', read.error !== undefined);
-      if (read.error === undefined) send(read.value);
-    });
-    return [entry, el('span', { class: 'range', text: rangeText(c) }), message];
-  }
-
   row(c) {
-    const send = (value) => this.send({ type: 'set_override', path: c.path, value });
-    let input;
-    if (c.kind === 'slider') {
-      const integer = Number.isInteger(c.step) && Number.isInteger(c.min);
-      input = el('input', { type: 'range', min: c.min, max: c.max, step: c.step, 'data-path': c.path });
-      input.addEventListener('change', () => send(integer ? Math.round(Number(input.value)) : Number(input.value)));
-      input.addEventListener('input', () => {
-        input.parentElement.querySelector('[data-entry]').value = input.value;
-      });
-    } else if (c.kind === 'toggle') {
-      input = el('input', { type: 'checkbox', 'data-path': c.path });
-      input.addEventListener('change', () => send(input.checked));
-    } else {
-      input = el('select', { 'data-path': c.path }, ...c.options.map((o) => el('option', { value: o }, o)));
-      input.addEventListener('change', () => send(input.value));
-    }
-    // The passes a control changes, on hover: what to watch in the pass list.
-    const affects = Array.isArray(c.affects) && c.affects.length ? `affects: ${c.affects.join(', ')}` : null;
-    return el('label', { class: 'control', title: affects }, el('span', { class: 'control-label', text: c.label }), input, c.kind === 'slider' ? this.entry(c, send) : null);
+    return controlRow(c, (value) => this.send({ type: 'set_override', path: c.path, value }));
   }
+}
+
+/**
+ * One control's row: a slider with its typed entry, a toggle or a choice,
+ * `c` a control as `/api/controls` gives it; `send(value)` sends a new
+ * value. The materials panel builds its parameters' rows with it too.
+ */
+export function controlRow(c, send) {
+  let input;
+  if (c.kind === 'slider') {
+    const integer = Number.isInteger(c.step) && Number.isInteger(c.min);
+    input = el('input', { type: 'range', min: c.min, max: c.max, step: c.step, 'data-path': c.path });
+    input.addEventListener('change', () => send(integer ? Math.round(Number(input.value)) : Number(input.value)));
+    input.addEventListener('input', () => {
+      input.parentElement.querySelector('[data-entry]').value = input.value;
+    });
+  } else if (c.kind === 'toggle') {
+    input = el('input', { type: 'checkbox', 'data-path': c.path });
+    input.addEventListener('change', () => send(input.checked));
+  } else {
+    input = el('select', { 'data-path': c.path }, ...c.options.map((o) => el('option', { value: o }, o)));
+    input.addEventListener('change', () => send(input.value));
+  }
+  // The passes a control changes, on hover: what to watch in the pass list.
+  const affects = Array.isArray(c.affects) && c.affects.length ? `affects: ${c.affects.join(', ')}` : null;
+  return el('label', { class: 'control', title: c.title ?? affects }, el('span', { class: 'control-label', text: c.label }), input, c.kind === 'slider' ? entry(c, send) : null);
+}
+
+/** The typed entry beside slider `c`, sending through `send`. */
+function entry(c, send) {
+  const input = el('input', { type: 'text', inputmode: 'decimal', class: 'num entry', 'data-entry': c.path, 'aria-label': `${c.label}, ${rangeText(c)}` });
+  const message = el('span', { class: 'entry-error', role: 'alert', hidden: true });
+  input.addEventListener('change', () => {
+    const read = parseEntry(input.value, c);
+    message.hidden = read.error === undefined;
+    message.textContent = read.error ?? '';
+    input.toggleAttribute('aria-invalid', read.error !== undefined);
+    if (read.error === undefined) send(read.value);
+  });
+  return [input, el('span', { class: 'range', text: rangeText(c) }), message];
 }

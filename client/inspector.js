@@ -112,6 +112,7 @@ export class Inspector {
       inside: (p) => this.inside(p),
       setHover: (p) => this.setHover(p),
       selected: () => {
+        this.onPin?.(this.view.pinned, this.a);
         this.refreshReadout();
         this.draw();
       },
@@ -678,6 +679,7 @@ export class Inspector {
     const { w, h } = this.cssSize();
     this.view.centreOn(x, y, w, h, 16);
     this.view.pinned = { x, y };
+    this.onPin?.(this.view.pinned, this.a);
     this.refreshReadout();
     this.draw();
   }

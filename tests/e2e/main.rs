@@ -6,6 +6,7 @@ mod check;
 mod denoise;
 mod golden;
 mod materials;
+mod materials_api;
 mod no_adapter;
 mod protocol;
 mod recipe;

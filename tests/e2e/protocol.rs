@@ -82,7 +82,7 @@ fn every_documented_message_has_every_documented_key() {
     assert_eq!(s.post("/api/frame/trace").0, 202);
     seen.until(&mut ws, "nan", |v| !v["report"].is_null());
 
-    for route in ["status", "passes", "pipelines", "diagnostics", "captures", "tensors", "nan", "quads", "controls"] {
+    for route in ["status", "passes", "pipelines", "diagnostics", "captures", "tensors", "nan", "quads", "controls", "materials"] {
         seen.add(format!("GET /api/{route}"), s.get_json(&format!("/api/{route}")));
     }
     let (status, body) = s.post("/api/reload");

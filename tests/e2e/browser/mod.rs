@@ -14,6 +14,7 @@ use loupe_tests::{Project, Server, reload, repo};
 mod console;
 mod difference;
 mod layout;
+mod materials;
 mod presets;
 mod readouts;
 mod timings;

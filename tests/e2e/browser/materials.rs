@@ -1,0 +1,94 @@
+//! The materials panel (client/materials.js) on the library scene at
+//! 64×36, in one page session: the list, the tree (collapsible), the
+//! report, a parameter slider that re-renders the frame through the
+//! parameter buffer alone (no pipeline generation moves), save writing the
+//! value into the scene file's `params` keeping its comments, and a pinned
+//! pixel naming its material.
+
+use std::collections::BTreeMap;
+
+use super::{Server, browser, shown, until};
+use crate::materials_api::{SCENE, small_materials};
+
+fn generations(s: &Server) -> BTreeMap<String, u64> {
+    s.get_json("/api/pipelines")
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| (p["name"].as_str().unwrap().to_owned(), p["generation"].as_u64().unwrap()))
+        .collect()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_materials_panel_shows_tree_report_and_live_parameters_and_names_a_pixels_material() {
+    let p = small_materials("browser-materials");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", SCENE]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
+    until(&c, &s, "the eight materials", "document.querySelectorAll('#materials-list [data-index]').length === 8").await;
+
+    // Car paint: a layer over a mix; the tree folds and unfolds.
+    let run = |js: String| {
+        let c = c.clone();
+        async move { c.execute(&js, vec![]).await.unwrap() }
+    };
+    run("document.querySelector('#materials-list [data-index=\"1\"]').click(); return true;".into()).await;
+    let root = "document.querySelector('#material-tree > details')";
+    until(&c, &s, "the layer at the root", &format!("{root}?.dataset.kind === 'layer'")).await;
+    let inner = format!("{root}.querySelector('details[data-kind=\"mix\"]')");
+    assert_eq!(run(format!("return {inner}.checkVisibility();")).await, true, "open: the mix below shows");
+    run(format!("{root}.querySelector('summary').click(); return true;")).await;
+    until(&c, &s, "folded", &format!("!{root}.open && !{inner}.checkVisibility()")).await;
+    run(format!("{root}.querySelector('summary').click(); return true;")).await;
+    until(&c, &s, "unfolded", &format!("{root}.open && {inner}.checkVisibility()")).await;
+    let closures = run("return document.querySelector('#material-report [data-key=\"closures\"]').textContent;".into()).await;
+    assert!(closures.as_str().is_some_and(|t| t.starts_with('3') || t.starts_with('2')), "{closures}");
+
+    // Plastic's roughness slider: a new frame, no pipeline rebuilt.
+    run("document.querySelector('#materials-list [data-index=\"7\"]').click(); return true;".into()).await;
+    let slider = "document.querySelector('#material-params [data-path=\"materials[7].params.specular_roughness\"]')";
+    until(&c, &s, "plastic's roughness control", slider).await;
+    until(&c, &s, "its value from the scene", &format!("Number({slider}.value).toFixed(2) === '0.20'")).await;
+    let before = generations(&s);
+    let frame = shown(&c).await;
+    run(format!("const i = {slider}; i.value = '0.9'; i.dispatchEvent(new Event('change')); return true;")).await;
+    until(&c, &s, "the override counted", "document.querySelector('#overrides-count').textContent === '1 unsaved'").await;
+    let start = std::time::Instant::now();
+    loop {
+        let now = shown(&c).await;
+        if now.frame > frame.frame && now.pixels != frame.pixels {
+            break;
+        }
+        assert!(start.elapsed() < super::LIMIT, "no new frame showing the rougher plastic\n{}", s.log());
+        tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+    }
+    assert_eq!(generations(&s), before, "a parameter changes a buffer, no pipeline");
+
+    // Save: the value lands in the entry's params, every comment stays.
+    let file = p.read(SCENE);
+    run("document.querySelector('#save-scene').click(); return true;".into()).await;
+    until(&c, &s, "saved", "document.querySelector('#overrides-count').textContent === 'as in the file'").await;
+    let saved = p.read(SCENE);
+    let old = "params = { base_color = [0.05, 0.35, 0.1], specular_roughness = 0.2 }";
+    assert!(file.contains(old), "materials.toml's plastic moved: update this test");
+    assert_eq!(saved, file.replace(old, "params = { base_color = [0.05, 0.35, 0.1], specular_roughness = 0.9 }"), "only the value changed");
+
+    // A pinned pixel names its material: the G-buffer's index there.
+    let opened = c.execute_async("window.loupe.inspect('gbuffer', 'material').then(arguments[0]);", vec![]).await.unwrap();
+    assert_eq!(opened, true);
+    // The first pixel of the middle row that a sphere (not the floor) covers.
+    let found = run("const s = window.loupe.state.inspector; const y = s.height >> 1;
+        for (let x = 0; x < s.width; x++) { const v = window.loupe.valueAt(x, y); if (v[3] > 0 && v[2] > 0.5) return [x, y, v[2]]; }
+        return null;"
+        .into())
+    .await;
+    let (x, y, index) = (found[0].as_u64().unwrap(), found[1].as_u64().unwrap(), found[2].as_f64().unwrap() as usize);
+    let name = s.get_json("/api/materials")["materials"][index]["name"].as_str().unwrap().to_owned();
+    run(format!("window.loupe.pin({x}, {y}); return true;")).await;
+    let named = until(&c, &s, "the pixel's material", "document.querySelector('#pixel-material').dataset.name").await;
+    assert_eq!(named, name.as_str());
+    let selected = run("return document.querySelector('#materials-list [aria-selected=\"true\"]').dataset.index;".into()).await;
+    assert_eq!(selected, index.to_string(), "the panel selects it");
+    c.close().await.unwrap();
+}

@@ -1,0 +1,94 @@
+//! `GET /api/materials` on the library scene: one entry per scene
+//! material with its parameters and override paths, beside the compile
+//! report of each definition; a `.mat` edit changes the report, and a
+//! broken `.mat` keeps the last good one while the diagnostics carry the
+//! error.
+
+use std::time::Duration;
+
+use loupe_tests::{Project, Server};
+use serde_json::Value;
+
+const LIMIT: Duration = Duration::from_secs(180);
+pub const SCENE: &str = "scenes/small_materials.toml";
+const PLASTIC: &str = "scenes/materials/plastic.mat";
+
+/// `scenes/materials.toml` at 64×36: quick on lavapipe.
+pub fn small_materials(name: &str) -> Project {
+    let p = Project::copy_of_repo(name);
+    let small = p.read("scenes/materials.toml").replacen("width = 640", "width = 64", 1).replacen("height = 360", "height = 36", 1);
+    assert!(small.contains("width = 64\n") && small.contains("height = 36\n"), "materials.toml's size moved: update this test");
+    p.write(SCENE, small);
+    p
+}
+
+fn entry<'a>(report: &'a Value, name: &str) -> &'a Value {
+    report["materials"].as_array().unwrap().iter().find(|m| m["name"] == name).unwrap_or_else(|| panic!("no `{name}`: {report}"))
+}
+
+fn definition<'a>(report: &'a Value, name: &str) -> &'a Value {
+    &report["definitions"][entry(report, name)["definition"].as_u64().unwrap() as usize]
+}
+
+#[test]
+fn materials_are_served_with_their_reports_and_a_broken_file_keeps_the_last_good_one() {
+    let p = small_materials("materials-api");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", SCENE]);
+    s.wait_for("a first frame", LIMIT, || (s.get_json("/api/status")["frame"].as_u64() > Some(0)).then_some(()));
+    let first = s.get_json("/api/materials");
+    assert_eq!(first["scene"], SCENE);
+    let names: Vec<&str> = first["materials"].as_array().unwrap().iter().map(|m| m["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["floor", "car paint", "polished metal", "rough metal", "hazy metal", "fabric", "skin", "plastic"]);
+    for (i, m) in first["materials"].as_array().unwrap().iter().enumerate() {
+        assert_eq!(m["index"], i, "{m}");
+    }
+
+    // The shorthand: its parameters are the entry's own keys.
+    let floor = entry(&first, "floor");
+    assert!(floor["file"].is_null() && floor["material"] == "shorthand", "{floor}");
+    assert_eq!(floor["params"][2]["path"], "materials[0].roughness");
+    assert_eq!(floor["params"][2]["value"].as_f64().unwrap() as f32, 0.9);
+
+    // A file's: the scene's values over the defaults, with range and doc.
+    let plastic = entry(&first, "plastic");
+    assert_eq!(plastic["file"], "materials/plastic.mat");
+    let colour = &plastic["params"][0];
+    assert_eq!(colour["path"], "materials[7].params.base_color");
+    assert_eq!(colour["type"], "color");
+    let floats = |v: &Value| v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap() as f32).collect::<Vec<_>>();
+    assert_eq!(floats(&colour["value"]), [0.05, 0.35, 0.1], "the scene's value");
+    assert_eq!(floats(&colour["default"]), [0.7, 0.08, 0.06], "the file's");
+    assert_eq!((colour["min"].as_f64(), colour["max"].as_f64()), (Some(0.0), Some(1.0)));
+    assert_eq!(colour["doc"], "The diffuse colour (linear RGB).");
+    assert_eq!(plastic["params"][2]["max"].as_f64(), Some(2.5));
+
+    // Reports: car paint is a layer over a mix, with three closures.
+    let paint = definition(&first, "car paint");
+    let root = &paint["nodes"][paint["root"].as_u64().unwrap() as usize];
+    assert_eq!((root["kind"].as_str(), root["depth"].as_u64()), (Some("layer"), Some(0)), "{paint}");
+    assert!(paint["closures"].as_array().unwrap().len() >= 2, "{paint}");
+    assert_eq!(paint["gbuffer_bytes_per_pixel"], 32);
+    assert!(paint["wgsl_bytes"].as_u64() > Some(1000) && paint["compile_ms"].as_f64() > Some(0.0), "{paint}");
+    assert_eq!(definition(&first, "plastic")["features"], serde_json::json!(["diffuse", "specular"]));
+
+    // An edit that adds fuzz: the report says so.
+    let good = p.read(PLASTIC);
+    let fuzzy = good.replace("    specular_ior: specular_ior,\n", "    specular_ior: specular_ior,\n    fuzz_weight: 0.5,\n");
+    assert_ne!(fuzzy, good, "plastic.mat's slab moved: update this test");
+    p.save_by_rename(PLASTIC, &fuzzy);
+    let edited = s.wait_for("the report of the edit", LIMIT, || {
+        let r = s.get_json("/api/materials");
+        (definition(&r, "plastic")["features"] == serde_json::json!(["diffuse", "specular", "fuzz"])).then_some(r)
+    });
+    let node = &definition(&edited, "plastic")["nodes"][0];
+    assert!(node["fields"].as_array().unwrap().iter().any(|f| f["field"] == "fuzz_weight" && f["value_text"] == "0.5"), "{node}");
+
+    // Broken: the diagnostics name the file and line; the report stays.
+    p.save_by_rename(PLASTIC, &fuzzy.replace("fuzz_weight: 0.5,", "fuzz_weight: 0.5 +,"));
+    let diagnostic = s.wait_for("the error", LIMIT, || {
+        let d = s.get_json("/api/diagnostics")["diagnostics"].as_array().unwrap().first().cloned();
+        d.filter(|d| d["location"]["file"].as_str().is_some_and(|f| f.ends_with("plastic.mat")))
+    });
+    assert_eq!(diagnostic["location"]["line"], 16, "{diagnostic}");
+    assert_eq!(s.get_json("/api/materials"), edited, "the last good report stays");
+}
