@@ -36,7 +36,7 @@ fn frame_png(s: &Server) -> Vec<u8> {
 }
 
 /// Each pipeline's generation: a rebuild raises it.
-fn generations(s: &Server) -> BTreeMap<String, u64> {
+pub fn generations(s: &Server) -> BTreeMap<String, u64> {
     s.get_json("/api/pipelines")
         .as_array()
         .unwrap()

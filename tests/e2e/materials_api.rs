@@ -84,7 +84,7 @@ fn materials_are_served_with_their_reports_and_a_broken_file_keeps_the_last_good
     assert!(node["fields"].as_array().unwrap().iter().any(|f| f["field"] == "fuzz_weight" && f["value_text"] == "0.5"), "{node}");
 
     // Broken: the diagnostics name the file and line; the report stays.
-    p.save_by_rename(PLASTIC, &fuzzy.replace("fuzz_weight: 0.5,", "fuzz_weight: 0.5 +,"));
+    p.save_by_rename(PLASTIC, fuzzy.replace("fuzz_weight: 0.5,", "fuzz_weight: 0.5 +,"));
     let diagnostic = s.wait_for("the error", LIMIT, || {
         let d = s.get_json("/api/diagnostics")["diagnostics"].as_array().unwrap().first().cloned();
         d.filter(|d| d["location"]["file"].as_str().is_some_and(|f| f.ends_with("plastic.mat")))

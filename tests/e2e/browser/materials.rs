@@ -5,19 +5,9 @@
 //! value into the scene file's `params` keeping its comments, and a pinned
 //! pixel naming its material.
 
-use std::collections::BTreeMap;
-
 use super::{Server, browser, shown, until};
+use crate::materials::generations;
 use crate::materials_api::{SCENE, small_materials};
-
-fn generations(s: &Server) -> BTreeMap<String, u64> {
-    s.get_json("/api/pipelines")
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|p| (p["name"].as_str().unwrap().to_owned(), p["generation"].as_u64().unwrap()))
-        .collect()
-}
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_materials_panel_shows_tree_report_and_live_parameters_and_names_a_pixels_material() {
