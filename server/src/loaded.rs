@@ -9,7 +9,8 @@ use std::sync::Arc;
 use crate::denoise::network::{Inputs, Network};
 use crate::denoise::{bundled, tza};
 use crate::diag::{Code, Diagnostic, Location, display_path};
-use crate::material::tree::{Definition, Type, Value};
+use crate::material::texture;
+use crate::material::tree::{Definition, TextureSource, Type, Value};
 use crate::material::{Instance, Program};
 use crate::mesh::MeshData;
 use crate::scene::{self, Denoiser, MaterialSource, ParamValue, Scene, overrides::Overrides};
@@ -84,7 +85,7 @@ pub fn materials_of(scene: &Scene) -> Arc<Program> {
 /// diagnostic with the scene line that names it as a second label.
 fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Program, Diagnostic> {
     let dir = path.parent().unwrap_or(Path::new("."));
-    let mut program = Program { definitions: Vec::new(), instances: Vec::new() };
+    let mut program = Program::default();
     // Definition index by (material file, material name); each file read
     // once, however many entries name it.
     let mut known: BTreeMap<(PathBuf, String), u32> = BTreeMap::new();
@@ -106,7 +107,14 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Pro
             MaterialSource::File { file, material, params, at } => {
                 let file_path = dir.join(file);
                 if !read.contains_key(&file_path) {
-                    read.insert(file_path.clone(), material_file(&file_path, at, files)?);
+                    let mut loaded = material_file(&file_path, at, files)?;
+                    // Its texture defaults index the program's table.
+                    for p in loaded.definitions.iter_mut().flat_map(|d| d.params.iter_mut()) {
+                        if let Value::Texture(k) = p.default {
+                            p.default = Value::Texture(texture_index(&mut program, &loaded.textures[k as usize]));
+                        }
+                    }
+                    read.insert(file_path.clone(), loaded);
                 }
                 let loaded = &read[&file_path];
                 let chosen = match material {
@@ -141,7 +149,29 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<Pro
         };
         program.instances.push(instance);
     }
+    // Watched before they are read, so a fix is seen after a failure.
+    files.extend(program.textures.iter().map(|t| t.path.clone()));
+    let images = program.textures.iter().map(texture::read).collect::<Result<Vec<_>, _>>()?;
+    let (layers, resampled) = texture::Layers::of(images);
+    for i in resampled {
+        log::warn!(
+            "texture `{}` is resampled to {}×{}, the size of the scene's textures",
+            display_path(&program.textures[i].path),
+            layers.width,
+            layers.height
+        );
+    }
+    program.layers = Arc::new(layers);
     Ok(program)
+}
+
+/// `source`'s index in the program's texture table, added if new.
+fn texture_index(program: &mut Program, source: &TextureSource) -> u32 {
+    let position = program.textures.iter().position(|t| t.path == source.path && t.space == source.space);
+    position.unwrap_or_else(|| {
+        program.textures.push(source.clone());
+        program.textures.len() - 1
+    }) as u32
 }
 
 /// A material file and its imports, read and lowered; every file read
@@ -190,6 +220,7 @@ fn param_values(d: &Definition, params: &[(String, ParamValue, Location)], mater
             (Type::Float, ParamValue::Float(x)) => Value::Float(x),
             (Type::Color | Type::Vec3, ParamValue::Vec3(c)) => Value::Vec3(c),
             (Type::Float, _) => return Err(error(format!("`{name}` is a number"))),
+            (Type::Texture, _) => return Err(error(format!("`{name}` is a texture: scenes cannot set one yet"))),
             (_, _) => return Err(error(format!("`{name}` is a colour: three numbers, [r, g, b]"))),
         };
         let parts = crate::material::analysis::channels(v);
