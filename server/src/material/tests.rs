@@ -223,7 +223,11 @@ fn the_starter_library_generates_its_golden_wgsl() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let golden = root.join("tests/golden/materials/generated");
     let bless = std::env::var_os("LOUPE_BLESS").is_some();
-    let mut files: Vec<_> = std::fs::read_dir(root.join("scenes/materials")).unwrap().map(|e| e.unwrap().path()).collect();
+    let mut files: Vec<_> = std::fs::read_dir(root.join("scenes/materials"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "mat"))
+        .collect();
     files.sort();
     assert!(files.len() >= 7, "{files:?}");
     for path in files {
