@@ -11,7 +11,8 @@ use crate::denoise::network::{Inputs, Network};
 use crate::denoise::{bundled, tza};
 use crate::diag::{Code, Diagnostic, Location, display_path};
 use crate::material::report::Report;
-use crate::material::tree::{Definition, Type, Value};
+use crate::material::texture;
+use crate::material::tree::{Definition, TextureSource, Type, Value};
 use crate::material::{Instance, Program};
 use crate::mesh::MeshData;
 use crate::scene::{self, Denoiser, MaterialSource, ParamValue, Scene, overrides::Overrides};
@@ -90,7 +91,7 @@ pub fn materials_of(scene: &Scene) -> Arc<Program> {
 /// definition's report comes with it (`compiled`).
 fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<(Program, Vec<Report>), Diagnostic> {
     let dir = path.parent().unwrap_or(Path::new("."));
-    let mut program = Program { definitions: Vec::new(), instances: Vec::new() };
+    let mut program = Program::default();
     let mut reports = Vec::new();
     // Definition index by (material file, material name); each file read
     // once, however many entries name it, with how long parsing took.
@@ -120,7 +121,13 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<(Pr
                 let file_path = dir.join(file);
                 if !read.contains_key(&file_path) {
                     let start = Instant::now();
-                    let loaded = material_file(&file_path, at, files)?;
+                    let mut loaded = material_file(&file_path, at, files)?;
+                    // Its texture defaults index the program's table.
+                    for p in loaded.definitions.iter_mut().flat_map(|d| d.params.iter_mut()) {
+                        if let Value::Texture(k) = p.default {
+                            p.default = Value::Texture(texture_index(&mut program, &loaded.textures[k as usize]));
+                        }
+                    }
                     read.insert(file_path.clone(), (loaded, start.elapsed().as_secs_f64() * 1e3));
                 }
                 let (loaded, parse_ms) = &read[&file_path];
@@ -159,6 +166,19 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<(Pr
         };
         program.instances.push(instance);
     }
+    // Watched before they are read, so a fix is seen after a failure.
+    files.extend(program.textures.iter().map(|t| t.path.clone()));
+    let images = program.textures.iter().map(texture::read).collect::<Result<Vec<_>, _>>()?;
+    let (layers, resampled) = texture::Layers::of(images);
+    for i in resampled {
+        log::warn!(
+            "texture `{}` is resampled to {}×{}, the size of the scene's textures",
+            display_path(&program.textures[i].path),
+            layers.width,
+            layers.height
+        );
+    }
+    program.layers = Arc::new(layers);
     Ok((program, reports))
 }
 
@@ -172,6 +192,15 @@ fn compiled(analysis: crate::material::analysis::Analysis, start: Instant, parse
     report.wgsl_bytes = Some(wgsl.len());
     report.compile_ms = Some(parse_ms + start.elapsed().as_secs_f64() * 1e3);
     (analysis.def, report)
+}
+
+/// `source`'s index in the program's texture table, added if new.
+fn texture_index(program: &mut Program, source: &TextureSource) -> u32 {
+    let position = program.textures.iter().position(|t| t.path == source.path && t.space == source.space);
+    position.unwrap_or_else(|| {
+        program.textures.push(source.clone());
+        program.textures.len() - 1
+    }) as u32
 }
 
 /// A material file and its imports, read and lowered; every file read
@@ -220,6 +249,7 @@ fn param_values(d: &Definition, params: &[(String, ParamValue, Location)], mater
             (Type::Float, ParamValue::Float(x)) => Value::Float(x),
             (Type::Color | Type::Vec3, ParamValue::Vec3(c)) => Value::Vec3(c),
             (Type::Float, _) => return Err(error(format!("`{name}` is a number"))),
+            (Type::Texture, _) => return Err(error(format!("`{name}` is a texture: scenes cannot set one yet"))),
             (_, _) => return Err(error(format!("`{name}` is a colour: three numbers, [r, g, b]"))),
         };
         let parts = crate::material::analysis::channels(v);

@@ -6,7 +6,7 @@
 #import loupe::view::{view, world_position}
 #import loupe::lights::{Light, lights, incident, light_type, rect_area, rect_cosine, LIGHT_RECT}
 #import loupe::environment::environment_radiance
-#import loupe::material::{Surface, material_init, material_eval, material_ambient, material_emission}
+#import loupe::material::{Surface, MaterialPoint, material_init_at, material_eval, material_ambient, material_emission}
 #ifdef SHADOWS
 #import loupe::shadows::shadow
 #endif
@@ -43,6 +43,7 @@ fn rect_sampled(light: Light, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, s: Surfa
 #endif
 
 @group(0) @binding(2) var gbuffer_normal: texture_2d<f32>;
+@group(0) @binding(3) var gbuffer_uv: texture_2d<f32>;
 @group(0) @binding(4) var gbuffer_material: texture_2d<f32>;
 @group(0) @binding(5) var depth: texture_depth_2d;
 @group(0) @binding(6) var dfg: texture_2d<f32>;
@@ -65,10 +66,38 @@ fn visibility(light: Light, p: vec3<f32>, n: vec3<f32>, l: vec3<f32>, distance: 
     return v;
 }
 
+// Where the material is evaluated: the G-buffer's UV with its derivatives
+// across the 2×2 quad (for the textures' mip level) and a tangent from the
+// derivatives of position and UV (the G-buffer stores none). Derivatives
+// must be taken in uniform control flow: this runs before any branch. They
+// are zero (the finest level, a flat normal map) where a neighbour in the
+// quad is another instance, the background, or across a depth jump.
+fn material_point_at(pixel: vec2<i32>, position: vec2<f32>, z: f32, n: vec3<f32>, instance: f32) -> MaterialPoint {
+    let uv = textureLoad(gbuffer_uv, pixel, 0).xy;
+    let p = world_position(position, z);
+    let distance = length(p - view.position.xyz);
+    let duv = mat2x2(dpdx(uv), dpdy(uv));
+    let dp = mat2x3(dpdx(p), dpdy(p));
+    let other = abs(dpdx(instance)) + abs(dpdy(instance)) + abs(dpdx(f32(z >= 1.0))) + abs(dpdy(f32(z >= 1.0)));
+    let jump = max(abs(dpdx(distance)), abs(dpdy(distance))) > 0.05 * distance;
+    if other > 0.0 || jump {
+        return MaterialPoint(uv, vec2(0.0), vec2(0.0), vec4(0.0));
+    }
+    // The cotangent frame: the direction of growing u in the surface.
+    let dp_y = cross(dp[1], n);
+    let dp_x = cross(n, dp[0]);
+    let t = dp_y * duv[0].x + dp_x * duv[1].x;
+    let b = dp_y * duv[0].y + dp_x * duv[1].y;
+    let sign = select(1.0, -1.0, dot(cross(n, t), b) < 0.0);
+    let tangent = select(vec4(0.0), vec4(normalize(t), sign), dot(t, t) > 0.0);
+    return MaterialPoint(uv, duv[0], duv[1], tangent);
+}
+
 @fragment
 fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
     let pixel = vec2<i32>(in.position.xy);
     let z = textureLoad(depth, pixel, 0);
+    let point = material_point_at(pixel, in.position.xy, z, normalize(textureLoad(gbuffer_normal, pixel, 0).xyz), textureLoad(gbuffer_material, pixel, 0).z);
     if z >= 1.0 {
         let p = world_position(in.position.xy, 1.0);
         return vec4(environment_radiance(normalize(p - view.position.xyz)), 1.0);
@@ -77,7 +106,7 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
     let instance = u32(textureLoad(gbuffer_material, pixel, 0).z);
     let p = world_position(in.position.xy, z);
     let v = normalize(view.position.xyz - p);
-    let s = material_init(instance, n, v);
+    let s = material_init_at(instance, n, v, point);
 
     var color = material_ambient(s, n, v, view.environment_top.rgb, view.environment_bottom.rgb, dfg) + material_emission(s);
     for (var i = 0u; i < view.counts.x; i++) {

@@ -17,7 +17,7 @@
 #import loupe::view::{view, world_position}
 #import loupe::lights::{Light, lights, incident, light_type, rect_area, rect_cosine, LIGHT_RECT}
 #import loupe::brdf::{basis, cosine_direction, PI}
-#import loupe::material::{Surface, material_init, material_eval, material_pdf, material_sample, material_emission, material_base_color}
+#import loupe::material::{Surface, material_init_at, material_point, material_eval, material_pdf, material_sample, material_emission, material_base_color}
 #import loupe::environment::environment_radiance
 #import loupe::random::{random_key, random_f32}
 #import loupe::bvh::{trace, occluded, triangles, NO_HIT}
@@ -385,7 +385,12 @@ fn shade_hit(tri: u32, u: f32, v: f32, p: vec3<f32>, dir: vec3<f32>) -> Vertex {
     n = select(ng, n / len, len > 1e-6 && finite(n / len));
     // Shading normals on the geometric normal's side.
     n = select(-n, n, dot(n, ng) >= 0.0);
-    return Vertex(p, ng, n, -dir, material_init(u32(s.na.w), n, -dir), false);
+    // Textures at level 0 (no ray differentials yet).
+    let w = vec3(1.0 - u - v, u, v);
+    let uv = s.uv_ab.xy * w.x + s.uv_ab.zw * w.y + s.uv_c.xy * w.z;
+    let tangent = s.ta.xyz * w.x + s.tb.xyz * w.y + s.tc.xyz * w.z;
+    let point = material_point(uv, vec4(tangent, s.ta.w));
+    return Vertex(p, ng, n, -dir, material_init_at(u32(s.na.w), n, -dir, point), false);
 }
 
 fn path(pixel: vec2<u32>) -> Sample {

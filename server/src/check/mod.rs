@@ -294,7 +294,7 @@ fn check_scene(path: &Path) -> (Checked, Option<Loaded>) {
 /// a project without scenes.
 fn project_materials<'a>(definitions: impl Iterator<Item = &'a Definition>) -> Program {
     let mut program =
-        Program { definitions: vec![crate::material::shorthand(Location::file_start("scene shorthand"))], instances: Vec::new() };
+        Program { definitions: vec![crate::material::shorthand(Location::file_start("scene shorthand"))], ..Program::default() };
     for d in definitions {
         if !program.definitions.iter().any(|x| x.nodes == d.nodes && x.exprs == d.exprs && x.params == d.params) {
             program.definitions.push(d.clone());

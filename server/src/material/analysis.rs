@@ -201,6 +201,8 @@ fn channel(v: Value, i: usize) -> f32 {
     match v {
         Value::Float(x) => x,
         Value::Vec3(c) => c[i],
+        // A texture has no channels to compute with (lowering lets none in).
+        Value::Texture(_) => f32::NAN,
     }
 }
 
@@ -209,6 +211,7 @@ pub fn channels(v: Value) -> Vec<f32> {
     match v {
         Value::Float(x) => vec![x],
         Value::Vec3(c) => c.to_vec(),
+        Value::Texture(_) => Vec::new(),
     }
 }
 
@@ -216,6 +219,7 @@ fn map(v: Value, f: impl Fn(f32) -> f32) -> Value {
     match v {
         Value::Float(x) => Value::Float(f(x)),
         Value::Vec3(c) => Value::Vec3(c.map(f)),
+        Value::Texture(_) => v,
     }
 }
 

@@ -25,18 +25,23 @@ pub const IMPORT_PATH: &str = "loupe::material";
 /// Where the module sits among the shader files, as diagnostics show it: it
 /// is generated, never on disk.
 pub const DISPLAY: &str = "generated/material.wgsl";
-/// Where the module's two buffers are bound.
+/// Where the module's two buffers, and its textures and their sampler, are
+/// bound.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Bindings {
     pub group: u32,
     pub params: u32,
     pub instances: u32,
+    /// A `texture_2d_array<f32>`: one layer per texture of the scene.
+    pub textures: u32,
+    /// A filtering sampler (trilinear, repeating).
+    pub sampler: u32,
 }
 
 impl Bindings {
     /// The renderer's: group 0, at bindings free in every pass that
     /// imports the module.
-    pub const RENDERER: Bindings = Bindings { group: 0, params: 10, instances: 11 };
+    pub const RENDERER: Bindings = Bindings { group: 0, params: 10, instances: 11, textures: 12, sampler: 13 };
 }
 
 /// The optional parts of a closure, each generated only when a definition
@@ -53,6 +58,10 @@ pub struct Features {
     /// A definition with multiple-scattering compensation (applied where
     /// its instance says so: `quality.energy_compensation`).
     pub compensated: bool,
+    /// A texture is sampled (the texture bindings and helpers).
+    pub textures: bool,
+    /// A slab sets its own `normal` (each closure carries one).
+    pub normal: bool,
 }
 
 impl Features {
@@ -67,7 +76,9 @@ impl Features {
                 f.fuzz |= set(Field::FuzzWeight);
                 f.emission |= set(Field::EmissionLuminance);
                 f.absorption |= set(Field::Thickness) && set(Field::TransmissionColor);
+                f.normal |= slab.get(Field::Normal).is_some();
             }
+            f.textures |= d.exprs.iter().any(|e| matches!(e.kind, ExprKind::Call(Builtin::Sample | Builtin::NormalMap, _)));
             // Compensation scales F0 and F90 alike: F90 must be a field.
             f.compensated |= d.energy_compensation;
             f.edge |= d.energy_compensation;
@@ -84,6 +95,8 @@ impl Features {
             (self.emission, "emission"),
             (self.absorption, "absorption"),
             (self.compensated, "energy compensation"),
+            (self.textures, "textures"),
+            (self.normal, "normal"),
         ]
         .into_iter()
         .filter_map(|(on, name)| on.then_some(name))
@@ -116,6 +129,9 @@ pub fn wgsl(definitions: &[Definition], bindings: Bindings) -> String {
         Init { d, w: &mut w, next: 0, temps: 0 }.function(i);
     }
     dispatch(&mut w, definitions.len(), features.compensated);
+    if features.textures {
+        w.push_str(TEXTURES);
+    }
     w.push_str(&common(features));
     w
 }
@@ -141,6 +157,11 @@ fn header(w: &mut String, definitions: &[Definition], f: Features, max: usize, b
     let _ = writeln!(w, "@group({}) @binding({}) var<storage, read> material_params: array<vec4<f32>>;", b.group, b.params);
     let _ = writeln!(w, "// Per instance: x = definition, y = first parameter slot, z = 1: energy compensation on.");
     let _ = writeln!(w, "@group({}) @binding({}) var<storage, read> material_instances: array<vec4<u32>>;\n", b.group, b.instances);
+    if f.textures {
+        let _ = writeln!(w, "// The scene's textures, one layer each (a texture param's value is its layer).");
+        let _ = writeln!(w, "@group({}) @binding({}) var material_textures: texture_2d_array<f32>;", b.group, b.textures);
+        let _ = writeln!(w, "@group({}) @binding({}) var material_sampler: sampler;\n", b.group, b.sampler);
+    }
     let _ = writeln!(w, "const MATERIAL_CLOSURES: u32 = {max}u;\n");
 }
 
@@ -163,6 +184,9 @@ fn closure_struct(w: &mut String, f: Features) {
     }
     if f.absorption {
         w.push_str("    // What crosses the slab toward the viewer and back.\n    transmittance: vec3<f32>,\n");
+    }
+    if f.normal {
+        w.push_str("    // The slab's shading normal; zero: the geometry's.\n    normal: vec3<f32>,\n");
     }
     w.push_str("}\n\nstruct Surface {\n    closures: array<Closure, MATERIAL_CLOSURES>,\n    count: u32,\n}\n\n");
     w.push_str("// A closure with every optional part neutral and weight 1.\nfn make_closure(base_color: vec3<f32>, metallic: f32, reflectance: vec3<f32>, roughness: f32) -> Closure {\n    var c: Closure;\n");
@@ -190,7 +214,7 @@ impl Init<'_> {
     fn function(mut self, index: usize) {
         let d = self.d;
         let _ = writeln!(self.w, "// {} ({})", d.name, d.location);
-        let _ = writeln!(self.w, "fn material_{index}_init(slot: u32, n: vec3<f32>, v: vec3<f32>) -> Surface {{");
+        let _ = writeln!(self.w, "fn material_{index}_init(slot: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> Surface {{");
         self.w.push_str("    let n_v = max(dot(n, v), 1e-4);\n    var s: Surface;\n");
         let count = closures(d, d.root);
         let _ = writeln!(self.w, "    s.count = {count}u;");
@@ -317,6 +341,10 @@ impl Init<'_> {
             // Down to the base and back up, along the view's slant.
             let _ = writeln!(self.w, "        c.transmittance = pow(saturate({tc}), vec3(2.0 * max({th}, 0.0) / n_v));");
         }
+        if set(Field::Normal) {
+            let normal = self.field(slab, Field::Normal);
+            let _ = writeln!(self.w, "        c.normal = normalize({normal});");
+        }
         let _ = writeln!(self.w, "        s.closures[{k}] = c;\n    }}");
     }
 
@@ -326,7 +354,7 @@ impl Init<'_> {
         match &e.kind {
             ExprKind::Const(v) => value(*v),
             ExprKind::Param(i) => {
-                let swizzle = if d.params[*i as usize].ty == Type::Float { "x" } else { "xyz" };
+                let swizzle = if matches!(d.params[*i as usize].ty, Type::Float | Type::Texture) { "x" } else { "xyz" };
                 format!("material_params[slot + {i}u].{swizzle}")
             }
             ExprKind::Neg(a) => format!("(-{})", self.expr(*a)),
@@ -342,7 +370,8 @@ impl Init<'_> {
             ExprKind::Call(f, args) => {
                 // Floats among colour arguments are splatted: WGSL's
                 // built-ins take one type.
-                let splat = e.ty != Type::Float && !matches!(f, Builtin::Rgb | Builtin::Grey | Builtin::TransmittanceToMfp);
+                let splat = e.ty != Type::Float
+                    && !matches!(f, Builtin::Rgb | Builtin::Grey | Builtin::TransmittanceToMfp | Builtin::Sample | Builtin::NormalMap);
                 let args: Vec<String> = args
                     .iter()
                     .map(|a| {
@@ -366,6 +395,9 @@ fn call(f: Builtin, a: &[String]) -> String {
         Builtin::Srgb => format!("srgb_to_linear({all})"),
         Builtin::IorToF0 => format!("ior_reflectance({all})"),
         Builtin::TransmittanceToMfp => format!("transmittance_to_mfp({all})"),
+        // A texture argument is its param's layer (`.x` of the slot).
+        Builtin::Sample => format!("material_texel({all}, p).rgb"),
+        Builtin::NormalMap => format!("material_normal_map(material_texel({}, p).rgb, {}, n, p.tangent)", a[0], a[1]),
         Builtin::Clamp | Builtin::Saturate | Builtin::Min | Builtin::Max | Builtin::Pow | Builtin::Sqrt | Builtin::Abs => {
             format!("{}({all})", f.name())
         }
@@ -382,17 +414,20 @@ fn value(v: Value) -> String {
     match v {
         Value::Float(x) => f(x),
         Value::Vec3([r, g, b]) => format!("vec3<f32>({}, {}, {})", f(r), f(g), f(b)),
+        // Lowering lets only params reach `sample` and `normal_map`.
+        Value::Texture(_) => unreachable!("a texture is never a constant in the tree"),
     }
 }
 
 fn dispatch(w: &mut String, count: usize, compensated: bool) {
-    w.push_str("// The surface of `instance` at a point with normal `n`, seen from `v`.\nfn material_init(instance: u32, n: vec3<f32>, v: vec3<f32>) -> Surface {\n");
+    w.push_str(POINT);
+    w.push_str("// The surface of `instance` at a point with normal `n`, seen from `v`.\nfn material_init_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> Surface {\n");
     w.push_str("    let header = material_instances[instance];\n    var s: Surface;\n    switch header.x {\n");
     for i in 1..count {
-        let _ = writeln!(w, "        case {i}u: {{ s = material_{i}_init(header.y, n, v); }}");
+        let _ = writeln!(w, "        case {i}u: {{ s = material_{i}_init(header.y, n, v, p); }}");
     }
     // A scene without materials (media alone) still links: no closures.
-    let fallback = if count == 0 { "" } else { "s = material_0_init(header.y, n, v);" };
+    let fallback = if count == 0 { "" } else { "s = material_0_init(header.y, n, v, p);" };
     let _ = writeln!(w, "        default: {{ {fallback} }}\n    }}");
     if compensated {
         // Once, after the operators, for every closure: one copy of the
@@ -403,7 +438,47 @@ fn dispatch(w: &mut String, count: usize, compensated: bool) {
         );
     }
     w.push_str("    return s;\n}\n\n");
+    w.push_str("// `material_init_at` where no UV is known: textures read their corner texel.\nfn material_init(instance: u32, n: vec3<f32>, v: vec3<f32>) -> Surface {\n    return material_init_at(instance, n, v, material_point(vec2(0.0), vec4(0.0)));\n}\n\n");
 }
+
+/// Where a material is evaluated, beyond its normal: what textures read.
+const POINT: &str = "// Where a material is evaluated: the UV, its screen-space derivatives
+// (zero: the finest mip level) and the tangent (xyz, w: the bitangent's sign;
+// zero: none, so normal maps are flat).
+struct MaterialPoint {
+    uv: vec2<f32>,
+    duv_dx: vec2<f32>,
+    duv_dy: vec2<f32>,
+    tangent: vec4<f32>,
+}
+
+fn material_point(uv: vec2<f32>, tangent: vec4<f32>) -> MaterialPoint {
+    return MaterialPoint(uv, vec2(0.0), vec2(0.0), tangent);
+}
+
+";
+
+/// Texture reads: explicit gradients, so they work in any control flow
+/// and any stage (the path tracer is a compute pass).
+const TEXTURES: &str = "fn material_texel(layer: f32, p: MaterialPoint) -> vec4<f32> {
+    return textureSampleGrad(material_textures, material_sampler, p.uv, i32(layer), p.duv_dx, p.duv_dy);
+}
+
+// A tangent-space normal map's texel (rgb in [0, 1]) as a world normal
+// about n, its tilt scaled by `strength`.
+fn material_normal_map(texel: vec3<f32>, strength: f32, n: vec3<f32>, tangent: vec4<f32>) -> vec3<f32> {
+    let m = texel * 2.0 - 1.0;
+    // The tangent made perpendicular to the shading normal.
+    let t = tangent.xyz - n * dot(n, tangent.xyz);
+    if dot(t, t) < 1e-12 {
+        return n;
+    }
+    let tn = normalize(t);
+    let b = cross(n, tn) * select(1.0, -1.0, tangent.w < 0.0);
+    return normalize((tn * m.x + b * m.y) * strength + n * max(m.z, 1e-4));
+}
+
+";
 
 /// The per-closure loops: the same text for every program, with the
 /// optional parts switched by `f`.
@@ -424,9 +499,14 @@ fn common(f: Features) -> String {
     let t = if f.absorption { "c.transmittance" } else { "vec3(1.0)" };
     let _ = writeln!(w, "fn closure_transmittance(c: Closure) -> vec3<f32> {{\n    return {t};\n}}\n");
 
+    // With normals of their own, closures shade about theirs.
+    let (ng, own) = if f.normal { ("n_geometry", "    let n = closure_normal(c, n_geometry);\n") } else { ("n", "") };
+    if f.normal {
+        w.push_str("fn closure_normal(c: Closure, n: vec3<f32>) -> vec3<f32> {\n    return select(n, c.normal, dot(c.normal, c.normal) > 0.0);\n}\n\n");
+    }
     let _ = writeln!(
         w,
-        "// BSDF × cosine of one closure, without its weight.\nfn closure_cos(c: Closure, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {{\n    var f = slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, {f90}, c.roughness);"
+        "// BSDF × cosine of one closure, without its weight.\nfn closure_cos(c: Closure, {ng}: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {{\n{own}    var f = slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, {f90}, c.roughness);"
     );
     if f.haze {
         let _ = writeln!(w, "    f = mix(f, slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, {f90}, c.haze.y), c.haze.x);");
@@ -436,7 +516,10 @@ fn common(f: Features) -> String {
     }
     w.push_str("    return f;\n}\n\n");
 
-    w.push_str("// The pdf of `closure_direction`'s directions.\nfn closure_pdf(c: Closure, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {\n    var p = slab_pdf(n, v, l, c.base_color, c.metallic, c.reflectance, c.roughness);\n");
+    let _ = write!(
+        w,
+        "// The pdf of `closure_direction`'s directions.\nfn closure_pdf(c: Closure, {ng}: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {{\n{own}    var p = slab_pdf(n, v, l, c.base_color, c.metallic, c.reflectance, c.roughness);\n"
+    );
     if f.haze {
         w.push_str("    p = mix(p, slab_pdf(n, v, l, c.base_color, c.metallic, c.reflectance, c.haze.y), c.haze.x);\n");
     }
@@ -445,7 +528,10 @@ fn common(f: Features) -> String {
     }
     w.push_str("    return p;\n}\n\n");
 
-    w.push_str("// A direction from one closure; u.x picks the lobe, u.yz place it.\nfn closure_direction(c: Closure, n: vec3<f32>, v: vec3<f32>, u: vec3<f32>) -> vec3<f32> {\n    var x = u.x;\n    var roughness = c.roughness;\n");
+    let _ = write!(
+        w,
+        "// A direction from one closure; u.x picks the lobe, u.yz place it.\nfn closure_direction(c: Closure, {ng}: vec3<f32>, v: vec3<f32>, u: vec3<f32>) -> vec3<f32> {{\n{own}    var x = u.x;\n    var roughness = c.roughness;\n"
+    );
     if f.fuzz {
         w.push_str("    let q = fuzz_share(c);\n    if x < q {\n        return cosine_about(n, u.yz);\n    }\n    x = min((x - q) / max(1.0 - q, 1e-8), 0.99999994);\n");
     }
@@ -466,7 +552,11 @@ fn common(f: Features) -> String {
     );
 
     // The raster's environment light: the split sum per closure.
-    w.push_str("// Light from the environment's gradient (`loupe::ambient`), closure by closure.\nfn material_ambient(s: Surface, n: vec3<f32>, v: vec3<f32>, top: vec3<f32>, bottom: vec3<f32>, dfg: texture_2d<f32>) -> vec3<f32> {\n    var e = vec3(0.0);\n    for (var k = 0u; k < s.count; k++) {\n        let c = s.closures[k];\n        var a = ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance, c.roughness, dfg);\n");
+    w.push_str("// Light from the environment's gradient (`loupe::ambient`), closure by closure.\nfn material_ambient(s: Surface, n: vec3<f32>, v: vec3<f32>, top: vec3<f32>, bottom: vec3<f32>, dfg: texture_2d<f32>) -> vec3<f32> {\n    var e = vec3(0.0);\n    for (var k = 0u; k < s.count; k++) {\n        let c = s.closures[k];\n");
+    if f.normal {
+        w.push_str("        let n = closure_normal(c, n);\n");
+    }
+    w.push_str("        var a = ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance, c.roughness, dfg);\n");
     if f.haze {
         w.push_str(
             "        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance, c.haze.y, dfg), c.haze.x);\n",
@@ -480,7 +570,8 @@ fn common(f: Features) -> String {
     // Rect lights by LTC: each closure's lobes at its roughness.
     let _ = writeln!(
         w,
-        "#ifdef LIGHT_RECT\n// A rect light through the LTC tables, closure by closure.\nfn material_rect(s: Surface, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, corners: array<vec3<f32>, 4>, two_sided: bool, ltc_matrix: texture_2d<f32>, ltc_amplitude: texture_2d<f32>) -> vec3<f32> {{\n    var e = vec3(0.0);\n    for (var k = 0u; k < s.count; k++) {{\n        let c = s.closures[k];\n        let r = ltc_rect(n, v, p, c.roughness, corners, two_sided, ltc_matrix, ltc_amplitude);\n        let diffuse = c.base_color * (1.0 - c.metallic) * r.diffuse;\n        var lit = diffuse + c.reflectance * r.specular.x + {};",
+        "#ifdef LIGHT_RECT\n// A rect light through the LTC tables, closure by closure.\nfn material_rect(s: Surface, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, corners: array<vec3<f32>, 4>, two_sided: bool, ltc_matrix: texture_2d<f32>, ltc_amplitude: texture_2d<f32>) -> vec3<f32> {{\n    var e = vec3(0.0);\n    for (var k = 0u; k < s.count; k++) {{\n        let c = s.closures[k];\n{}        let r = ltc_rect(n, v, p, c.roughness, corners, two_sided, ltc_matrix, ltc_amplitude);\n        let diffuse = c.base_color * (1.0 - c.metallic) * r.diffuse;\n        var lit = diffuse + c.reflectance * r.specular.x + {};",
+        if f.normal { "        let n = closure_normal(c, n);\n" } else { "" },
         if f.edge { "c.edge * r.specular.y" } else { "r.specular.y" }
     );
     if f.haze {

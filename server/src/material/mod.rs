@@ -12,10 +12,13 @@ mod build;
 pub mod front;
 pub mod operators;
 pub mod report;
+pub mod texture;
 pub mod tree;
 
 use crate::diag::{Code, Diagnostic, Location};
-use tree::{Definition, Expr, ExprId, ExprKind, Field, Node, NodeId, NodeKind, Param, Slab, Type, Value};
+use std::sync::Arc;
+
+use tree::{Definition, Expr, ExprId, ExprKind, Field, Node, NodeId, NodeKind, Param, Slab, TextureSource, Type, Value};
 
 /// The materials a scene uses, compiled: each definition once, and one
 /// instance per `[[materials]]` entry (in the scene's order, so an
@@ -24,6 +27,11 @@ use tree::{Definition, Expr, ExprId, ExprKind, Field, Node, NodeId, NodeKind, Pa
 pub struct Program {
     pub definitions: Vec<Definition>,
     pub instances: Vec<Instance>,
+    /// The images the definitions' defaults and the instances name, each
+    /// once (`Value::Texture` indexes it).
+    pub textures: Vec<TextureSource>,
+    /// Those images decoded, one layer each (`textures[i]` is layer `i`).
+    pub layers: Arc<texture::Layers>,
 }
 
 /// A definition with values for its parameters.
@@ -55,6 +63,8 @@ impl Program {
             params.extend(i.values.iter().map(|v| match *v {
                 Value::Float(x) => [x, 0.0, 0.0, 0.0],
                 Value::Vec3([r, g, b]) => [r, g, b, 0.0],
+                // Its layer in the texture array.
+                Value::Texture(layer) => [layer as f32, 0.0, 0.0, 0.0],
             }));
         }
         if params.is_empty() {

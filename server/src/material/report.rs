@@ -120,6 +120,7 @@ pub fn value_text(value: Value) -> String {
         Value::Float(x) => format!("{x:?}"),
         Value::Vec3([r, g, b]) if r == g && g == b => format!("grey({r:?})"),
         Value::Vec3([r, g, b]) => format!("rgb({r:?}, {g:?}, {b:?})"),
+        Value::Texture(i) => format!("texture {i}"),
     }
 }
 

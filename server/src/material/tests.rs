@@ -73,7 +73,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 /// The program's module, bound at group 1 where the test kernel binds
 /// buffers, and its two buffers.
 fn module(program: &Program) -> (SourceFile, [wgpu::Buffer; 2]) {
-    let text = back::wgsl(&program.definitions, Bindings { group: 1, params: 0, instances: 1 });
+    let text = back::wgsl(&program.definitions, Bindings { group: 1, params: 0, instances: 1, textures: 2, sampler: 3 });
     let file = SourceFile::from_text(back::DISPLAY.into(), back::DISPLAY.into(), text.into());
     let (params, instances) = program.buffers();
     (file, [storage(bytemuck::cast_slice(&params)), storage(bytemuck::cast_slice(&instances))])
@@ -110,7 +110,7 @@ fn shorthand_program() -> Program {
             }
         }
     }
-    Program { definitions: vec![shorthand(at())], instances }
+    Program { definitions: vec![shorthand(at())], instances, ..Program::default() }
 }
 
 fn queries(instances: usize) -> Vec<Query> {
@@ -186,6 +186,7 @@ fn a_mix_evaluates_as_its_weights_say() {
     let program = Program {
         definitions: vec![only(&mix, 0), only(&mix, 1), mix],
         instances: (0..3).map(|definition| Instance { definition, values: vec![], compensated: false }).collect(),
+        ..Program::default()
     };
     let (file, [params, instances]) = module(&program);
     let gpu = shared();
@@ -222,7 +223,11 @@ fn the_starter_library_generates_its_golden_wgsl() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let golden = root.join("tests/golden/materials/generated");
     let bless = std::env::var_os("LOUPE_BLESS").is_some();
-    let mut files: Vec<_> = std::fs::read_dir(root.join("scenes/materials")).unwrap().map(|e| e.unwrap().path()).collect();
+    let mut files: Vec<_> = std::fs::read_dir(root.join("scenes/materials"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "mat"))
+        .collect();
     files.sort();
     assert!(files.len() >= 7, "{files:?}");
     for path in files {

@@ -79,6 +79,9 @@ pub enum Type {
     Float,
     Color,
     Vec3,
+    /// An image sampled by UV (`sample`, `normal_map`); only a parameter
+    /// of the material's own file has this type.
+    Texture,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -86,6 +89,36 @@ pub enum Value {
     Float(f32),
     /// A colour or a vector (see the parameter's or expression's `Type`).
     Vec3([f32; 3]),
+    /// A texture: an index into the `TextureSource` table of what holds
+    /// the value (`front::Loaded::textures` for a file's defaults,
+    /// `Program::textures` for a program's definitions and instances).
+    Texture(u32),
+}
+
+/// An image file a texture value names.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TextureSource {
+    /// Resolved against the file that names it.
+    pub path: std::path::PathBuf,
+    pub space: ColorSpace,
+    /// Where the path is written.
+    pub location: Location,
+}
+
+/// How a texture's values are read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum ColorSpace {
+    /// sRGB-encoded colour, decoded to linear (8/16-bit PNG's default).
+    Srgb,
+    /// Linear values as stored (EXR's default; masks, roughness).
+    Linear,
+    /// A tangent-space normal map: linear, `rgb * 2 - 1`.
+    Normal,
+}
+
+impl ColorSpace {
+    pub const ALL: [(&'static str, ColorSpace); 3] =
+        [("srgb", ColorSpace::Srgb), ("linear", ColorSpace::Linear), ("normal", ColorSpace::Normal)];
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -171,10 +204,13 @@ pub enum Field {
     TransmissionColor,
     /// The slab's thickness, in the units of `transmission_color`.
     Thickness,
+    /// The shading normal, world space (`normal_map(tex, strength)`);
+    /// unset: the geometry's.
+    Normal,
 }
 
 impl Field {
-    pub const ALL: [Field; 16] = [
+    pub const ALL: [Field; 17] = [
         Field::BaseColor,
         Field::BaseMetalness,
         Field::SpecularWeight,
@@ -191,6 +227,7 @@ impl Field {
         Field::EmissionLuminance,
         Field::TransmissionColor,
         Field::Thickness,
+        Field::Normal,
     ];
 
     /// The name written in material files.
@@ -212,6 +249,7 @@ impl Field {
             Field::EmissionLuminance => "emission_luminance",
             Field::TransmissionColor => "transmission_color",
             Field::Thickness => "thickness",
+            Field::Normal => "normal",
         }
     }
 
@@ -227,6 +265,7 @@ impl Field {
             | Field::FuzzColor
             | Field::EmissionColor
             | Field::TransmissionColor => Type::Color,
+            Field::Normal => Type::Vec3,
             _ => Type::Float,
         }
     }
@@ -246,6 +285,8 @@ impl Field {
             Field::HazeRoughness => Value::Float(0.7),
             Field::FuzzRoughness => Value::Float(0.5),
             Field::EmissionColor => Value::Vec3([1.0; 3]),
+            // Never used as a value: an unset normal is the geometry's.
+            Field::Normal => Value::Vec3([0.0, 0.0, 1.0]),
         }
     }
 
@@ -255,6 +296,7 @@ impl Field {
         match self {
             Field::SpecularIor => Some((1.0, 5.0)),
             Field::EmissionLuminance | Field::Thickness => Some((0.0, f32::MAX)),
+            Field::Normal => None,
             _ => Some((0.0, 1.0)),
         }
     }
@@ -312,10 +354,15 @@ pub enum Builtin {
     /// `transmittance_to_mfp(color, distance)`: the mean free path that keeps
     /// `color` of the light after `distance`.
     TransmittanceToMfp,
+    /// `sample(tex)`: the texture's colour at the surface's UV.
+    Sample,
+    /// `normal_map(tex, strength)`: the world normal a tangent-space
+    /// normal map gives, its tilt scaled by `strength`.
+    NormalMap,
 }
 
 impl Builtin {
-    pub const ALL: [Builtin; 14] = [
+    pub const ALL: [Builtin; 16] = [
         Builtin::Rgb,
         Builtin::Grey,
         Builtin::Lerp,
@@ -330,6 +377,8 @@ impl Builtin {
         Builtin::Srgb,
         Builtin::IorToF0,
         Builtin::TransmittanceToMfp,
+        Builtin::Sample,
+        Builtin::NormalMap,
     ];
 
     pub fn name(self) -> &'static str {
@@ -348,6 +397,8 @@ impl Builtin {
             Builtin::Srgb => "srgb",
             Builtin::IorToF0 => "ior_to_f0",
             Builtin::TransmittanceToMfp => "transmittance_to_mfp",
+            Builtin::Sample => "sample",
+            Builtin::NormalMap => "normal_map",
         }
     }
 

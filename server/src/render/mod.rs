@@ -9,6 +9,7 @@ pub mod dfg;
 pub mod frame;
 pub mod graph;
 pub mod ltc;
+pub mod material_textures;
 pub mod passes;
 pub mod path_geometry;
 pub mod pipelines;

@@ -29,6 +29,8 @@ pub struct SceneGpu {
     /// (`material::Program::buffers`).
     pub material_params: wgpu::Buffer,
     pub material_instances: wgpu::Buffer,
+    /// The materials' textures and their sampler.
+    pub material_textures: super::material_textures::MaterialTextures,
     pub lights: wgpu::Buffer,
     pub media: wgpu::Buffer,
     pub shadow_views: wgpu::Buffer,
@@ -412,6 +414,7 @@ impl SceneGpu {
             // element size even when no triangle reads one.
             material_params: storage("material params", bytemuck::cast_slice(&material_params).to_vec()),
             material_instances: storage("material instances", bytemuck::cast_slice(&material_instances).to_vec()),
+            material_textures: super::material_textures::MaterialTextures::new(device, queue, &materials.layers),
             // A scene without lights still binds one (zeroed) light: the
             // shader's array needs room for one element.
             lights: storage("lights", if scene.lights.is_empty() { vec![0; LIGHT_BYTES] } else { light_bytes(scene) }),

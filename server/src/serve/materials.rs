@@ -3,6 +3,8 @@
 //! scene override path sets it, beside their definitions' compile reports.
 
 use crate::loaded::Loaded;
+use crate::diag::display_path;
+use crate::material::Program;
 use crate::material::tree::{Param, Type, Value};
 use crate::protocol::{MaterialEntry, MaterialParam, MaterialsReport};
 use crate::scene::MaterialSource;
@@ -24,7 +26,7 @@ pub fn report(scene: &str, loaded: &Loaded) -> MaterialsReport {
                 MaterialSource::Shorthand { .. } => (None, format!("materials[{i}]")),
                 MaterialSource::File { file, .. } => (Some(file.clone()), format!("materials[{i}].params")),
             };
-            let params = def.params.iter().zip(&instance.values).map(|(p, v)| param(p, *v, &prefix)).collect();
+            let params = def.params.iter().zip(&instance.values).map(|(p, v)| param(program, p, *v, &prefix)).collect();
             MaterialEntry {
                 index: i as u32,
                 name: m.name.clone(),
@@ -38,18 +40,19 @@ pub fn report(scene: &str, loaded: &Loaded) -> MaterialsReport {
     MaterialsReport { scene: scene.to_owned(), materials, definitions: loaded.reports.to_vec() }
 }
 
-fn param(p: &Param, value: Value, prefix: &str) -> MaterialParam {
+fn param(program: &Program, p: &Param, value: Value, prefix: &str) -> MaterialParam {
     let ty = match p.ty {
         Type::Float => "float",
         Type::Color => "color",
         Type::Vec3 => "vec3",
+        Type::Texture => "texture",
     };
     MaterialParam {
         name: p.name.clone(),
         path: format!("{prefix}.{}", p.name),
         ty,
-        value: json(value),
-        default: json(p.default),
+        value: json(program, value),
+        default: json(program, p.default),
         min: p.range.map(|r| r.0),
         max: p.range.map(|r| r.1),
         unit: p.unit.clone(),
@@ -57,9 +60,11 @@ fn param(p: &Param, value: Value, prefix: &str) -> MaterialParam {
     }
 }
 
-fn json(v: Value) -> serde_json::Value {
+/// A texture is shown as the path of its image.
+fn json(program: &Program, v: Value) -> serde_json::Value {
     match v {
         Value::Float(x) => x.into(),
         Value::Vec3(c) => c.to_vec().into(),
+        Value::Texture(k) => display_path(&program.textures[k as usize].path).into(),
     }
 }

@@ -35,11 +35,17 @@ pub enum TypeName {
     Color,
     Vec3,
     Slab,
+    Texture,
 }
 
 impl TypeName {
-    pub const ALL: [(&'static str, TypeName); 4] =
-        [("float", TypeName::Float), ("color", TypeName::Color), ("vec3", TypeName::Vec3), ("slab", TypeName::Slab)];
+    pub const ALL: [(&'static str, TypeName); 5] = [
+        ("float", TypeName::Float),
+        ("color", TypeName::Color),
+        ("vec3", TypeName::Vec3),
+        ("slab", TypeName::Slab),
+        ("texture", TypeName::Texture),
+    ];
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -52,6 +58,17 @@ pub struct ParamDecl {
     pub range: Option<(Expr, Expr)>,
     pub unit: Option<Ident>,
     pub doc: Option<String>,
+    /// A `texture` param's default, `"PATH" [SPACE]` (its `default` is then
+    /// a placeholder at the path's span).
+    pub texture: Option<TextureDecl>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct TextureDecl {
+    pub path: String,
+    pub path_span: Span,
+    /// `srgb`, `linear` or `normal`, if written.
+    pub space: Option<Ident>,
 }
 
 #[derive(Debug, Clone, PartialEq)]

@@ -24,13 +24,16 @@ const OPERATORS: [&str; 4] = ["mix", "layer", "coverage", "add"];
 
 pub struct Lowered {
     pub definitions: Vec<Definition>,
+    /// The images texture params name (`Value::Texture` indexes it).
+    pub textures: Vec<TextureSource>,
     pub errors: Vec<Diagnostic>,
     pub warnings: Vec<Diagnostic>,
 }
 
 pub fn lower(units: &[Unit]) -> Lowered {
     let mut errors = Vec::new();
-    let params: Vec<Vec<ParamInfo>> = (0..units.len()).map(|u| declared_params(units, u, &mut errors)).collect();
+    let mut textures = Vec::new();
+    let params: Vec<Vec<ParamInfo>> = (0..units.len()).map(|u| declared_params(units, u, &mut textures, &mut errors)).collect();
     for u in units {
         check_names(u, &mut errors);
     }
@@ -62,7 +65,7 @@ pub fn lower(units: &[Unit]) -> Lowered {
             ));
         }
     }
-    Lowered { definitions, errors, warnings }
+    Lowered { definitions, textures, errors, warnings }
 }
 
 /// A param as declared: its default and range evaluated. One per `param`
@@ -78,7 +81,7 @@ struct ParamInfo {
     location: Location,
 }
 
-fn declared_params(units: &[Unit], u: usize, errors: &mut Vec<Diagnostic>) -> Vec<ParamInfo> {
+fn declared_params(units: &[Unit], u: usize, textures: &mut Vec<TextureSource>, errors: &mut Vec<Diagnostic>) -> Vec<ParamInfo> {
     let unit = &units[u];
     let loc = |s: &Span| unit.source.location(s.clone());
     let mut out = Vec::new();
@@ -94,7 +97,18 @@ fn declared_params(units: &[Unit], u: usize, errors: &mut Vec<Diagnostic>) -> Ve
         };
         let ty = info.ty;
         if p.ty == TypeName::Slab {
-            errors.push(error("a param cannot be a slab", loc(&p.ty_span), "params are `float`, `color` or `vec3`"));
+            errors.push(error("a param cannot be a slab", loc(&p.ty_span), "params are `float`, `color`, `vec3` or `texture`"));
+            out.push(info);
+            continue;
+        }
+        if let Some(t) = &p.texture {
+            match texture_source(unit, t) {
+                Ok(source) => {
+                    textures.push(source);
+                    info.default = Value::Texture(textures.len() as u32 - 1);
+                }
+                Err(d) => errors.push(d),
+            }
             out.push(info);
             continue;
         }
@@ -149,6 +163,25 @@ fn declared_params(units: &[Unit], u: usize, errors: &mut Vec<Diagnostic>) -> Ve
         out.push(info);
     }
     out
+}
+
+/// A texture param's image: its path resolved against the file, and its
+/// colour space (as written, else linear for EXR and sRGB for the rest).
+fn texture_source(unit: &Unit, t: &ast::TextureDecl) -> Result<TextureSource, Diagnostic> {
+    let path = unit.source.path.parent().unwrap_or(std::path::Path::new(".")).join(&t.path);
+    let exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let space = match &t.space {
+        None if exr => ColorSpace::Linear,
+        None => ColorSpace::Srgb,
+        Some(s) => match ColorSpace::ALL.iter().find(|(name, _)| *name == s.name) {
+            Some((_, space)) => *space,
+            None => {
+                let at = unit.source.location(s.span.clone());
+                return Err(error(format!("unknown colour space `{}`", s.name), at, "one of `srgb`, `linear` or `normal`"));
+            }
+        },
+    };
+    Ok(TextureSource { path, space, location: unit.source.location(t.path_span.clone()) })
 }
 
 /// Every name a file declares is declared once, and none hides an operator
@@ -713,7 +746,7 @@ impl<'a> Lowerer<'a> {
         use Builtin::*;
         let count = match b {
             Rgb | Lerp | Clamp => 3,
-            Min | Max | Pow | TransmittanceToMfp => 2,
+            Min | Max | Pow | TransmittanceToMfp | NormalMap => 2,
             _ => 1,
         };
         let what = format!("`{}`", b.name());
@@ -738,6 +771,8 @@ impl<'a> Lowerer<'a> {
             Srgb => fixed(&[Type::Color], Type::Color),
             IorToF0 => fixed(&[Type::Float], Type::Float),
             TransmittanceToMfp => fixed(&[Type::Color, Type::Float], Type::Color),
+            Sample => fixed(&[Type::Texture], Type::Color),
+            NormalMap => fixed(&[Type::Texture, Type::Float], Type::Vec3),
             // The rest work per component: their arguments join to one type.
             _ => (Vec::new(), tys.iter().try_fold(tys[0], |acc, t| join(acc, *t))),
         };
@@ -751,6 +786,12 @@ impl<'a> Lowerer<'a> {
                     format!("a {}", type_name(*t)),
                 );
             }
+        }
+        // The texture's layer is the instance's value of a param of this
+        // material: a default made constant (another file's) has none.
+        if matches!(b, Sample | NormalMap) && !matches!(self.exprs[ids[0].0 as usize].kind, ExprKind::Param(_)) {
+            let at = &args[0].value.span;
+            return self.err(scope, at, format!("{what} takes a texture param of this material's file"), "not a param of this file");
         }
         let Some(ret) = ret else {
             let shown: Vec<&str> = tys.iter().map(|t| type_name(*t)).collect();
@@ -867,6 +908,7 @@ fn scalar(t: TypeName) -> Type {
         TypeName::Float => Type::Float,
         TypeName::Color => Type::Color,
         TypeName::Vec3 | TypeName::Slab => Type::Vec3,
+        TypeName::Texture => Type::Texture,
     }
 }
 
@@ -875,13 +917,16 @@ fn type_name(t: Type) -> &'static str {
         Type::Float => "float",
         Type::Color => "color",
         Type::Vec3 => "vec3",
+        Type::Texture => "texture",
     }
 }
 
 /// The type of an operation on `a` and `b`: a float broadcasts; a colour
-/// and a vector do not mix.
+/// and a vector do not mix; a texture takes part in none (only `sample`
+/// and `normal_map` read it).
 fn join(a: Type, b: Type) -> Option<Type> {
     match (a, b) {
+        (Type::Texture, _) | (_, Type::Texture) => None,
         (x, y) if x == y => Some(x),
         (Type::Float, y) => Some(y),
         (x, Type::Float) => Some(x),

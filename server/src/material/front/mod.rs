@@ -25,6 +25,9 @@ pub struct Loaded {
     pub definitions: Vec<Definition>,
     /// Every file read, the root first: what a watcher watches.
     pub files: Vec<PathBuf>,
+    /// The images the definitions' texture params name by default
+    /// (`Value::Texture` indexes it); not read yet.
+    pub textures: Vec<crate::material::tree::TextureSource>,
     pub warnings: Vec<Diagnostic>,
 }
 
@@ -49,5 +52,9 @@ fn lower_root(root: SourceFile) -> Result<Loaded, Vec<Diagnostic>> {
     }
     let mut lowered = lower::lower(&units);
     errors.append(&mut lowered.errors);
-    if errors.is_empty() { Ok(Loaded { definitions: lowered.definitions, files, warnings: lowered.warnings }) } else { Err(errors) }
+    if errors.is_empty() {
+        Ok(Loaded { definitions: lowered.definitions, files, textures: lowered.textures, warnings: lowered.warnings })
+    } else {
+        Err(errors)
+    }
 }

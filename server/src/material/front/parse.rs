@@ -152,7 +152,7 @@ impl Parser {
         {
             return Ok((*t, self.bump().span));
         }
-        self.expected("a type (`float`, `color`, `vec3` or `slab`)")
+        self.expected("a type (`float`, `color`, `vec3`, `texture` or `slab`)")
     }
 
     fn param(&mut self, doc: Option<String>) -> PResult<ParamDecl> {
@@ -161,6 +161,9 @@ impl Parser {
         self.expect_punct(':')?;
         let (ty, ty_span) = self.type_name()?;
         self.expect_punct('=')?;
+        if ty == TypeName::Texture {
+            return self.texture_param(name, ty_span, doc);
+        }
         let default = self.expr()?;
         let range = if self.is_keyword("in") {
             self.bump();
@@ -175,7 +178,19 @@ impl Parser {
         };
         let has_unit = matches!(&self.peek().tok, Tok::Ident(n) if !KEYWORDS.contains(&n.as_str()));
         let unit = if has_unit { Some(self.ident("a unit")?) } else { None };
-        Ok(ParamDecl { name, ty, ty_span, default, range, unit, doc })
+        Ok(ParamDecl { name, ty, ty_span, default, range, unit, doc, texture: None })
+    }
+
+    /// The rest of `param NAME: texture = "PATH" [SPACE]`.
+    fn texture_param(&mut self, name: Ident, ty_span: Span, doc: Option<String>) -> PResult<ParamDecl> {
+        let t = self.peek().clone();
+        let Tok::Str(path) = t.tok else { return self.expected("a quoted image path") };
+        self.bump();
+        let is_space = matches!(&self.peek().tok, Tok::Ident(n) if !KEYWORDS.contains(&n.as_str()));
+        let space = if is_space { Some(self.ident("a colour space")?) } else { None };
+        let default = Expr { kind: ExprKind::Number(0.0), span: t.span.clone() };
+        let texture = Some(TextureDecl { path, path_span: t.span, space });
+        Ok(ParamDecl { name, ty: TypeName::Texture, ty_span, default, range: None, unit: None, doc, texture })
     }
 
     fn function(&mut self) -> PResult<FnDecl> {

@@ -1,6 +1,6 @@
 //! Surface attributes per pixel (layout in `geometry/gbuffer.wgsl`).
 
-use super::{MATERIAL_INSTANCES, MATERIAL_PARAMS, VIEW, material_bindings};
+use super::{MATERIAL_INSTANCES, MATERIAL_PARAMS, MATERIAL_SAMPLER, MATERIAL_TEXTURES, VIEW, material_bindings};
 use crate::gpu::pipeline::{ALL, Depth, Group, HDR, PipelineSpec, Stages, storage};
 use crate::render::context::DepthTarget;
 use crate::render::graph::{GraphBuilder, PassKind};
@@ -22,7 +22,7 @@ pub static GBUFFER: PipelineSpec = PipelineSpec {
     name: "geometry.gbuffer",
     shader: "geometry/gbuffer.wgsl",
     stages: Stages::Mesh { vertex: "vs_main", fragment: Some("fs_main"), targets: &[HDR, HDR, HDR, UV], depth: Depth::Equal },
-    groups: &[Group::always(0, &[VIEW, storage("objects", 1, ALL), MATERIAL_PARAMS, MATERIAL_INSTANCES])],
+    groups: &[Group::always(0, &[VIEW, storage("objects", 1, ALL), MATERIAL_PARAMS, MATERIAL_INSTANCES, MATERIAL_TEXTURES, MATERIAL_SAMPLER])],
     defs: &[],
 };
 pub const SPECS: &[&PipelineSpec] = &[&GBUFFER];
@@ -48,8 +48,9 @@ pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle) -> GBuffer {
     let targets = [gb.normal, gb.albedo, gb.material, gb.uv];
     p.execute(move |ctx| {
         let s = ctx.scene;
-        let [params, instances] = material_bindings(s);
-        let bindings = [("view", s.view.as_entire_binding()), ("objects", s.objects.as_entire_binding()), params, instances];
+        let [params, instances, textures, sampler] = material_bindings(s);
+        let bindings =
+            [("view", s.view.as_entire_binding()), ("objects", s.objects.as_entire_binding()), params, instances, textures, sampler];
         ctx.draw_objects(&key, &bindings, &targets, Some(DepthTarget { texture: depth, layer: 0, clear: false }));
     });
     gb

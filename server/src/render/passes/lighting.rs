@@ -4,7 +4,7 @@
 //! GGX table of `render/dfg.rs`); the environment behind the geometry.
 
 use super::gbuffer::GBuffer;
-use super::{LIGHTS, MATERIAL_INSTANCES, MATERIAL_PARAMS, MEDIA, SHADOW_GROUP, SHADOWS, TWO_TRIANGLES, VIEW, fullscreen_key, material_bindings};
+use super::{LIGHTS, MATERIAL_INSTANCES, MATERIAL_PARAMS, MATERIAL_SAMPLER, MATERIAL_TEXTURES, MEDIA, SHADOW_GROUP, SHADOWS, TWO_TRIANGLES, VIEW, fullscreen_key, material_bindings};
 use crate::gpu::pipeline::{Group, HDR, PipelineSpec, Stages, depth_texture, texture};
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Meaning, Handle, TextureDesc};
@@ -23,7 +23,7 @@ pub static DEFERRED: PipelineSpec = PipelineSpec {
     shader: "passes/lighting.wgsl",
     stages: Stages::Fullscreen { fragment: "fs_main", targets: &[HDR] },
     groups: &[
-        Group::always(0, &[VIEW, LIGHTS, texture("gbuffer_normal", 2), texture("gbuffer_material", 4), depth_texture("depth", 5), texture("dfg", 6), MATERIAL_PARAMS, MATERIAL_INSTANCES]),
+        Group::always(0, &[VIEW, LIGHTS, texture("gbuffer_normal", 2), texture("gbuffer_uv", 3), texture("gbuffer_material", 4), depth_texture("depth", 5), texture("dfg", 6), MATERIAL_PARAMS, MATERIAL_INSTANCES, MATERIAL_TEXTURES, MATERIAL_SAMPLER]),
         SHADOW_GROUP,
         Group::when(2, LIGHT_RECT, &[texture("ltc_matrix", 0), texture("ltc_amplitude", 1)]),
         Group::when(3, MEDIA_SHADOWS, MEDIA),
@@ -38,7 +38,7 @@ pub fn lighting(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle
     let sampled = scene.has_rect_lights() && scene.quality.rect_lights == RectLights::Sampled;
     let defs = [(SHADOWS, shadows.is_some()), (LIGHT_RECT, ltc.is_some()), (RECT_SAMPLED, sampled), (MEDIA_SHADOWS, media)];
     let key = p.pipeline(fullscreen_key(&DEFERRED, scene, &defs));
-    let inputs = [("gbuffer_normal", gb.normal), ("gbuffer_material", gb.material), ("depth", depth)];
+    let inputs = [("gbuffer_normal", gb.normal), ("gbuffer_uv", gb.uv), ("gbuffer_material", gb.material), ("depth", depth)];
     for (_, h) in inputs {
         p.sample(h);
     }

@@ -81,9 +81,38 @@ pub const SHADOW_GROUP: Group =
 /// pass that imports the module; `material::back`'s binding numbers).
 pub const MATERIAL_PARAMS: Binding = storage("material_params", Bindings::RENDERER.params, FRAG.union(COMPUTE));
 pub const MATERIAL_INSTANCES: Binding = storage("material_instances", Bindings::RENDERER.instances, FRAG.union(COMPUTE));
+/// Its textures (one filterable array, every layout has it so a texture
+/// added to a scene changes no layout) and their sampler.
+pub const MATERIAL_TEXTURES: Binding = Binding {
+    name: "material_textures",
+    entry: wgpu::BindGroupLayoutEntry {
+        binding: Bindings::RENDERER.textures,
+        visibility: FRAG.union(COMPUTE),
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            multisampled: false,
+        },
+        count: None,
+    },
+};
+pub const MATERIAL_SAMPLER: Binding = Binding {
+    name: "material_sampler",
+    entry: wgpu::BindGroupLayoutEntry {
+        binding: Bindings::RENDERER.sampler,
+        visibility: FRAG.union(COMPUTE),
+        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+        count: None,
+    },
+};
 /// Binds them.
-pub fn material_bindings(s: &crate::render::scene_gpu::SceneGpu) -> [(&'static str, wgpu::BindingResource<'_>); 2] {
-    [("material_params", s.material_params.as_entire_binding()), ("material_instances", s.material_instances.as_entire_binding())]
+pub fn material_bindings(s: &crate::render::scene_gpu::SceneGpu) -> [(&'static str, wgpu::BindingResource<'_>); 4] {
+    [
+        ("material_params", s.material_params.as_entire_binding()),
+        ("material_instances", s.material_instances.as_entire_binding()),
+        ("material_textures", wgpu::BindingResource::TextureView(&s.material_textures.view)),
+        ("material_sampler", wgpu::BindingResource::Sampler(&s.material_textures.sampler)),
+    ]
 }
 pub const MEDIA: &[Binding] = &[storage("media", 0, FRAG.union(COMPUTE))];
 

@@ -6,7 +6,7 @@
 //! denoiser takes), and `samples`. The session forgets the history, so
 //! accumulation restarts, whenever the scene or its pipeline changes.
 
-use super::{LIGHTS, MATERIAL_INSTANCES, MATERIAL_PARAMS, MEDIA, VIEW, material_bindings};
+use super::{LIGHTS, MATERIAL_INSTANCES, MATERIAL_PARAMS, MATERIAL_SAMPLER, MATERIAL_TEXTURES, MEDIA, VIEW, material_bindings};
 use crate::gpu::pipeline::{COMPUTE, Group, HDR, PipelineSpec, Stages, sizes, storage, storage_rw, storage_texture, uniform};
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Meaning, Element, Handle, PipelineKey, TensorLayout, TextureDesc};
@@ -41,6 +41,8 @@ pub static PATH_TRACE: PipelineSpec = PipelineSpec {
                 storage_texture("samples", 9, SAMPLES),
                 MATERIAL_PARAMS,
                 MATERIAL_INSTANCES,
+                MATERIAL_TEXTURES,
+                MATERIAL_SAMPLER,
             ],
         ),
         Group::always(1, &[storage("nodes", 0, COMPUTE), storage("triangles", 1, COMPUTE)]),

@@ -33,7 +33,7 @@ fn repository_library() -> Library {
     let mut lib = library::read_tree(&shader_root()).unwrap();
     let program = crate::material::Program {
         definitions: vec![crate::material::shorthand(crate::diag::Location::file_start("test.toml"))],
-        instances: Vec::new(),
+        ..Default::default()
     };
     crate::render::session::material_module(&mut lib, &shader_root(), &program);
     lib

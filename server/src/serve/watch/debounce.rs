@@ -24,7 +24,7 @@ pub fn is_source_file(path: &Path) -> bool {
         return false;
     }
     match Path::new(name).extension().and_then(|e| e.to_str()) {
-        Some(ext) => ["wgsl", "toml", "mat", "gltf", "glb", "bin"].iter().any(|want| ext.eq_ignore_ascii_case(want)),
+        Some(ext) => ["wgsl", "toml", "mat", "gltf", "glb", "bin", "png", "exr"].iter().any(|want| ext.eq_ignore_ascii_case(want)),
         None => false,
     }
 }

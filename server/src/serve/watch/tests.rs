@@ -109,7 +109,7 @@ impl Session {
 
 #[test]
 fn source_file_names() {
-    for yes in ["a.wgsl", "dir/b.WGSL", "scene.toml", "paint.mat", "m.gltf", "m.glb", "m.bin", "x.y.wgsl"] {
+    for yes in ["a.wgsl", "dir/b.WGSL", "scene.toml", "paint.mat", "m.gltf", "m.glb", "m.bin", "x.y.wgsl", "rust.png", "sky.EXR"] {
         assert!(is_source_file(Path::new(yes)), "{yes}");
     }
     for no in [
@@ -121,7 +121,7 @@ fn source_file_names() {
         ".#a.wgsl",
         "a.wgsl.tmp",
         ".hidden.wgsl",
-        "a.png",
+        "a.jpg",
         "wgsl",
         "#a.wgsl#",
         "",

@@ -47,7 +47,7 @@ fn make_closure(base_color: vec3<f32>, metallic: f32, reflectance: vec3<f32>, ro
 }
 
 // plastic (../scenes/materials/plastic.mat:12:10)
-fn material_0_init(slot: u32, n: vec3<f32>, v: vec3<f32>) -> Surface {
+fn material_0_init(slot: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> Surface {
     let n_v = max(dot(n, v), 1e-4);
     var s: Surface;
     s.count = 1u;
@@ -60,12 +60,26 @@ fn material_0_init(slot: u32, n: vec3<f32>, v: vec3<f32>) -> Surface {
     return s;
 }
 
+// Where a material is evaluated: the UV, its screen-space derivatives
+// (zero: the finest mip level) and the tangent (xyz, w: the bitangent's sign;
+// zero: none, so normal maps are flat).
+struct MaterialPoint {
+    uv: vec2<f32>,
+    duv_dx: vec2<f32>,
+    duv_dy: vec2<f32>,
+    tangent: vec4<f32>,
+}
+
+fn material_point(uv: vec2<f32>, tangent: vec4<f32>) -> MaterialPoint {
+    return MaterialPoint(uv, vec2(0.0), vec2(0.0), tangent);
+}
+
 // The surface of `instance` at a point with normal `n`, seen from `v`.
-fn material_init(instance: u32, n: vec3<f32>, v: vec3<f32>) -> Surface {
+fn material_init_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> Surface {
     let header = material_instances[instance];
     var s: Surface;
     switch header.x {
-        default: { s = material_0_init(header.y, n, v); }
+        default: { s = material_0_init(header.y, n, v, p); }
     }
     if header.z != 0u {
         let n_v = max(dot(n, v), 1e-4);
@@ -77,6 +91,11 @@ fn material_init(instance: u32, n: vec3<f32>, v: vec3<f32>) -> Surface {
         }
     }
     return s;
+}
+
+// `material_init_at` where no UV is known: textures read their corner texel.
+fn material_init(instance: u32, n: vec3<f32>, v: vec3<f32>) -> Surface {
+    return material_init_at(instance, n, v, material_point(vec2(0.0), vec4(0.0)));
 }
 
 fn max3(x: vec3<f32>) -> f32 {
