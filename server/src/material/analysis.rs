@@ -42,6 +42,10 @@ pub enum Feature {
     /// A medium that absorbs: the slab is in the top of a layer, with a
     /// thickness above 0 and a transmission colour other than white.
     Absorption,
+    /// A dielectric that lets light through its interface (refracting into
+    /// a solid, or straight through a thin wall): a transmission weight
+    /// above 0 and metalness below 1.
+    Transmission,
 }
 
 /// Why a material is not energy-conserving.
@@ -436,6 +440,7 @@ fn slab_features(def: &Definition, slab: &Slab, in_layer_top: bool) -> BTreeSet<
         (Feature::Fuzz, !is(Field::FuzzWeight, zero) && !is(Field::FuzzColor, zero)),
         (Feature::Emission, !is(Field::EmissionLuminance, zero) && !is(Field::EmissionColor, zero)),
         (Feature::Absorption, in_layer_top && !is(Field::Thickness, zero) && !is(Field::TransmissionColor, white)),
+        (Feature::Transmission, !metal_only && !is(Field::TransmissionWeight, zero)),
     ]
     .into_iter()
     .filter_map(|(feature, on)| on.then_some(feature))

@@ -171,10 +171,19 @@ pub enum Field {
     TransmissionColor,
     /// The slab's thickness, in the units of `transmission_color`.
     Thickness,
+    /// OpenPBR `transmission_weight`: the share of a dielectric's base that
+    /// transmits (refracts through the interface) instead of diffusing.
+    /// The transmitted light keeps `transmission_color` per unit of
+    /// distance inside a solid (Beer–Lambert), or once through a thin wall.
+    TransmissionWeight,
+    /// OpenPBR `geometry_thin_walled`: above 0.5 the surface is a thin
+    /// shell, and light passes straight through it instead of refracting
+    /// into a solid.
+    ThinWalled,
 }
 
 impl Field {
-    pub const ALL: [Field; 16] = [
+    pub const ALL: [Field; 18] = [
         Field::BaseColor,
         Field::BaseMetalness,
         Field::SpecularWeight,
@@ -191,6 +200,8 @@ impl Field {
         Field::EmissionLuminance,
         Field::TransmissionColor,
         Field::Thickness,
+        Field::TransmissionWeight,
+        Field::ThinWalled,
     ];
 
     /// The name written in material files.
@@ -212,6 +223,8 @@ impl Field {
             Field::EmissionLuminance => "emission_luminance",
             Field::TransmissionColor => "transmission_color",
             Field::Thickness => "thickness",
+            Field::TransmissionWeight => "transmission_weight",
+            Field::ThinWalled => "thin_walled",
         }
     }
 
@@ -233,7 +246,7 @@ impl Field {
 
     /// The value of a field the material does not set: together, a white
     /// rough plastic with IOR 1.5 (F0 = 0.04), no haze, fuzz or emission,
-    /// and a clear, infinitely thin medium.
+    /// and a clear, infinitely thin medium that transmits nothing.
     pub fn default(self) -> Value {
         match self {
             Field::BaseColor => Value::Vec3([0.8; 3]),
@@ -243,6 +256,7 @@ impl Field {
             Field::SpecularIor => Value::Float(1.5),
             Field::SpecularRoughness => Value::Float(0.5),
             Field::HazeWeight | Field::FuzzWeight | Field::EmissionLuminance | Field::Thickness => Value::Float(0.0),
+            Field::TransmissionWeight | Field::ThinWalled => Value::Float(0.0),
             Field::HazeRoughness => Value::Float(0.7),
             Field::FuzzRoughness => Value::Float(0.5),
             Field::EmissionColor => Value::Vec3([1.0; 3]),
