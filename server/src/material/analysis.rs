@@ -663,6 +663,24 @@ mod tests {
     }
 
     #[test]
+    fn transmission_needs_a_weight_and_a_dielectric() {
+        let mut b = Build::new("m");
+        let one = b.float(1.0);
+        let zero = b.float(0.0);
+        let glass = b.slab(&[(Field::TransmissionWeight, one)]);
+        let opaque = b.slab(&[(Field::TransmissionWeight, zero)]);
+        let metal = b.slab(&[(Field::TransmissionWeight, one), (Field::BaseMetalness, one)]);
+        let half = b.float(0.5);
+        let m1 = b.mix(glass, opaque, half);
+        let root = b.mix(m1, metal, half);
+        let a = analyse(&b.finish(root));
+        let transmits = |n: NodeId| a.features[n.0 as usize].contains(&Feature::Transmission);
+        assert!(transmits(glass), "{:?}", a.features);
+        assert!(!transmits(opaque), "transmission_weight: 0 transmits nothing");
+        assert!(!transmits(metal), "metal does not transmit");
+    }
+
+    #[test]
     fn add_and_out_of_range_constants_break_energy_conservation() {
         let mut b = Build::new("m");
         let bright = b.float(1.25);
