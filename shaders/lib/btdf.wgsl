@@ -56,6 +56,19 @@ fn mirrored(n: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     return l - 2.0 * dot(n, l) * n;
 }
 
+// The half vector of the reflection lobe at l: of l itself above the
+// surface, of its mirror image above for a thin wall's light below.
+fn reflection_half(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
+    return normalize(v + select(mirrored(n, l), l, dot(n, l) > 0.0));
+}
+
+// The share of the light at microfacet cosine v·h that goes to l's side:
+// the reflectance above, the rest below.
+fn reflection_share(n_l: f32, v_h: f32, eta: f32, thin: f32) -> f32 {
+    let r = dielectric_reflectance(max(v_h, 0.0), eta, thin);
+    return select(1.0 - r, r, n_l > 0.0);
+}
+
 // BSDF × |n·l| for light from l seen from v: the interface's reflection
 // above the surface, what it lets through below.
 fn dielectric_cos(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, eta: f32, roughness: f32, thin: f32, tint: vec3<f32>) -> vec3<f32> {
@@ -67,11 +80,9 @@ fn dielectric_cos(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, eta: f32, roughness:
     let n_v = max(dot(n, v), 1e-4);
     let a = alpha(roughness);
     if n_l > 0.0 || thin > 0.5 {
-        let m = select(mirrored(n, l), l, n_l > 0.0);
-        let h = normalize(v + m);
-        let r = dielectric_reflectance(max(dot(v, h), 0.0), eta, thin);
+        let h = reflection_half(n, v, l);
         let lobe = d_ggx(n, h, a) * v_smith(n_v, abs(n_l), a) * abs(n_l);
-        return select((1.0 - r) * tint, vec3(r), n_l > 0.0) * lobe;
+        return select(tint, vec3(1.0), n_l > 0.0) * reflection_share(n_l, dot(v, h), eta, thin) * lobe;
     }
     let h = refraction_half(n, v, l, eta);
     let v_h = dot(v, h);
@@ -94,12 +105,10 @@ fn dielectric_pdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, eta: f32, roughness:
     let n_v = max(dot(n, v), 1e-4);
     let a = alpha(roughness);
     if n_l > 0.0 || thin > 0.5 {
-        let m = select(mirrored(n, l), l, n_l > 0.0);
-        let h = normalize(v + m);
-        let r = dielectric_reflectance(max(dot(v, h), 0.0), eta, thin);
+        let h = reflection_half(n, v, l);
         // VNDF's pdf(h) = G1(v) v·h D(h) / n·v; reflection's Jacobian
         // 1 / (4 v·h) cancels the v·h.
-        return select(1.0 - r, r, n_l > 0.0) * g1_smith(n_v, a) * d_ggx(n, h, a) / (4.0 * n_v);
+        return reflection_share(n_l, dot(v, h), eta, thin) * g1_smith(n_v, a) * d_ggx(n, h, a) / (4.0 * n_v);
     }
     let h = refraction_half(n, v, l, eta);
     let v_h = dot(v, h);

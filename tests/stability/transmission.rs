@@ -6,7 +6,8 @@
 
 use std::f64::consts::PI;
 
-use crate::chi2::{self, Axis, Fit, GAUSS};
+use crate::chi2::{self, Axis, Fit};
+use crate::sampling::{self, Density};
 use loupe::gpu::Gpu;
 use loupe::gpu::testing::Kernel;
 
@@ -195,46 +196,9 @@ fn offsets(half: &Half, l: [f32; 3]) -> Option<(f64, f64)> {
 }
 
 /// Each cell's probability (both halves, above first) and the directional
-/// albedo (∫ f over the sphere), by Gauss–Legendre quadrature per cell.
-pub struct Density {
-    pub cells: Vec<f64>,
-    pub albedo: [f64; 3],
-}
-
+/// albedo (∫ f over the sphere), by `sampling::integrate`.
 pub fn density(gpu: &Gpu, k: &Kernels, case: &Case) -> Density {
-    let mut points = Vec::new();
-    let mut weights = Vec::new();
-    let mut input = header(case).to_vec();
-    let mut base = 0;
-    for half in halves(case) {
-        let (cos, phi) = (half.cos, half.phi);
-        for i in 0..cos.cells {
-            for j in 0..phi.cells {
-                for (ta, wa) in GAUSS {
-                    let (c, dc) = cos.at((i as f64 + ta) / cos.cells as f64);
-                    for (tb, wb) in GAUSS {
-                        let (p, dp) = phi.at((j as f64 + tb) / phi.cells as f64);
-                        let s = (1.0 - c * c).max(0.0).sqrt();
-                        input.push([(s * p.cos()) as f32, (s * p.sin()) as f32, c as f32, 0.0]);
-                        points.push(base + i * phi.cells + j);
-                        weights.push(wa * wb * dc * dp / (cos.cells * phi.cells) as f64);
-                    }
-                }
-            }
-        }
-        base += cos.cells * phi.cells;
-    }
-    let out: Vec<[f32; 4]> = k.density.run(gpu, &input, points.len(), &[]).unwrap();
-    let mut cells = vec![0.0; base];
-    let mut albedo = [0.0; 3];
-    for ((o, cell), w) in out.iter().zip(&points).zip(&weights) {
-        assert!(o.iter().all(|x| x.is_finite()), "{case}: pdf, f = {o:?}");
-        cells[*cell] += f64::from(o[0]) * w;
-        for c in 0..3 {
-            albedo[c] += f64::from(o[1 + c]) * w;
-        }
-    }
-    Density { cells, albedo }
+    sampling::integrate(gpu, &k.density, &header(case), &halves(case).map(|h| (h.cos, h.phi)), case)
 }
 
 /// One drawn sample: (direction, pdf), (weight).
