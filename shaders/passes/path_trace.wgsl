@@ -24,6 +24,9 @@
 #ifdef MEDIA
 #import loupe::media::{media, media_span, coefficients}
 #endif
+#ifdef MATERIAL_TRANSMISSION
+#import loupe::material::{material_inside, material_medium}
+#endif
 
 struct Shading {
     // xyz: vertex normals (world); na.w: material index.
@@ -393,6 +396,15 @@ fn shade_hit(tri: u32, u: f32, v: f32, p: vec3<f32>, dir: vec3<f32>) -> Vertex {
     return Vertex(p, ng, n, -dir, material_init_at(u32(s.na.w), n, -dir, point), false);
 }
 
+#ifdef MATERIAL_TRANSMISSION
+// Whether the ray met the triangle's back face: from inside the solid, on
+// a closed mesh (its triangles wind outward, as geometric normals say).
+fn from_inside(tri: u32, dir: vec3<f32>) -> bool {
+    let t = triangles[tri];
+    return dot(cross(t.b.xyz - t.a.xyz, t.c.xyz - t.a.xyz), dir) > 0.0;
+}
+#endif
+
 fn path(pixel: vec2<u32>) -> Sample {
     let jitter = vec2(rand(), rand());
     var origin = view.position.xyz;
@@ -427,6 +439,14 @@ fn path(pixel: vec2<u32>) -> Sample {
             break;
         } else {
             x = shade_hit(hit.triangle, hit.u, hit.v, origin + dir * hit.t, dir);
+#ifdef MATERIAL_TRANSMISSION
+            // The segment just travelled lay inside the solid: Beer–Lambert
+            // over its length; and the interface is crossed outward.
+            if from_inside(hit.triangle, dir) {
+                throughput *= pow(max(material_medium(x.surface), vec3(1e-6)), vec3(hit.t));
+                x.surface = material_inside(x.surface);
+            }
+#endif
             // Emissive surfaces are not sampled by next-event estimation:
             // a path finds them by its own direction, at full weight.
             out.radiance += throughput * material_emission(x.surface);
@@ -449,7 +469,9 @@ fn path(pixel: vec2<u32>) -> Sample {
             pdf = ISOTROPIC;
         } else {
             let s = material_sample(x.surface, x.n, x.v, vec3(rand(), rand(), rand()));
-            if s.pdf <= 0.0 || dot(s.l, x.ng) <= 0.0 {
+            // Reflected above both normals or transmitted below both; a
+            // direction between them (shading normals) ends the path.
+            if s.pdf <= 0.0 || (dot(s.l, x.ng) > 0.0) != (dot(s.l, x.n) > 0.0) {
                 break;
             }
             l = s.l;
@@ -468,7 +490,9 @@ fn path(pixel: vec2<u32>) -> Sample {
         }
         origin = select(offset(x.p, x.ng, l), x.p, x.in_medium);
         dir = l;
-        last_pdf = pdf;
+        // Light sampling never draws a direction below a surface: one that
+        // was transmitted takes what it finds unweighted.
+        last_pdf = select(pdf, 0.0, dot(l, x.ng) < 0.0);
         last = x;
     }
     return out;

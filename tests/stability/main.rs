@@ -15,6 +15,7 @@ mod half;
 mod inputs;
 mod sampling;
 mod scenes;
+mod transmission;
 
 use loupe::gpu::testing;
 
@@ -126,6 +127,78 @@ fn energy_compensation_returns_a_white_metals_light() {
         max_dielectric = max_dielectric.max(albedo);
     }
     eprintln!("furnace: white metal within {worst:.1e} of 1; white dielectric at most {max_dielectric:.5}");
+    all_pass(&failures);
+}
+
+/// How far a clear smooth interface's albedo may sit from 1: the 0.5 % of
+/// the furnace (the single-scattering GGX lobes lose G2/G1 of the
+/// light, about 1e-4 at the clamped roughness, and f32 rounding the rest).
+const CLEAR: f64 = 5e-3;
+
+/// `dielectric_direction` draws from `dielectric_pdf` over the whole
+/// sphere (reflection and refraction, total internal reflection inside,
+/// thin walls straight through); a sample's weight never exceeds 1 (it is
+/// G2/G1); the albedo stays at or below 1.
+#[test]
+fn transmission_samples_follow_their_pdf() {
+    let gpu = testing::device();
+    let kernels = transmission::Kernels::new(&gpu);
+    let cases = transmission::cases();
+    let threshold = chi2::sidak(SIGNIFICANCE, cases.len());
+    let u = loupe::testing::uniforms(transmission::SAMPLES);
+    let mut failures = Vec::new();
+    let (mut worst_p, mut largest_weight, mut max_albedo) = (1.0f64, 0.0f64, 0.0f64);
+    for case in &cases {
+        let density = transmission::density(&gpu, &kernels, case);
+        let drawn = transmission::draw(&gpu, &kernels, case, &u);
+        let bad = drawn.iter().filter(|d| d.iter().flatten().any(|x| !x.is_finite())).count();
+        failures.extend((bad > 0).then(|| format!("{case}: {bad} samples hold a NaN or Inf")));
+        let fit = transmission::fit(case, &drawn, &density);
+        let largest = drawn.iter().map(|d| f64::from(d[1][0])).fold(0.0, f64::max);
+        let integral: f64 = density.cells.iter().sum();
+        let kept = drawn.iter().filter(|d| d[0][3] > 0.0).count() as f64 / drawn.len() as f64;
+        let (mean, se) = transmission::mean_weight(&drawn);
+        eprintln!(
+            "{case}: chi² {:.0} over {} dof ({} pooled), p = {:.3e}; largest weight {largest:.4}; albedo {:.5} (sampled {mean:.5} ± {se:.1e}); kept {kept:.5}, ∫pdf {integral:.5}",
+            fit.statistic, fit.dof, fit.pooled, fit.p_value, density.albedo[0]
+        );
+        if fit.p_value < threshold {
+            failures.push(format!("{case}: chi-square p = {:e} < {threshold:e}: the samples do not follow dielectric_pdf", fit.p_value));
+        }
+        failures.extend(at_most(&format!("{case}: largest weight"), largest, 1.0 + ALBEDO_SLACK).err());
+        failures.extend(at_most(&format!("{case}: albedo"), density.albedo[0], 1.0 + ALBEDO_SLACK).err());
+        let sigma = (kept * (1.0 - kept) / drawn.len() as f64).sqrt();
+        failures.extend(
+            at_most(&format!("{case}: kept share {kept} against ∫pdf {integral}"), (kept - integral).abs(), GRAZING + 4.0 * sigma).err(),
+        );
+        worst_p = worst_p.min(fit.p_value);
+        largest_weight = largest_weight.max(largest);
+        max_albedo = max_albedo.max(density.albedo[0]);
+    }
+    eprintln!(
+        "{} cases: worst p {worst_p:.3e} (threshold {threshold:.3e}), largest weight {largest_weight:.4}, max albedo {max_albedo:.5}",
+        cases.len()
+    );
+    all_pass(&failures);
+}
+
+/// The transmission furnace: a clear, smooth interface (a solid seen from
+/// outside and from inside, a thin wall) reflects and transmits all the
+/// light, within `CLEAR`: the mean sample weight, Fresnel splitting it.
+#[test]
+fn a_clear_smooth_interface_returns_all_the_light() {
+    let gpu = testing::device();
+    let kernels = transmission::Kernels::new(&gpu);
+    let u = loupe::testing::uniforms(transmission::SAMPLES);
+    let mut failures = Vec::new();
+    let mut worst = 0.0f64;
+    for case in transmission::smooth() {
+        let (mean, se) = transmission::mean_weight(&transmission::draw(&gpu, &kernels, &case, &u));
+        eprintln!("{case}: albedo {mean:.5} ± {se:.1e}");
+        failures.extend(at_most(&format!("{case}: albedo against 1"), (mean - 1.0).abs(), CLEAR).err());
+        worst = worst.max((mean - 1.0).abs());
+    }
+    eprintln!("transmission furnace: within {worst:.1e} of 1");
     all_pass(&failures);
 }
 

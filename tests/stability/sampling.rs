@@ -180,29 +180,40 @@ pub fn density(gpu: &Gpu, k: &Kernels, case: &Case) -> Density {
 /// `density` of a kernel written as `DENSITY` is: (pdf, reflected light ×
 /// cosine) of direction `input[2 + i].xyz`.
 pub fn quadrature(gpu: &Gpu, kernel: &Kernel, case: &Case) -> Density {
-    let (cos, phi) = axes(case);
-    let mut points = Vec::with_capacity(cos.cells * phi.cells * GAUSS.len().pow(2));
-    let mut weights = Vec::with_capacity(points.capacity());
-    let mut input = header(case).to_vec();
-    for i in 0..cos.cells {
-        for j in 0..phi.cells {
-            for (ta, wa) in GAUSS {
-                let (c, dc) = cos.at((i as f64 + ta) / cos.cells as f64);
-                for (tb, wb) in GAUSS {
-                    let (p, dp) = phi.at((j as f64 + tb) / phi.cells as f64);
-                    let s = (1.0 - c * c).max(0.0).sqrt();
-                    input.push([(s * p.cos()) as f32, (s * p.sin()) as f32, c as f32, 0.0]);
-                    points.push(i * phi.cells + j);
-                    weights.push(wa * wb * dc * dp / (cos.cells * phi.cells) as f64);
+    integrate(gpu, kernel, &header(case), &[axes(case)], case)
+}
+
+/// The quadrature of a kernel written as `DENSITY` is, after `header`,
+/// over the cells of `grids` (each a (cos θ, φ) pair of axes; cells
+/// numbered grid by grid, cos θ major): each cell's probability and the
+/// integral of the light.
+pub fn integrate(gpu: &Gpu, kernel: &Kernel, header: &[[f32; 4]], grids: &[(Axis, Axis)], what: &dyn std::fmt::Display) -> Density {
+    let mut points = Vec::new();
+    let mut weights = Vec::new();
+    let mut input = header.to_vec();
+    let mut first = 0;
+    for (cos, phi) in grids {
+        for i in 0..cos.cells {
+            for j in 0..phi.cells {
+                for (ta, wa) in GAUSS {
+                    let (c, dc) = cos.at((i as f64 + ta) / cos.cells as f64);
+                    for (tb, wb) in GAUSS {
+                        let (p, dp) = phi.at((j as f64 + tb) / phi.cells as f64);
+                        let s = (1.0 - c * c).max(0.0).sqrt();
+                        input.push([(s * p.cos()) as f32, (s * p.sin()) as f32, c as f32, 0.0]);
+                        points.push(first + i * phi.cells + j);
+                        weights.push(wa * wb * dc * dp / (cos.cells * phi.cells) as f64);
+                    }
                 }
             }
         }
+        first += cos.cells * phi.cells;
     }
     let out: Vec<[f32; 4]> = kernel.run(gpu, &input, points.len(), &[]).unwrap();
-    let mut cells = vec![0.0; cos.cells * phi.cells];
+    let mut cells = vec![0.0; first];
     let mut albedo = [0.0; 3];
     for ((o, cell), w) in out.iter().zip(&points).zip(&weights) {
-        assert!(o.iter().all(|x| x.is_finite()), "{case}: pdf, brdf_cos = {o:?}");
+        assert!(o.iter().all(|x| x.is_finite()), "{what}: pdf, light = {o:?}");
         cells[*cell] += f64::from(o[0]) * w;
         for c in 0..3 {
             albedo[c] += f64::from(o[1 + c]) * w;

@@ -42,6 +42,10 @@ pub enum Feature {
     /// A medium that absorbs: the slab is in the top of a layer, with a
     /// thickness above 0 and a transmission colour other than white.
     Absorption,
+    /// A dielectric that lets light through its interface (refracting into
+    /// a solid, or straight through a thin wall): a transmission weight
+    /// above 0 and metalness below 1.
+    Transmission,
 }
 
 /// Why a material is not energy-conserving.
@@ -440,6 +444,7 @@ fn slab_features(def: &Definition, slab: &Slab, in_layer_top: bool) -> BTreeSet<
         (Feature::Fuzz, !is(Field::FuzzWeight, zero) && !is(Field::FuzzColor, zero)),
         (Feature::Emission, !is(Field::EmissionLuminance, zero) && !is(Field::EmissionColor, zero)),
         (Feature::Absorption, in_layer_top && !is(Field::Thickness, zero) && !is(Field::TransmissionColor, white)),
+        (Feature::Transmission, !metal_only && !is(Field::TransmissionWeight, zero)),
     ]
     .into_iter()
     .filter_map(|(feature, on)| on.then_some(feature))
@@ -659,6 +664,24 @@ mod tests {
         assert!(!absorbs(base), "a base's medium is not crossed: {:?}", a.features);
         assert!(!absorbs(clear_top), "a clear medium absorbs nothing");
         assert!(absorbs(tinted_top));
+    }
+
+    #[test]
+    fn transmission_needs_a_weight_and_a_dielectric() {
+        let mut b = Build::new("m");
+        let one = b.float(1.0);
+        let zero = b.float(0.0);
+        let glass = b.slab(&[(Field::TransmissionWeight, one)]);
+        let opaque = b.slab(&[(Field::TransmissionWeight, zero)]);
+        let metal = b.slab(&[(Field::TransmissionWeight, one), (Field::BaseMetalness, one)]);
+        let half = b.float(0.5);
+        let m1 = b.mix(glass, opaque, half);
+        let root = b.mix(m1, metal, half);
+        let a = analyse(&b.finish(root));
+        let transmits = |n: NodeId| a.features[n.0 as usize].contains(&Feature::Transmission);
+        assert!(transmits(glass), "{:?}", a.features);
+        assert!(!transmits(opaque), "transmission_weight: 0 transmits nothing");
+        assert!(!transmits(metal), "metal does not transmit");
     }
 
     #[test]

@@ -25,6 +25,17 @@ pub const IMPORT_PATH: &str = "loupe::material";
 /// Where the module sits among the shader files, as diagnostics show it: it
 /// is generated, never on disk.
 pub const DISPLAY: &str = "generated/material.wgsl";
+/// The def the path tracer's solid-glass code compiles under. The module
+/// cannot define it for its importers (naga_oil reads `#define` only in the
+/// entry shader), so the composer adds it to every shader composed with a
+/// module that has the code (`implied_defs`).
+pub const TRANSMISSION_DEF: &str = "MATERIAL_TRANSMISSION";
+
+/// The defs the module `text` implies for the shaders importing it.
+pub fn implied_defs(text: &str) -> Option<&'static str> {
+    text.contains("\nfn material_inside(").then_some(TRANSMISSION_DEF)
+}
+
 /// Where the module's two buffers, and its textures and their sampler, are
 /// bound.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -55,6 +66,9 @@ pub struct Features {
     pub emission: bool,
     /// A layer whose top absorbs (thickness and transmission colour).
     pub absorption: bool,
+    /// A dielectric that transmits (`transmission_weight`): refraction
+    /// into solids and light through thin walls (`shaders/lib/btdf.wgsl`).
+    pub transmission: bool,
     /// A definition with multiple-scattering compensation (applied where
     /// its instance says so: `quality.energy_compensation`).
     pub compensated: bool,
@@ -77,6 +91,7 @@ impl Features {
                 f.emission |= set(Field::EmissionLuminance);
                 f.absorption |= set(Field::Thickness) && set(Field::TransmissionColor);
                 f.normal |= slab.get(Field::Normal).is_some();
+                f.transmission |= set(Field::TransmissionWeight);
             }
             f.textures |= d.exprs.iter().any(|e| matches!(e.kind, ExprKind::Call(Builtin::Sample | Builtin::NormalMap, _)));
             // Compensation scales F0 and F90 alike: F90 must be a field.
@@ -94,6 +109,7 @@ impl Features {
             (self.fuzz, "fuzz"),
             (self.emission, "emission"),
             (self.absorption, "absorption"),
+            (self.transmission, "transmission"),
             (self.compensated, "energy compensation"),
             (self.textures, "textures"),
             (self.normal, "normal"),
@@ -145,12 +161,16 @@ fn header(w: &mut String, definitions: &[Definition], f: Features, max: usize, b
     let _ = writeln!(w, "// Features: core{}.", names.iter().map(|n| format!(", {n}")).collect::<String>());
     w.push_str("#define_import_path loupe::material\n\n");
     w.push_str("#import loupe::brdf::{BrdfSample, PI, slab_cos, slab_pdf, slab_direction, specular_f0, f_schlick_edge, luminance_of}\n");
-    w.push_str("#import loupe::ambient::{ambient_light, gradient_irradiance}\n");
+    let radiance = if f.transmission { ", gradient_radiance" } else { "" };
+    let _ = writeln!(w, "#import loupe::ambient::{{ambient_light, gradient_irradiance{radiance}}}");
     if f.fuzz {
         w.push_str("#import loupe::fuzz::fuzz_cos\n");
     }
     if f.compensated {
         w.push_str("#import loupe::multiscatter::energy_compensation\n");
+    }
+    if f.transmission {
+        w.push_str("#import loupe::btdf::{dielectric_cos, dielectric_pdf, dielectric_direction, fresnel_dielectric}\n");
     }
     w.push_str("#ifdef LIGHT_RECT\n#import loupe::ltc::ltc_rect\n#endif\n\n");
     let _ = writeln!(w, "// A float parameter in .x, a colour or vector in .xyz; each instance's block starts at its slot.");
@@ -188,6 +208,9 @@ fn closure_struct(w: &mut String, f: Features) {
     if f.normal {
         w.push_str("    // The slab's shading normal; zero: the geometry's.\n    normal: vec3<f32>,\n");
     }
+    if f.transmission {
+        w.push_str("    // The share of the closure that is a transmitting dielectric, the\n    // relative IOR across its interface from v's side, 1: a thin wall,\n    // and the colour kept per unit of distance inside (once through a\n    // thin wall).\n    transmission: f32,\n    eta: f32,\n    thin: f32,\n    tint: vec3<f32>,\n");
+    }
     w.push_str("}\n\nstruct Surface {\n    closures: array<Closure, MATERIAL_CLOSURES>,\n    count: u32,\n}\n\n");
     w.push_str("// A closure with every optional part neutral and weight 1.\nfn make_closure(base_color: vec3<f32>, metallic: f32, reflectance: vec3<f32>, roughness: f32) -> Closure {\n    var c: Closure;\n");
     w.push_str("    c.weight = vec3(1.0);\n    c.base_color = base_color;\n    c.metallic = metallic;\n    c.reflectance = reflectance;\n    c.roughness = roughness;\n");
@@ -196,6 +219,9 @@ fn closure_struct(w: &mut String, f: Features) {
     }
     if f.absorption {
         w.push_str("    c.transmittance = vec3(1.0);\n");
+    }
+    if f.transmission {
+        w.push_str("    c.transmission = 0.0;\n    c.eta = 1.5;\n    c.thin = 0.0;\n    c.tint = vec3(1.0);\n");
     }
     w.push_str("    return c;\n}\n\n");
 }
@@ -345,6 +371,16 @@ impl Init<'_> {
             let normal = self.field(slab, Field::Normal);
             let _ = writeln!(self.w, "        c.normal = normalize({normal});");
         }
+        if set(Field::TransmissionWeight) {
+            let (tw, ior) = (self.field(slab, Field::TransmissionWeight), self.field(slab, Field::SpecularIor));
+            let (thin, tc) = (self.field(slab, Field::ThinWalled), self.field(slab, Field::TransmissionColor));
+            // Metal does not transmit; an IOR of 1 would make refraction's
+            // half vector undefined (v + η l = 0), so η stays above it.
+            let _ = writeln!(
+                self.w,
+                "        c.transmission = saturate({tw}) * (1.0 - metallic);\n        c.eta = max({ior}, 1.01);\n        c.thin = select(0.0, 1.0, {thin} > 0.5);\n        c.tint = saturate({tc});"
+            );
+        }
         let _ = writeln!(self.w, "        s.closures[{k}] = c;\n    }}");
     }
 
@@ -492,6 +528,9 @@ fn common(f: Features) -> String {
         w,
         "fn closure_albedo(c: Closure, n_v: f32) -> vec3<f32> {{\n    let fr = f_schlick_edge(c.reflectance, {f90}, n_v);\n    var e = fr + (1.0 - c.metallic) * c.base_color * (vec3(1.0) - fr);"
     );
+    if f.transmission {
+        w.push_str("    // The transmitting share reflects only what its interface does.\n    e = mix(e, vec3(fresnel_dielectric(n_v, c.eta)), c.transmission);\n");
+    }
     if f.fuzz {
         w.push_str("    e = e * (1.0 - max3(c.fuzz_color)) + c.fuzz_color;\n");
     }
@@ -511,6 +550,9 @@ fn common(f: Features) -> String {
     if f.haze {
         let _ = writeln!(w, "    f = mix(f, slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, {f90}, c.haze.y), c.haze.x);");
     }
+    if f.transmission {
+        w.push_str("    f = mix(f, dielectric_cos(n, v, l, c.eta, c.roughness, c.thin, c.tint), c.transmission);\n");
+    }
     if f.fuzz {
         w.push_str("    f = f * (1.0 - max3(c.fuzz_color)) + c.fuzz_color * fuzz_cos(n, v, l, c.fuzz_roughness);\n");
     }
@@ -522,6 +564,9 @@ fn common(f: Features) -> String {
     );
     if f.haze {
         w.push_str("    p = mix(p, slab_pdf(n, v, l, c.base_color, c.metallic, c.reflectance, c.haze.y), c.haze.x);\n");
+    }
+    if f.transmission {
+        w.push_str("    p = mix(p, dielectric_pdf(n, v, l, c.eta, c.roughness, c.thin), c.transmission);\n");
     }
     if f.fuzz {
         w.push_str("    p = mix(p, max(dot(n, l), 0.0) / PI, fuzz_share(c));\n");
@@ -535,16 +580,28 @@ fn common(f: Features) -> String {
     if f.fuzz {
         w.push_str("    let q = fuzz_share(c);\n    if x < q {\n        return cosine_about(n, u.yz);\n    }\n    x = min((x - q) / max(1.0 - q, 1e-8), 0.99999994);\n");
     }
+    if f.transmission {
+        w.push_str("    if x < c.transmission {\n        return dielectric_direction(n, v, vec3(x / c.transmission, u.yz), c.eta, c.roughness, c.thin);\n    }\n    x = min((x - c.transmission) / max(1.0 - c.transmission, 1e-8), 0.99999994);\n");
+    }
     if f.haze {
         w.push_str("    if x < c.haze.x {\n        roughness = c.haze.y;\n        x = x / c.haze.x;\n    } else {\n        x = (x - c.haze.x) / max(1.0 - c.haze.x, 1e-8);\n    }\n    x = min(x, 0.99999994);\n");
     }
-    w.push_str("    return slab_direction(n, v, vec3(x, u.yz), c.base_color, c.metallic, c.reflectance, roughness);\n}\n\n");
+    if f.transmission {
+        // Below the surface only the transmitting lobe's pdf counts: a
+        // reflection drawn below must end the path, not pass for one.
+        w.push_str("    let l = slab_direction(n, v, vec3(x, u.yz), c.base_color, c.metallic, c.reflectance, roughness);\n    return select(vec3(0.0), l, dot(n, l) > 0.0);\n}\n\n");
+    } else {
+        w.push_str("    return slab_direction(n, v, vec3(x, u.yz), c.base_color, c.metallic, c.reflectance, roughness);\n}\n\n");
+    }
     if f.fuzz {
         w.push_str("fn fuzz_share(c: Closure) -> f32 {\n    return max3(c.fuzz_color) * 0.5;\n}\n\n");
         w.push_str("fn cosine_about(n: vec3<f32>, u: vec2<f32>) -> vec3<f32> {\n    let s = select(-1.0, 1.0, n.z >= 0.0);\n    let a = -1.0 / (s + n.z);\n    let b = n.x * n.y * a;\n    let t = vec3(1.0 + s * n.x * n.x * a, s * b, -s * n.x);\n    let bt = vec3(b, s + n.y * n.y * a, -n.y);\n    let r = sqrt(u.x);\n    let phi = 2.0 * PI * u.y;\n    return t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(1.0 - u.x, 0.0));\n}\n\n");
     }
 
     w.push_str(LOOPS);
+    if f.transmission {
+        w.push_str(TRANSMISSION);
+    }
     let emission = if f.emission { "        e += s.closures[k].weight * s.closures[k].emission;\n" } else { "" };
     let _ = writeln!(
         w,
@@ -561,6 +618,13 @@ fn common(f: Features) -> String {
         w.push_str(
             "        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance, c.haze.y, dfg), c.haze.x);\n",
         );
+    }
+    if f.transmission {
+        // The raster's approximation: the transmitting share reflects the
+        // split-sum specular and shows the environment behind, along the
+        // view bent once by the interface (straight through a thin wall),
+        // tinted once by its colour.
+        w.push_str("        let through = select(refract(-v, n, 1.0 / c.eta), -v, c.thin > 0.5);\n        let behind = (1.0 - fresnel_dielectric(dot(n, v), c.eta)) * c.tint * gradient_radiance(top, bottom, through);\n        a = mix(a, ambient_light(top, bottom, n, v, vec3(0.0), 0.0, c.reflectance, c.roughness, dfg) + behind, c.transmission);\n");
     }
     if f.fuzz {
         w.push_str("        a = a * (1.0 - max3(c.fuzz_color)) + c.fuzz_color / PI * gradient_irradiance(top, bottom, n);\n");
@@ -580,6 +644,9 @@ fn common(f: Features) -> String {
             "        let h = ltc_rect(n, v, p, c.haze.y, corners, two_sided, ltc_matrix, ltc_amplitude);\n        lit = mix(lit, diffuse + c.reflectance * h.specular.x + {}, c.haze.x);",
             if f.edge { "c.edge * h.specular.y" } else { "h.specular.y" }
         );
+    }
+    if f.transmission {
+        w.push_str("        lit -= c.transmission * diffuse;\n");
     }
     if f.fuzz {
         w.push_str("        lit = lit * (1.0 - max3(c.fuzz_color)) + c.fuzz_color * r.diffuse;\n");
@@ -696,6 +763,34 @@ fn material_roughness(s: Surface) -> f32 {
         x += luminance_of(s.closures[k].weight) * s.closures[k].roughness;
     }
     return x;
+}
+
+";
+
+/// What the path tracer needs of solids beyond the loops (under its
+/// `MATERIAL_TRANSMISSION` def, on when a definition transmits).
+const TRANSMISSION: &str = "// The surface seen from inside its solid: the interface's relative IOR
+// inverts (thin walls have no inside).
+fn material_inside(s: Surface) -> Surface {
+    var t = s;
+    for (var k = 0u; k < t.count; k++) {
+        t.closures[k].eta = select(1.0 / t.closures[k].eta, t.closures[k].eta, t.closures[k].thin > 0.5);
+    }
+    return t;
+}
+
+// The colour light keeps per unit of distance inside the solid: the solid
+// closures' transmission colours by their transmitting weights (white when
+// none transmits).
+fn material_medium(s: Surface) -> vec3<f32> {
+    var sum = vec3(0.0);
+    var total = 0.0;
+    for (var k = 0u; k < s.count; k++) {
+        let w = luminance_of(s.closures[k].weight) * s.closures[k].transmission * (1.0 - s.closures[k].thin);
+        sum += w * s.closures[k].tint;
+        total += w;
+    }
+    return select(vec3(1.0), sum / total, total > 0.0);
 }
 
 ";

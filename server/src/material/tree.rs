@@ -207,10 +207,19 @@ pub enum Field {
     /// The shading normal, world space (`normal_map(tex, strength)`);
     /// unset: the geometry's.
     Normal,
+    /// OpenPBR `transmission_weight`: the share of a dielectric's base that
+    /// transmits (refracts through the interface) instead of diffusing.
+    /// The transmitted light keeps `transmission_color` per unit of
+    /// distance inside a solid (Beer–Lambert), or once through a thin wall.
+    TransmissionWeight,
+    /// OpenPBR `geometry_thin_walled`: above 0.5 the surface is a thin
+    /// shell, and light passes straight through it instead of refracting
+    /// into a solid.
+    ThinWalled,
 }
 
 impl Field {
-    pub const ALL: [Field; 17] = [
+    pub const ALL: [Field; 19] = [
         Field::BaseColor,
         Field::BaseMetalness,
         Field::SpecularWeight,
@@ -228,6 +237,8 @@ impl Field {
         Field::TransmissionColor,
         Field::Thickness,
         Field::Normal,
+        Field::TransmissionWeight,
+        Field::ThinWalled,
     ];
 
     /// The name written in material files.
@@ -250,6 +261,8 @@ impl Field {
             Field::TransmissionColor => "transmission_color",
             Field::Thickness => "thickness",
             Field::Normal => "normal",
+            Field::TransmissionWeight => "transmission_weight",
+            Field::ThinWalled => "thin_walled",
         }
     }
 
@@ -272,7 +285,7 @@ impl Field {
 
     /// The value of a field the material does not set: together, a white
     /// rough plastic with IOR 1.5 (F0 = 0.04), no haze, fuzz or emission,
-    /// and a clear, infinitely thin medium.
+    /// and a clear, infinitely thin medium that transmits nothing.
     pub fn default(self) -> Value {
         match self {
             Field::BaseColor => Value::Vec3([0.8; 3]),
@@ -282,6 +295,7 @@ impl Field {
             Field::SpecularIor => Value::Float(1.5),
             Field::SpecularRoughness => Value::Float(0.5),
             Field::HazeWeight | Field::FuzzWeight | Field::EmissionLuminance | Field::Thickness => Value::Float(0.0),
+            Field::TransmissionWeight | Field::ThinWalled => Value::Float(0.0),
             Field::HazeRoughness => Value::Float(0.7),
             Field::FuzzRoughness => Value::Float(0.5),
             Field::EmissionColor => Value::Vec3([1.0; 3]),

@@ -106,7 +106,7 @@ impl Warm {
             .make_naga_module(NagaModuleDescriptor {
                 source: &entry.text,
                 file_path: &entry.display,
-                shader_defs: naga_oil_defs(defs),
+                shader_defs: naga_oil_defs(&with_implied(defs, deps)),
                 ..Default::default()
             })
             .map_err(Box::new)
@@ -179,6 +179,15 @@ fn compose_and_validate(
         vec![located(Code::Validation, message, labels, notes, entry)]
     })?;
     Ok(Composed { module, info, files })
+}
+
+/// `defs` and those the imported modules imply: naga_oil reads `#define`
+/// only in the entry, so a module cannot define for its importers what it
+/// provides (the generated material module's transmission code,
+/// `material::back::implied_defs`).
+fn with_implied(defs: &ShaderDefs, deps: &[Arc<SourceFile>]) -> ShaderDefs {
+    let material = deps.iter().filter(|d| d.import_path.as_ref().is_some_and(|(name, _)| name == crate::material::back::IMPORT_PATH));
+    defs.iter().cloned().chain(material.flat_map(|d| crate::material::back::implied_defs(&d.text)).map(str::to_owned)).collect()
 }
 
 fn naga_oil_defs(defs: &ShaderDefs) -> HashMap<String, ShaderDefValue> {

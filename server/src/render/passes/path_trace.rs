@@ -103,6 +103,8 @@ pub fn path_trace(g: &mut GraphBuilder, scene: &Scene) -> Option<Traced> {
 }
 
 #[cfg(test)]
+mod glass_tests;
+#[cfg(test)]
 mod tests;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
