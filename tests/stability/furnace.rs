@@ -5,6 +5,7 @@
 
 use crate::sampling::{self, Case, Density};
 use loupe::gpu::Gpu;
+use loupe::gpu::testing::Kernel;
 
 /// (pdf, brdf_cos with the specular lobe compensated) of direction
 /// `input[2 + i].xyz`: the lobe is brdf_cos's specular term, rebuilt from
@@ -43,7 +44,12 @@ pub fn cases(metallic: f32) -> Vec<Case> {
     out
 }
 
+/// The compensated material's kernel, compiled once for every case.
+pub fn kernel(gpu: &Gpu) -> Kernel {
+    sampling::kernel(gpu, COMPENSATED)
+}
+
 /// The directional albedo with the lobe compensated.
-pub fn compensated(gpu: &Gpu, case: &Case) -> Density {
-    sampling::quadrature(gpu, &sampling::kernel(gpu, COMPENSATED), case)
+pub fn compensated(gpu: &Gpu, kernel: &Kernel, case: &Case) -> Density {
+    sampling::quadrature(gpu, kernel, case)
 }

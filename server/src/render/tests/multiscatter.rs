@@ -90,7 +90,7 @@ fn bless() {
         .chunks(POINTS)
         .map(|r| format!("    {},", r.iter().map(|c| (*c as f32).to_string()).collect::<Vec<_>>().join(", ")))
         .collect();
-    let array = format!("const E_FIT = array<f32, {}>(\n{}\n);\n", POINTS * POINTS, rows.join("\n"));
+    let array = format!("var<private> E_FIT: array<f32, {0}> = array<f32, {0}>(\n{1}\n);\n", POINTS * POINTS, rows.join("\n"));
     std::fs::write(PATH, format!("{}{array}{}", &wgsl[..begin], &wgsl[end..])).unwrap();
 }
 
