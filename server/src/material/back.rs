@@ -115,7 +115,7 @@ pub fn wgsl(definitions: &[Definition], bindings: Bindings) -> String {
     for (i, d) in definitions.iter().enumerate() {
         Init { d, w: &mut w, next: 0, temps: 0 }.function(i);
     }
-    dispatch(&mut w, definitions.len(), features.compensated);
+    dispatch(&mut w, definitions.len(), features);
     w.push_str(&common(features));
     w
 }
@@ -155,6 +155,9 @@ fn closure_struct(w: &mut String, f: Features) {
     if f.haze {
         w.push_str("    // x: the second lobe's share, y: its roughness.\n    haze: vec2<f32>,\n");
     }
+    if f.haze && f.compensated {
+        w.push_str("    // The second lobe's energy compensation over the first's (1: none).\n    haze_compensation: vec3<f32>,\n");
+    }
     if f.fuzz {
         w.push_str("    // Colour times weight.\n    fuzz_color: vec3<f32>,\n    fuzz_roughness: f32,\n");
     }
@@ -172,6 +175,9 @@ fn closure_struct(w: &mut String, f: Features) {
     }
     if f.absorption {
         w.push_str("    c.transmittance = vec3(1.0);\n");
+    }
+    if f.haze && f.compensated {
+        w.push_str("    c.haze_compensation = vec3(1.0);\n");
     }
     w.push_str("    return c;\n}\n\n");
 }
@@ -385,7 +391,7 @@ fn value(v: Value) -> String {
     }
 }
 
-fn dispatch(w: &mut String, count: usize, compensated: bool) {
+fn dispatch(w: &mut String, count: usize, f: Features) {
     w.push_str("// The surface of `instance` at a point with normal `n`, seen from `v`.\nfn material_init(instance: u32, n: vec3<f32>, v: vec3<f32>) -> Surface {\n");
     w.push_str("    let header = material_instances[instance];\n    var s: Surface;\n    switch header.x {\n");
     for i in 1..count {
@@ -394,13 +400,20 @@ fn dispatch(w: &mut String, count: usize, compensated: bool) {
     // A scene without materials (media alone) still links: no closures.
     let fallback = if count == 0 { "" } else { "s = material_0_init(header.y, n, v);" };
     let _ = writeln!(w, "        default: {{ {fallback} }}\n    }}");
-    if compensated {
+    if f.compensated {
         // Once, after the operators, for every closure: one copy of the
         // fit in the module, not one per slab (with one per slab,
         // lavapipe's pipeline compiles took four times as long).
         w.push_str(
-            "    if header.z != 0u {\n        let n_v = max(dot(n, v), 1e-4);\n        for (var k = 0u; k < s.count; k++) {\n            // Turquin's factor scales the whole lobe: F0 and F90 alike.\n            let e = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness);\n            s.closures[k].reflectance *= e;\n            s.closures[k].edge *= e;\n        }\n    }\n",
+            "    if header.z != 0u {\n        let n_v = max(dot(n, v), 1e-4);\n        for (var k = 0u; k < s.count; k++) {\n            // Turquin's factor scales the whole lobe: F0 and F90 alike.\n            let e = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness);\n",
         );
+        if f.haze {
+            // The haze lobe loses what GGX loses at its own roughness:
+            // the first lobe's factor on it would leave a white hazy
+            // metal 9 % dark head-on and 4 % over 1 at grazing views.
+            w.push_str("            s.closures[k].haze_compensation = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].haze.y) / e;\n");
+        }
+        w.push_str("            s.closures[k].reflectance *= e;\n            s.closures[k].edge *= e;\n        }\n    }\n");
     }
     w.push_str("    return s;\n}\n\n");
 }
@@ -409,6 +422,9 @@ fn dispatch(w: &mut String, count: usize, compensated: bool) {
 /// optional parts switched by `f`.
 fn common(f: Features) -> String {
     let f90 = if f.edge { "c.edge" } else { "vec3(1.0)" };
+    // The haze lobe's F0 and F90, compensated at its own roughness.
+    let (haze_f0, haze_f90) =
+        if f.compensated { ("c.reflectance * c.haze_compensation", "c.edge * c.haze_compensation") } else { ("c.reflectance", f90) };
     let mut w = String::new();
     w.push_str(HELPERS);
     // Directional albedo of one closure toward v, for layering and for
@@ -429,7 +445,7 @@ fn common(f: Features) -> String {
         "// BSDF × cosine of one closure, without its weight.\nfn closure_cos(c: Closure, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {{\n    var f = slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, {f90}, c.roughness);"
     );
     if f.haze {
-        let _ = writeln!(w, "    f = mix(f, slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, {f90}, c.haze.y), c.haze.x);");
+        let _ = writeln!(w, "    f = mix(f, slab_cos(n, v, l, c.base_color, c.metallic, {haze_f0}, {haze_f90}, c.haze.y), c.haze.x);");
     }
     if f.fuzz {
         w.push_str("    f = f * (1.0 - max3(c.fuzz_color)) + c.fuzz_color * fuzz_cos(n, v, l, c.fuzz_roughness);\n");
@@ -468,8 +484,9 @@ fn common(f: Features) -> String {
     // The raster's environment light: the split sum per closure.
     w.push_str("// Light from the environment's gradient (`loupe::ambient`), closure by closure.\nfn material_ambient(s: Surface, n: vec3<f32>, v: vec3<f32>, top: vec3<f32>, bottom: vec3<f32>, dfg: texture_2d<f32>) -> vec3<f32> {\n    var e = vec3(0.0);\n    for (var k = 0u; k < s.count; k++) {\n        let c = s.closures[k];\n        var a = ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance, c.roughness, dfg);\n");
     if f.haze {
-        w.push_str(
-            "        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance, c.haze.y, dfg), c.haze.x);\n",
+        let _ = writeln!(
+            w,
+            "        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, {haze_f0}, c.haze.y, dfg), c.haze.x);"
         );
     }
     if f.fuzz {
@@ -486,8 +503,7 @@ fn common(f: Features) -> String {
     if f.haze {
         let _ = writeln!(
             w,
-            "        let h = ltc_rect(n, v, p, c.haze.y, corners, two_sided, ltc_matrix, ltc_amplitude);\n        lit = mix(lit, diffuse + c.reflectance * h.specular.x + {}, c.haze.x);",
-            if f.edge { "c.edge * h.specular.y" } else { "h.specular.y" }
+            "        let h = ltc_rect(n, v, p, c.haze.y, corners, two_sided, ltc_matrix, ltc_amplitude);\n        lit = mix(lit, diffuse + {haze_f0} * h.specular.x + {haze_f90} * h.specular.y, c.haze.x);"
         );
     }
     if f.fuzz {
