@@ -270,6 +270,9 @@ fn every_library_material_reflects_at_most_the_light_it_gets() {
     crate::all_pass(&failures);
 }
 
+/// Parameter values by name, over a definition's defaults.
+type Params = Vec<(&'static str, Value)>;
+
 /// Samples per chi-square case.
 const SAMPLES: usize = 1 << 18;
 
@@ -279,7 +282,7 @@ const SAMPLES: usize = 1 << 18;
 /// one (two GGX lobes) and a fuzz one (fabric: sheen over a rough
 /// dielectric), each with its roughness parameter swept from below the
 /// module's clamp (0.045) to 1. (material, its parameters, the one swept.)
-fn chi2_materials() -> [(&'static str, Vec<(&'static str, Value)>, &'static str); 4] {
+fn chi2_materials() -> [(&'static str, Params, &'static str); 4] {
     [
         ("car_paint::car_paint", vec![], "coat_roughness"),
         ("openpbr::openpbr", vec![("coat_weight", Value::Float(0.5))], "coat_roughness"),
