@@ -13,6 +13,7 @@ mod chi2;
 mod furnace;
 mod half;
 mod inputs;
+mod library;
 mod sampling;
 mod scenes;
 mod transmission;

@@ -135,7 +135,8 @@ pub fn kernel(gpu: &Gpu, body: &str) -> Kernel {
     Kernel::new(gpu, &format!("{PRELUDE}{body}"), "main").unwrap_or_else(|e| panic!("{e}"))
 }
 
-fn header(case: &Case) -> [[f32; 4]; 2] {
+/// What `input[0]` and `input[1]` hold for a case (see `PRELUDE`).
+pub fn header(case: &Case) -> [[f32; 4]; 2] {
     let sin_v = (1.0 - case.cos_v * case.cos_v).sqrt();
     [[sin_v as f32, 0.0, case.cos_v as f32, case.roughness], [1.0, 1.0, 1.0, case.metallic]]
 }
@@ -143,7 +144,7 @@ fn header(case: &Case) -> [[f32; 4]; 2] {
 /// The histogram's axes for a case: both centred on the mirror direction
 /// (cos θ = n·v, φ = π), cells there about a fifth of the specular lobe's
 /// width.
-fn axes(case: &Case) -> (Axis, Axis) {
+fn axes(case: &Case, cells: (usize, usize)) -> (Axis, Axis) {
     let a = alpha(case.roughness);
     let sin_v = (1.0 - case.cos_v * case.cos_v).sqrt();
     // A half vector tilted by δ from n turns the reflection by 2δ(v·h)
@@ -151,8 +152,8 @@ fn axes(case: &Case) -> (Axis, Axis) {
     // lobe spans about alpha · sin θ in cos θ (alpha² at the pole, where
     // cos θ is flat) and alpha · (n·v + alpha) / sin θ in φ, a sliver at
     // grazing views.
-    let cos = Axis::new(0.0, 1.0, case.cos_v, a * sin_v + a * a, CELLS.0);
-    let phi = Axis::new(0.0, 2.0 * PI, PI, (a * (case.cos_v + a) / sin_v).min(10.0), CELLS.1);
+    let cos = Axis::new(0.0, 1.0, case.cos_v, a * sin_v + a * a, cells.0);
+    let phi = Axis::new(0.0, 2.0 * PI, PI, (a * (case.cos_v + a) / sin_v).min(10.0), cells.1);
     (cos, phi)
 }
 
@@ -180,14 +181,27 @@ pub fn density(gpu: &Gpu, k: &Kernels, case: &Case) -> Density {
 /// `density` of a kernel written as `DENSITY` is: (pdf, reflected light ×
 /// cosine) of direction `input[2 + i].xyz`.
 pub fn quadrature(gpu: &Gpu, kernel: &Kernel, case: &Case) -> Density {
-    integrate(gpu, kernel, &header(case), &[axes(case)], case)
+    quadrature_bound(gpu, kernel, case, CELLS, &[])
+}
+
+/// `quadrature` over `cells` (cos θ × φ; `fit` needs the default ones),
+/// with `buffers` bound at group 1 (a material module's).
+pub fn quadrature_bound(gpu: &Gpu, kernel: &Kernel, case: &Case, cells: (usize, usize), buffers: &[&wgpu::Buffer]) -> Density {
+    integrate(gpu, kernel, &header(case), &[axes(case, cells)], case, buffers)
 }
 
 /// The quadrature of a kernel written as `DENSITY` is, after `header`,
 /// over the cells of `grids` (each a (cos θ, φ) pair of axes; cells
 /// numbered grid by grid, cos θ major): each cell's probability and the
 /// integral of the light.
-pub fn integrate(gpu: &Gpu, kernel: &Kernel, header: &[[f32; 4]], grids: &[(Axis, Axis)], what: &dyn std::fmt::Display) -> Density {
+pub fn integrate(
+    gpu: &Gpu,
+    kernel: &Kernel,
+    header: &[[f32; 4]],
+    grids: &[(Axis, Axis)],
+    what: &dyn std::fmt::Display,
+    buffers: &[&wgpu::Buffer],
+) -> Density {
     let mut points = Vec::new();
     let mut weights = Vec::new();
     let mut input = header.to_vec();
@@ -209,7 +223,7 @@ pub fn integrate(gpu: &Gpu, kernel: &Kernel, header: &[[f32; 4]], grids: &[(Axis
         }
         first += cos.cells * phi.cells;
     }
-    let out: Vec<[f32; 4]> = kernel.run(gpu, &input, points.len(), &[]).unwrap();
+    let out: Vec<[f32; 4]> = kernel.run_bound(gpu, &input, points.len(), &[], buffers).unwrap();
     let mut cells = vec![0.0; first];
     let mut albedo = [0.0; 3];
     for ((o, cell), w) in out.iter().zip(&points).zip(&weights) {
@@ -235,7 +249,12 @@ pub fn draw(gpu: &Gpu, k: &Kernels, case: &Case, u: &[[f32; 3]]) -> Vec<Drawn> {
 /// cell probabilities times the number drawn; samples that left the
 /// hemisphere, pdf 0, are in neither).
 pub fn fit(case: &Case, drawn: &[Drawn], density: &Density) -> Fit {
-    let (cos, phi) = axes(case);
+    fit_in(case, CELLS, drawn, density)
+}
+
+/// `fit` over `cells` (those `density` was integrated over).
+pub fn fit_in(case: &Case, cells: (usize, usize), drawn: &[Drawn], density: &Density) -> Fit {
+    let (cos, phi) = axes(case, cells);
     let mut observed = vec![0.0; cos.cells * phi.cells];
     for d in drawn.iter().filter(|d| d[0][3] > 0.0) {
         let (oc, op) = offsets(case, [d[0][0], d[0][1], d[0][2]]);

@@ -198,7 +198,7 @@ fn offsets(half: &Half, l: [f32; 3]) -> Option<(f64, f64)> {
 /// Each cell's probability (both halves, above first) and the directional
 /// albedo (∫ f over the sphere), by `sampling::integrate`.
 pub fn density(gpu: &Gpu, k: &Kernels, case: &Case) -> Density {
-    sampling::integrate(gpu, &k.density, &header(case), &halves(case).map(|h| (h.cos, h.phi)), case)
+    sampling::integrate(gpu, &k.density, &header(case), &halves(case).map(|h| (h.cos, h.phi)), case, &[])
 }
 
 /// One drawn sample: (direction, pdf), (weight).

@@ -144,7 +144,7 @@ pub fn wgsl(definitions: &[Definition], bindings: Bindings) -> String {
     for (i, d) in definitions.iter().enumerate() {
         Init { d, w: &mut w, next: 0, temps: 0 }.function(i);
     }
-    dispatch(&mut w, definitions.len(), features.compensated);
+    dispatch(&mut w, definitions.len(), features);
     if features.textures {
         w.push_str(TEXTURES);
     }
@@ -196,6 +196,9 @@ fn closure_struct(w: &mut String, f: Features) {
     if f.haze {
         w.push_str("    // x: the second lobe's share, y: its roughness.\n    haze: vec2<f32>,\n");
     }
+    if f.haze && f.compensated {
+        w.push_str("    // The second lobe's energy compensation over the first's (1: none).\n    haze_compensation: vec3<f32>,\n");
+    }
     if f.fuzz {
         w.push_str("    // Colour times weight.\n    fuzz_color: vec3<f32>,\n    fuzz_roughness: f32,\n");
     }
@@ -222,6 +225,9 @@ fn closure_struct(w: &mut String, f: Features) {
     }
     if f.transmission {
         w.push_str("    c.transmission = 0.0;\n    c.eta = 1.5;\n    c.thin = 0.0;\n    c.tint = vec3(1.0);\n");
+    }
+    if f.haze && f.compensated {
+        w.push_str("    c.haze_compensation = vec3(1.0);\n");
     }
     w.push_str("    return c;\n}\n\n");
 }
@@ -455,7 +461,7 @@ fn value(v: Value) -> String {
     }
 }
 
-fn dispatch(w: &mut String, count: usize, compensated: bool) {
+fn dispatch(w: &mut String, count: usize, f: Features) {
     w.push_str(POINT);
     w.push_str("// The surface of `instance` at a point with normal `n`, seen from `v`.\nfn material_init_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> Surface {\n");
     w.push_str("    let header = material_instances[instance];\n    var s: Surface;\n    switch header.x {\n");
@@ -465,13 +471,20 @@ fn dispatch(w: &mut String, count: usize, compensated: bool) {
     // A scene without materials (media alone) still links: no closures.
     let fallback = if count == 0 { "" } else { "s = material_0_init(header.y, n, v, p);" };
     let _ = writeln!(w, "        default: {{ {fallback} }}\n    }}");
-    if compensated {
+    if f.compensated {
         // Once, after the operators, for every closure: one copy of the
         // fit in the module, not one per slab (with one per slab,
         // lavapipe's pipeline compiles took four times as long).
         w.push_str(
-            "    if header.z != 0u {\n        let n_v = max(dot(n, v), 1e-4);\n        for (var k = 0u; k < s.count; k++) {\n            // Turquin's factor scales the whole lobe: F0 and F90 alike.\n            let e = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness);\n            s.closures[k].reflectance *= e;\n            s.closures[k].edge *= e;\n        }\n    }\n",
+            "    if header.z != 0u {\n        let n_v = max(dot(n, v), 1e-4);\n        for (var k = 0u; k < s.count; k++) {\n            // Turquin's factor scales the whole lobe: F0 and F90 alike.\n            let e = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness);\n",
         );
+        if f.haze {
+            // The haze lobe loses what GGX loses at its own roughness:
+            // the first lobe's factor on it would leave a white hazy
+            // metal 9 % dark head-on and 4 % over 1 at grazing views.
+            w.push_str("            s.closures[k].haze_compensation = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].haze.y) / e;\n");
+        }
+        w.push_str("            s.closures[k].reflectance *= e;\n            s.closures[k].edge *= e;\n        }\n    }\n");
     }
     w.push_str("    return s;\n}\n\n");
     w.push_str("// `material_init_at` where no UV is known: textures read their corner texel.\nfn material_init(instance: u32, n: vec3<f32>, v: vec3<f32>) -> Surface {\n    return material_init_at(instance, n, v, material_point(vec2(0.0), vec4(0.0)));\n}\n\n");
@@ -520,6 +533,9 @@ fn material_normal_map(texel: vec3<f32>, strength: f32, n: vec3<f32>, tangent: v
 /// optional parts switched by `f`.
 fn common(f: Features) -> String {
     let f90 = if f.edge { "c.edge" } else { "vec3(1.0)" };
+    // The haze lobe's F0 and F90, compensated at its own roughness.
+    let (haze_f0, haze_f90) =
+        if f.compensated { ("c.reflectance * c.haze_compensation", "c.edge * c.haze_compensation") } else { ("c.reflectance", f90) };
     let mut w = String::new();
     w.push_str(HELPERS);
     // Directional albedo of one closure toward v, for layering and for
@@ -548,7 +564,7 @@ fn common(f: Features) -> String {
         "// BSDF × cosine of one closure, without its weight.\nfn closure_cos(c: Closure, {ng}: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {{\n{own}    var f = slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, {f90}, c.roughness);"
     );
     if f.haze {
-        let _ = writeln!(w, "    f = mix(f, slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, {f90}, c.haze.y), c.haze.x);");
+        let _ = writeln!(w, "    f = mix(f, slab_cos(n, v, l, c.base_color, c.metallic, {haze_f0}, {haze_f90}, c.haze.y), c.haze.x);");
     }
     if f.transmission {
         w.push_str("    f = mix(f, dielectric_cos(n, v, l, c.eta, c.roughness, c.thin, c.tint), c.transmission);\n");
@@ -615,8 +631,9 @@ fn common(f: Features) -> String {
     }
     w.push_str("        var a = ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance, c.roughness, dfg);\n");
     if f.haze {
-        w.push_str(
-            "        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance, c.haze.y, dfg), c.haze.x);\n",
+        let _ = writeln!(
+            w,
+            "        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, {haze_f0}, c.haze.y, dfg), c.haze.x);"
         );
     }
     if f.transmission {
@@ -641,8 +658,7 @@ fn common(f: Features) -> String {
     if f.haze {
         let _ = writeln!(
             w,
-            "        let h = ltc_rect(n, v, p, c.haze.y, corners, two_sided, ltc_matrix, ltc_amplitude);\n        lit = mix(lit, diffuse + c.reflectance * h.specular.x + {}, c.haze.x);",
-            if f.edge { "c.edge * h.specular.y" } else { "h.specular.y" }
+            "        let h = ltc_rect(n, v, p, c.haze.y, corners, two_sided, ltc_matrix, ltc_amplitude);\n        lit = mix(lit, diffuse + {haze_f0} * h.specular.x + {haze_f90} * h.specular.y, c.haze.x);"
         );
     }
     if f.transmission {

@@ -29,6 +29,8 @@ struct Closure {
     edge: vec3<f32>,
     // x: the second lobe's share, y: its roughness.
     haze: vec2<f32>,
+    // The second lobe's energy compensation over the first's (1: none).
+    haze_compensation: vec3<f32>,
 }
 
 struct Surface {
@@ -45,6 +47,7 @@ fn make_closure(base_color: vec3<f32>, metallic: f32, reflectance: vec3<f32>, ro
     c.reflectance = reflectance;
     c.roughness = roughness;
     c.edge = vec3(1.0);
+    c.haze_compensation = vec3(1.0);
     return c;
 }
 
@@ -89,6 +92,7 @@ fn material_init_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint)
         for (var k = 0u; k < s.count; k++) {
             // Turquin's factor scales the whole lobe: F0 and F90 alike.
             let e = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness);
+            s.closures[k].haze_compensation = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].haze.y) / e;
             s.closures[k].reflectance *= e;
             s.closures[k].edge *= e;
         }
@@ -131,7 +135,7 @@ fn closure_transmittance(c: Closure) -> vec3<f32> {
 // BSDF × cosine of one closure, without its weight.
 fn closure_cos(c: Closure, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     var f = slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, c.edge, c.roughness);
-    f = mix(f, slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, c.edge, c.haze.y), c.haze.x);
+    f = mix(f, slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance * c.haze_compensation, c.edge * c.haze_compensation, c.haze.y), c.haze.x);
     return f;
 }
 
@@ -259,7 +263,7 @@ fn material_ambient(s: Surface, n: vec3<f32>, v: vec3<f32>, top: vec3<f32>, bott
     for (var k = 0u; k < s.count; k++) {
         let c = s.closures[k];
         var a = ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance, c.roughness, dfg);
-        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance, c.haze.y, dfg), c.haze.x);
+        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance * c.haze_compensation, c.haze.y, dfg), c.haze.x);
         e += c.weight * a;
     }
     return e;
@@ -275,7 +279,7 @@ fn material_rect(s: Surface, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, corners: 
         let diffuse = c.base_color * (1.0 - c.metallic) * r.diffuse;
         var lit = diffuse + c.reflectance * r.specular.x + c.edge * r.specular.y;
         let h = ltc_rect(n, v, p, c.haze.y, corners, two_sided, ltc_matrix, ltc_amplitude);
-        lit = mix(lit, diffuse + c.reflectance * h.specular.x + c.edge * h.specular.y, c.haze.x);
+        lit = mix(lit, diffuse + c.reflectance * c.haze_compensation * h.specular.x + c.edge * c.haze_compensation * h.specular.y, c.haze.x);
         e += c.weight * lit;
     }
     return e;
