@@ -2,8 +2,8 @@
 //! scene's material instances with their parameters, each saying which
 //! scene override path sets it, beside their definitions' compile reports.
 
-use crate::loaded::Loaded;
 use crate::diag::display_path;
+use crate::loaded::Loaded;
 use crate::material::Program;
 use crate::material::tree::{Param, Type, Value};
 use crate::protocol::{MaterialEntry, MaterialParam, MaterialsReport};
