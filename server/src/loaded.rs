@@ -35,6 +35,9 @@ pub struct Loaded {
     /// Every file this scene was read from (itself, its meshes, material
     /// files and weights), for the watcher's dependency graph.
     pub files: Vec<PathBuf>,
+    /// What loading found but could render anyway: what glTF materials
+    /// cannot represent (for `loupe check` and the browser's diagnostics).
+    pub warnings: Vec<Diagnostic>,
 }
 
 /// Reads a scene file, every mesh it references (`scene::load`) and its
@@ -45,11 +48,13 @@ pub fn load(path: &Path) -> Result<Loaded, Diagnostic> {
 
 /// `load` with live overrides applied on top of the file's text.
 pub fn load_with(path: &Path, overrides: &Overrides) -> Result<Loaded, Diagnostic> {
-    let scene::Read { scene, meshes, mut files } = scene::load_with(path, overrides)?;
+    let scene::Read { mut scene, mut meshes, mut files } = scene::load_with(path, overrides)?;
     let dir = path.parent().unwrap_or(Path::new("."));
-    let (materials, reports) = materials(path, &scene, &mut files)?;
+    let (mut materials, mut reports) = materials(path, &scene, &mut files)?;
+    let warnings = gltf_objects::split(dir, &mut scene, &mut meshes, &mut materials, &mut reports)?;
+    read_textures(&mut materials, &mut files)?;
     let denoiser = scene.denoiser.as_ref().map(|d| network(dir, d, &mut files)).transpose()?.map(Arc::new);
-    Ok(Loaded { scene, meshes, materials: Arc::new(materials), reports: Arc::new(reports), denoiser, files })
+    Ok(Loaded { scene, meshes, materials: Arc::new(materials), reports: Arc::new(reports), denoiser, files, warnings })
 }
 
 /// The network of `[denoiser]`: without `weights`, the bundled one for its
@@ -81,14 +86,17 @@ fn network(dir: &Path, d: &Denoiser, files: &mut Vec<PathBuf>) -> Result<Network
 /// relative to the working directory; a failure panics.
 #[cfg(any(test, feature = "testing"))]
 pub fn materials_of(scene: &Scene) -> Arc<Program> {
-    Arc::new(materials(Path::new("scene.toml"), scene, &mut Vec::new()).unwrap_or_else(|d| panic!("{d}")).0)
+    let mut program = materials(Path::new("scene.toml"), scene, &mut Vec::new()).unwrap_or_else(|d| panic!("{d}")).0;
+    read_textures(&mut program, &mut Vec::new()).unwrap_or_else(|d| panic!("{d}"));
+    Arc::new(program)
 }
 
 /// The scene's materials compiled: the shorthand's one definition (when
 /// any entry uses it) and each material file's, once each. A material file
 /// and its imports join the scene's dependencies; a bad one is its own
 /// diagnostic with the scene line that names it as a second label. Each
-/// definition's report comes with it (`compiled`).
+/// definition's report comes with it (`compiled`). Textures are indexed,
+/// not read yet (`read_textures`).
 fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<(Program, Vec<Report>), Diagnostic> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut program = Program::default();
@@ -122,11 +130,8 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<(Pr
                 if !read.contains_key(&file_path) {
                     let start = Instant::now();
                     let mut loaded = material_file(&file_path, at, files)?;
-                    // Its texture defaults index the program's table.
-                    for p in loaded.definitions.iter_mut().flat_map(|d| d.params.iter_mut()) {
-                        if let Value::Texture(k) = p.default {
-                            p.default = Value::Texture(texture_index(&mut program, &loaded.textures[k as usize]));
-                        }
+                    for d in &mut loaded.definitions {
+                        index_textures(&mut program, d, &loaded.textures);
                     }
                     read.insert(file_path.clone(), (loaded, start.elapsed().as_secs_f64() * 1e3));
                 }
@@ -166,6 +171,12 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<(Pr
         };
         program.instances.push(instance);
     }
+    Ok((program, reports))
+}
+
+/// Reads and decodes the program's textures into its layers; each texture
+/// file joins `files`.
+fn read_textures(program: &mut Program, files: &mut Vec<PathBuf>) -> Result<(), Diagnostic> {
     // Watched before they are read, so a fix is seen after a failure.
     files.extend(program.textures.iter().map(|t| t.path.clone()));
     let images = program.textures.iter().map(texture::read).collect::<Result<Vec<_>, _>>()?;
@@ -179,7 +190,7 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<(Pr
         );
     }
     program.layers = Arc::new(layers);
-    Ok((program, reports))
+    Ok(())
 }
 
 /// An analysed definition and its report, whose WGSL size is that of the
@@ -192,6 +203,16 @@ fn compiled(analysis: crate::material::analysis::Analysis, start: Instant, parse
     report.wgsl_bytes = Some(wgsl.len());
     report.compile_ms = Some(parse_ms + start.elapsed().as_secs_f64() * 1e3);
     (analysis.def, report)
+}
+
+/// Makes `d`'s texture defaults, which index `textures` (its front end's
+/// table), index the program's table instead.
+fn index_textures(program: &mut Program, d: &mut Definition, textures: &[TextureSource]) {
+    for p in &mut d.params {
+        if let Value::Texture(k) = p.default {
+            p.default = Value::Texture(texture_index(program, &textures[k as usize]));
+        }
+    }
 }
 
 /// `source`'s index in the program's texture table, added if new.
@@ -266,5 +287,6 @@ fn param_values(d: &Definition, params: &[(String, ParamValue, Location)], mater
     Ok(values)
 }
 
+mod gltf_objects;
 #[cfg(test)]
 mod tests;

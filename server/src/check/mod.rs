@@ -282,7 +282,10 @@ fn check_scene(path: &Path) -> (Checked, Option<Loaded>) {
     let start = Instant::now();
     let display = display_path(path);
     let (loaded, diagnostics) = match guarded(&display, "the scene loader", || crate::loaded::load(path).map_err(|d| vec![d])) {
-        Ok(l) => (Some(l), Vec::new()),
+        Ok(l) => {
+            let warnings = l.warnings.clone();
+            (Some(l), warnings)
+        }
         Err(ds) => (None, ds),
     };
     (Checked { duration: start.elapsed(), ..Checked::uncompiled(&display, ModuleKind::Scene, diagnostics) }, loaded)

@@ -156,3 +156,65 @@ fn material_parameter_overrides_reach_the_instance_and_are_checked() {
     assert_eq!(report.closures, [0]);
     assert!(report.wgsl_bytes.is_some_and(|b| b > 1000) && report.compile_ms.is_some_and(|ms| ms > 0.0), "{report:?}");
 }
+
+/// The repository's scenes directory.
+fn scenes() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
+}
+
+#[test]
+fn a_gltf_object_without_a_material_gets_one_instance_per_gltf_material_and_a_named_one_overrides() {
+    let dir = tempfile::tempdir_in(scenes()).unwrap();
+    let scene = dir.path().join("s.toml");
+    let crate_ = "[[materials]]\nname = \"m\"\n\n[[objects]]\nname = \"box\"\nmesh = \"../meshes/crate/crate.gltf\"\n";
+    std::fs::write(&scene, crate_).unwrap();
+    let l = load(&scene).unwrap_or_else(|d| panic!("{d}"));
+    let names: Vec<(&str, usize)> = l.scene.objects.iter().map(|o| (o.name.as_str(), o.material)).collect();
+    assert_eq!(names, [("box/wood", 1), ("box/felt", 2)], "instances after the scene's own");
+    let defs: Vec<&str> = l.materials.instances[1..].iter().map(|i| l.materials.definitions[i.definition as usize].name.as_str()).collect();
+    assert!(defs[0].ends_with("crate.gltf::wood") && defs[1].ends_with("crate.gltf::felt"), "{defs:?}");
+    // Each part draws its primitive: four sides, then top and bottom.
+    let triangles: Vec<usize> = l
+        .scene
+        .objects
+        .iter()
+        .map(|o| match &o.geometry {
+            scene::Geometry::Mesh { file, .. } => l.meshes[file].triangle_count(),
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(triangles, [8, 4]);
+    assert_eq!(l.materials.textures.len(), 2, "the wood's colour and normal map");
+    assert!(l.files.iter().any(|f| f.ends_with("crate_wood.png")), "textures are watched");
+    // The anisotropy the felt uses is named, in the glTF file.
+    let w: Vec<&Diagnostic> = l.warnings.iter().filter(|w| w.message.contains("KHR_materials_anisotropy")).collect();
+    assert!(w.len() == 1 && w[0].file().is_some_and(|f| f.ends_with("crate.gltf")), "{:?}", l.warnings);
+    // Naming a material overrides them all.
+    std::fs::write(&scene, format!("{crate_}material = \"m\"\n")).unwrap();
+    let l = load(&scene).unwrap_or_else(|d| panic!("{d}"));
+    let names: Vec<(&str, usize)> = l.scene.objects.iter().map(|o| (o.name.as_str(), o.material)).collect();
+    assert_eq!(names, [("box", 0)]);
+    assert_eq!(l.materials.instances.len(), 1);
+    assert!(l.warnings.is_empty(), "{:?}", l.warnings);
+    // A shape has no materials of its own.
+    std::fs::write(&scene, "[[objects]]\nshape = \"cube\"\n").unwrap();
+    assert!(load(&scene).unwrap_err().message.contains("needs a `material`"));
+}
+
+#[test]
+fn the_showcase_uses_six_library_materials_and_a_gltf_asset_with_its_own() {
+    let l = load(&scenes().join("showcase.toml")).unwrap_or_else(|d| panic!("{d}"));
+    let library: std::collections::BTreeSet<&str> = l
+        .scene
+        .materials
+        .iter()
+        .filter_map(|m| match &m.source {
+            MaterialSource::File { file, .. } => Some(file.as_str()),
+            MaterialSource::Shorthand { .. } => None,
+        })
+        .collect();
+    let gltf: Vec<&str> = l.materials.definitions.iter().map(|d| d.name.as_str()).filter(|n| n.contains(".gltf::")).collect();
+    assert!(library.len() + gltf.len() >= 6 && library.len() >= 5, "{library:?} {gltf:?}");
+    assert_eq!(gltf.len(), 2, "the crate's wood and felt: {gltf:?}");
+    assert!(l.materials.definitions.iter().any(|d| d.name.contains(".gltf::") && d.params.iter().any(|p| p.ty == Type::Texture)));
+}

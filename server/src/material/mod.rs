@@ -10,6 +10,7 @@ pub mod back;
 #[cfg(test)]
 mod build;
 pub mod front;
+pub mod gltf;
 pub mod operators;
 pub mod report;
 pub mod texture;

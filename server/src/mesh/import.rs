@@ -46,6 +46,31 @@ pub fn load_gltf(path: &Path, display: &str) -> Result<MeshData, Diagnostic> {
 }
 
 pub(super) fn load(path: &Path, display: &str, limits: &Limits) -> Result<MeshData, Diagnostic> {
+    let parts = read(path, display, limits, false)?.parts;
+    Ok(parts.into_iter().next().map(|(_, mesh)| mesh).unwrap_or_default())
+}
+
+/// A glTF's default scene split by material: what an object that takes the
+/// glTF's own materials draws, one part per material.
+#[derive(Debug, Clone)]
+pub struct Parts {
+    /// Per glTF material (its index; `None`: primitives without one, which
+    /// glTF draws with its default material), in the order first drawn, the
+    /// triangles that use it.
+    pub parts: Vec<(Option<usize>, MeshData)>,
+    /// The document's JSON (the .glb's JSON chunk), for its materials.
+    pub json: serde_json::Value,
+    /// A .gltf's text, to place diagnostics; `None` for a .glb.
+    pub text: Option<String>,
+}
+
+/// Loads the default scene of a .gltf or .glb split by material.
+pub fn load_gltf_parts(path: &Path, display: &str) -> Result<Parts, Diagnostic> {
+    read(path, display, &LIMITS, true)
+}
+
+/// The default scene's triangles: one part, or (`split`) one per material.
+fn read(path: &Path, display: &str, limits: &Limits, split: bool) -> Result<Parts, Diagnostic> {
     let bytes =
         read_capped(path, limits.file_bytes).map_err(|e| e.diagnostic("file", limits.file_bytes).at(Location::file_start(display)))?;
     let is_glb = bytes.starts_with(glb::MAGIC);
@@ -72,7 +97,13 @@ pub(super) fn load(path: &Path, display: &str, limits: &Limits) -> Result<MeshDa
     }
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = load_buffers(&doc, &root, base, bin, limits)?;
-    Flattener { doc: &doc, root: &root, buffers: &buffers, limits, meshes: vec![None; root.meshes.len()] }.run()
+    let parts = Flattener { doc: &doc, root: &root, buffers: &buffers, limits, split, meshes: vec![None; root.meshes.len()] }.run()?;
+    let (json, text) = if split {
+        (serde_json::from_slice(json).map_err(|e| doc.json_error(&e))?, doc.text.as_ref().map(|(t, _)| (*t).to_owned()))
+    } else {
+        (serde_json::Value::Null, None)
+    };
+    Ok(Parts { parts, json, text })
 }
 
 fn not_utf8(display: &str, bytes: &[u8], e: std::str::Utf8Error) -> Diagnostic {
@@ -84,17 +115,17 @@ fn not_utf8(display: &str, bytes: &[u8], e: std::str::Utf8Error) -> Diagnostic {
 }
 
 /// The file being loaded, to place diagnostics.
-struct Doc<'a> {
-    display: &'a str,
+pub struct Doc<'a> {
+    pub display: &'a str,
     /// A .gltf's text. `None` for a .glb: its JSON sits in a binary file no
     /// editor shows by line, so its diagnostics name elements, at the file.
-    text: Option<(&'a str, LineIndex)>,
+    pub text: Option<(&'a str, LineIndex)>,
 }
 
 impl Doc<'_> {
     /// Where the element at `path` is written, clipped to its first line: a
     /// whole primitive underlined would hide which one is meant.
-    fn at(&self, path: &JsonPath) -> Location {
+    pub fn at(&self, path: &JsonPath) -> Location {
         let Some((text, lines)) = &self.text else {
             return Location::file_start(self.display);
         };
@@ -218,17 +249,32 @@ struct Flattener<'a> {
     root: &'a Root,
     buffers: &'a [Cow<'a, [u8]>],
     limits: &'a Limits,
-    /// Each mesh decoded once, however many nodes place it.
-    meshes: Vec<Option<MeshData>>,
+    /// Keep primitives of different materials apart.
+    split: bool,
+    /// Each mesh decoded once, however many nodes place it: its primitives
+    /// joined, per material when `split`.
+    meshes: Vec<Option<Vec<Group>>>,
+}
+
+/// Triangles of one material (`None`: no material, or not split).
+type Group = (Option<usize>, MeshData);
+
+/// The group of `out` for `key`, added if new.
+fn group(out: &mut Vec<Group>, key: Option<usize>) -> &mut MeshData {
+    let i = out.iter().position(|(k, _)| *k == key).unwrap_or_else(|| {
+        out.push((key, MeshData::default()));
+        out.len() - 1
+    });
+    &mut out[i].1
 }
 
 impl Flattener<'_> {
-    fn run(mut self) -> Result<MeshData, Diagnostic> {
+    fn run(mut self) -> Result<Vec<Group>, Diagnostic> {
         let (doc, root) = (self.doc, self.root);
         if root.meshes.is_empty() {
             return Err(doc.error(&JsonPath::top("meshes"), "the file has no meshes"));
         }
-        let mut out = MeshData::default();
+        let mut out = Vec::new();
         let scene = match root.scene {
             Some(s) => Some((s.value(), JsonPath::top("scene"))),
             None if !root.scenes.is_empty() => Some((0, JsonPath::element("scenes", 0))),
@@ -264,7 +310,7 @@ impl Flattener<'_> {
             }
         };
         self.walk(&mut out, roots)?;
-        if out.indices.is_empty() {
+        if out.iter().all(|(_, m)| m.indices.is_empty()) {
             return Err(doc.error(&listed_at, format!("{listed_at} has no triangles to draw")));
         }
         Ok(out)
@@ -272,7 +318,7 @@ impl Flattener<'_> {
 
     /// Depth-first over node trees with an explicit stack: a deep or cyclic
     /// hierarchy can neither overflow the stack nor loop.
-    fn walk(&mut self, out: &mut MeshData, roots: Vec<(usize, JsonPath)>) -> Result<(), Diagnostic> {
+    fn walk(&mut self, out: &mut Vec<Group>, roots: Vec<(usize, JsonPath)>) -> Result<(), Diagnostic> {
         let (doc, root) = (self.doc, self.root);
         let mut seen = vec![false; root.nodes.len()];
         let mut stack: Vec<(usize, Mat4, JsonPath)> = roots.into_iter().rev().map(|(n, at)| (n, IDENTITY, at)).collect();
@@ -327,7 +373,7 @@ impl Flattener<'_> {
     }
 
     /// Appends mesh `m`, transformed by `world`, to `out`.
-    fn place(&mut self, out: &mut MeshData, m: usize, world: &Mat4, referenced_at: &JsonPath) -> Result<(), Diagnostic> {
+    fn place(&mut self, out: &mut Vec<Group>, m: usize, world: &Mat4, referenced_at: &JsonPath) -> Result<(), Diagnostic> {
         if self.meshes.get(m).is_none() {
             let count = self.root.meshes.len();
             return Err(self.doc.error(referenced_at, format!("{referenced_at} refers to meshes[{m}], but the file has {count} meshes")));
@@ -336,18 +382,23 @@ impl Flattener<'_> {
             Some(part) => part,
             None => self.decode_mesh(m)?,
         };
-        let placed = extend(out, &part, world, self.doc, referenced_at, self.limits);
+        // Split by material, the parts together stay within the limits.
+        let count = |groups: &[Group]| groups.iter().fold((0, 0), |(v, t), (_, m)| (v + m.positions.len(), t + m.triangle_count()));
+        let ((v, t), (pv, pt)) = (count(out), count(&part));
+        let placed = within_limits(v + pv, t + pt, self.doc, referenced_at, self.limits)
+            .and_then(|()| part.iter().try_for_each(|(key, p)| extend(group(out, *key), p, world, self.doc, referenced_at, self.limits)));
         self.meshes[m] = Some(part);
         placed
     }
 
-    fn decode_mesh(&self, m: usize) -> Result<MeshData, Diagnostic> {
+    fn decode_mesh(&self, m: usize) -> Result<Vec<Group>, Diagnostic> {
         let path = JsonPath::element("meshes", m);
-        let mut out = MeshData::default();
+        let mut out = Vec::new();
         for (p, primitive) in self.root.meshes[m].primitives.iter().enumerate() {
             let at = path.field("primitives").index(p);
             let part = self.decode_primitive(primitive, &at)?;
-            extend(&mut out, &part, &IDENTITY, self.doc, &at, self.limits)?;
+            let key = if self.split { primitive.material.map(|i| i.value()) } else { None };
+            extend(group(&mut out, key), &part, &IDENTITY, self.doc, &at, self.limits)?;
         }
         Ok(out)
     }
@@ -591,15 +642,7 @@ impl Flattener<'_> {
 
 /// Appends `part` transformed by `m` to `out`, within the limits.
 fn extend(out: &mut MeshData, part: &MeshData, m: &Mat4, doc: &Doc, at: &JsonPath, limits: &Limits) -> Result<(), Diagnostic> {
-    let vertices = out.positions.len() + part.positions.len();
-    let triangles = out.triangle_count() + part.triangle_count();
-    if vertices > limits.vertices || triangles > limits.triangles {
-        let (max_v, max_t) = (limits.vertices, limits.triangles);
-        return Err(doc.error(
-            at,
-            format!("with {at} the mesh has {vertices} vertices and {triangles} triangles; the limits are {max_v} and {max_t}"),
-        ));
-    }
+    within_limits(out.positions.len() + part.positions.len(), out.triangle_count() + part.triangle_count(), doc, at, limits)?;
     let base = out.positions.len() as u32;
     let normal = NormalTransform::of(m);
     for &p in &part.positions {
@@ -619,6 +662,18 @@ fn extend(out: &mut MeshData, part: &MeshData, m: &Mat4, doc: &Doc, at: &JsonPat
         // A mirroring transform turns counter-clockwise into clockwise.
         let [a, b, c] = if normal.mirrors { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] };
         out.indices.extend([a + base, b + base, c + base]);
+    }
+    Ok(())
+}
+
+/// An error unless a mesh of `vertices` and `triangles` is within the limits.
+fn within_limits(vertices: usize, triangles: usize, doc: &Doc, at: &JsonPath, limits: &Limits) -> Result<(), Diagnostic> {
+    if vertices > limits.vertices || triangles > limits.triangles {
+        let (max_v, max_t) = (limits.vertices, limits.triangles);
+        return Err(doc.error(
+            at,
+            format!("with {at} the mesh has {vertices} vertices and {triangles} triangles; the limits are {max_v} and {max_t}"),
+        ));
     }
     Ok(())
 }

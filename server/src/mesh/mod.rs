@@ -8,17 +8,18 @@
 mod dependencies;
 mod glb;
 mod import;
-mod json_path;
+pub(crate) mod json_path;
 mod math;
 mod shapes;
 mod tangents;
-mod uri;
+pub(crate) mod uri;
 
 #[cfg(test)]
 mod tests;
 
 pub use dependencies::external_buffers;
-pub use import::load_gltf;
+pub use import::Doc;
+pub use import::{Parts, load_gltf, load_gltf_parts};
 pub use shapes::{cube, plane, sphere};
 
 /// The most triangles a mesh may have: 16 Mi, an index buffer of 192 MiB,

@@ -169,7 +169,9 @@ pub struct Object {
     /// A glTF 2.0 file (.gltf or .glb), relative to the scene file.
     #[serde(default)]
     pub mesh: Option<String>,
-    pub material: String,
+    /// Required for a shape; a mesh without one takes its glTF materials.
+    #[serde(default)]
+    pub material: Option<String>,
     #[serde(default)]
     pub position: Vec3,
     /// Euler angles in degrees, applied in Y, X, Z order (yaw, pitch, roll).

@@ -91,8 +91,14 @@ pub struct Denoiser {
 pub struct Object {
     pub name: String,
     pub geometry: Geometry,
-    /// Index into `Scene::materials`.
+    /// Index into `Scene::materials`: the material instance it is drawn
+    /// with (`crate::loaded` appends instances past the scene's own for
+    /// glTF materials).
     pub material: usize,
+    /// The object names no material: it is drawn with its glTF's own, one
+    /// per primitive. `crate::loaded` splits it into one object per glTF
+    /// material before the renderer sees it.
+    pub gltf_materials: bool,
     pub position: Vec3,
     pub rotation_deg: Vec3,
     pub scale: Vec3,

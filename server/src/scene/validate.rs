@@ -288,16 +288,25 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
             (Some(_), Some(_)) => return Err(c.error(&p("mesh"), "give either `shape` or `mesh`, not both")),
             (None, None) => return Err(c.error(&[K("objects"), I(i)], "needs a `shape` (sphere, cube, plane) or a `mesh` (a glTF file)")),
         };
-        let Some(material) = f.materials.iter().position(|m| m.name == o.material) else {
-            let known: Vec<&str> = f.materials.iter().map(|m| m.name.as_str()).collect();
-            return Err(c.error(
-                &p("material"),
-                format!(
-                    "no material named `{}` (defined: {})",
-                    o.material,
-                    if known.is_empty() { "none".into() } else { known.join(", ") }
-                ),
-            ));
+        let (material, gltf_materials) = match (&o.material, &geometry) {
+            (Some(name), _) => {
+                let Some(material) = f.materials.iter().position(|m| &m.name == name) else {
+                    let known: Vec<&str> = f.materials.iter().map(|m| m.name.as_str()).collect();
+                    return Err(c.error(
+                        &p("material"),
+                        format!(
+                            "no material named `{name}` (defined: {})",
+                            if known.is_empty() { "none".into() } else { known.join(", ") }
+                        ),
+                    ));
+                };
+                (material, false)
+            }
+            // Its index is the instance `loaded` appends per glTF material.
+            (None, Geometry::Mesh { .. }) => (0, true),
+            (None, Geometry::Shape(_)) => {
+                return Err(c.error(&[K("objects"), I(i)], "needs a `material`: only a glTF mesh brings materials of its own"));
+            }
         };
         let scale = match o.scale {
             Scale::Uniform(s) => [s; 3],
@@ -314,6 +323,7 @@ pub fn scene(display: &str, text: &str, f: file::File) -> Result<Scene, Diagnost
             name: o.name.clone().unwrap_or_else(|| format!("object{i}")),
             geometry,
             material,
+            gltf_materials,
             position: c.vec3(&p("position"), o.position)?,
             rotation_deg: c.vec3(&p("rotation_deg"), o.rotation_deg)?,
             scale,

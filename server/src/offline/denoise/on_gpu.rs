@@ -80,6 +80,7 @@ pub fn denoise(gpu: Gpu, shader_root: &Path, net: Arc<Network>, images: &TileIma
         reports: Default::default(),
         denoiser: Some(net.clone()),
         files: vec![],
+        warnings: vec![],
     };
     let adapter = gpu.adapter_name();
     let mut session = Session::new(gpu, shader_root, lib, &loaded);

@@ -105,7 +105,7 @@ mod tests {
             let lib = crate::shader::library::read_tree(&root).unwrap();
             let text = format!("[output]\nwidth = {W}\nheight = {H}\n[post]\nauto_exposure = true\nauto_exposure_speed = 3.0\n");
             let scene = crate::scene::parse("auto.toml", &text).unwrap();
-            let loaded = crate::loaded::Loaded { scene: scene.clone(), meshes: Default::default(), materials: crate::loaded::materials_of(&scene), denoiser: None, files: vec![], reports: Default::default() };
+            let loaded = crate::loaded::Loaded { scene: scene.clone(), meshes: Default::default(), materials: crate::loaded::materials_of(&scene), denoiser: None, files: vec![], reports: Default::default(), warnings: vec![] };
             let gpu = crate::gpu::open().unwrap_or_else(|e| panic!("these tests need a GPU device (lavapipe will do): {e}"));
             let source = Arc::new(gpu.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("known luminance"),

@@ -96,6 +96,9 @@ pub struct Daemon {
     /// reloads the scene.
     scene_files: Vec<PathBuf>,
     scene_error: Option<Diagnostic>,
+    /// What the installed scene loaded with but could not represent (glTF
+    /// materials), shown beside the errors.
+    scene_warnings: Vec<Diagnostic>,
     /// Live values from the browser on top of the scene file.
     overrides: Overrides,
     shared: Arc<Shared>,
@@ -148,6 +151,7 @@ impl Daemon {
                         reports: Default::default(),
                         denoiser: None,
                         files: vec![config.scene_path.clone()],
+                        warnings: Vec::new(),
                     },
                     Some(d),
                 )
@@ -170,6 +174,7 @@ impl Daemon {
             config,
             // Files whose names are not UTF-8 are left out, each with its warning.
             file_errors: unnamed.into_iter().filter_map(|d| Some((d.file()?.to_owned(), d))).collect(),
+            scene_warnings: loaded.warnings,
             scene_files: loaded.files,
             scene_error,
             overrides: Overrides::new(),
@@ -375,6 +380,7 @@ impl Daemon {
         self.publish_materials(&l);
         let changed = self.session.set_scene(&l);
         self.scene_files = l.files;
+        self.scene_warnings = l.warnings;
         self.config.watch_files.set(&self.scene_files);
         self.scene_error = None;
         changed

@@ -149,7 +149,7 @@ impl Daemon {
 
     pub(super) fn diagnostics(&self) -> Vec<Diagnostic> {
         let mut all = self.session.pipeline_diagnostics();
-        for d in self.file_errors.values().chain(self.scene_error.iter()).chain(self.gpu_errors.iter()) {
+        for d in self.file_errors.values().chain(self.scene_error.iter()).chain(&self.scene_warnings).chain(self.gpu_errors.iter()) {
             if !all.iter().any(|x| x.to_string() == d.to_string()) {
                 all.push(d.clone());
             }

@@ -95,7 +95,7 @@ fn gpu_session_with(net: Network, scene: Scene, sets: &[[Image; 3]]) -> (Session
     let network = Arc::new(net);
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
     let lib = crate::shader::library::read_tree(&root).unwrap();
-    let loaded = crate::loaded::Loaded { scene: scene.clone(), meshes: Default::default(), materials: crate::loaded::materials_of(&scene), denoiser: Some(network.clone()), files: vec![], reports: Default::default() };
+    let loaded = crate::loaded::Loaded { scene: scene.clone(), meshes: Default::default(), materials: crate::loaded::materials_of(&scene), denoiser: Some(network.clone()), files: vec![], reports: Default::default(), warnings: vec![] };
     let gpu = crate::gpu::testing::device();
     let sources: Vec<[Arc<wgpu::Texture>; 3]> = sets.iter().map(|i| [texture(&gpu, COLOR, &i[0]), texture(&gpu, HDR, &i[1]), texture(&gpu, HDR, &i[2])]).collect();
     let mut session = Session::new(gpu, &root, lib, &loaded);

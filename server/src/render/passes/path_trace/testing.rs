@@ -20,7 +20,7 @@ pub const SAMPLES: &str = "path_trace/samples";
 /// A scene from TOML text, with `meshes` as if loaded from its files.
 pub fn loaded(text: &str, meshes: BTreeMap<String, Arc<MeshData>>) -> Loaded {
     let scene = crate::scene::parse("path_test.toml", text).unwrap_or_else(|d| panic!("{d}"));
-    Loaded { materials: crate::loaded::materials_of(&scene), scene, meshes, denoiser: None, files: vec![], reports: Default::default() }
+    Loaded { materials: crate::loaded::materials_of(&scene), scene, meshes, denoiser: None, files: vec![], reports: Default::default(), warnings: vec![] }
 }
 
 /// A session on the test device over the repository's shaders, every

@@ -39,7 +39,7 @@ fn session(loaded: &Loaded) -> Session {
 
 fn parsed(text: &str) -> Loaded {
     let scene = crate::scene::parse("volume_test.toml", text).unwrap_or_else(|d| panic!("{d}"));
-    Loaded { materials: crate::loaded::materials_of(&scene), scene, meshes: BTreeMap::new(), denoiser: None, files: vec![], reports: Default::default() }
+    Loaded { materials: crate::loaded::materials_of(&scene), scene, meshes: BTreeMap::new(), denoiser: None, files: vec![], reports: Default::default(), warnings: vec![] }
 }
 
 /// Renders `loaded` in `s` (its pipelines built on first use), capturing
