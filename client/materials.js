@@ -100,10 +100,14 @@ export class MaterialsPanel {
     this.values();
   }
 
-  /** A parameter's rows: one slider, or one per colour channel; a
-   * texture's image path, read-only (textures change in their files). */
+  /** A parameter's rows: one slider, or one per colour channel; or one
+   * read-only line. */
   rows(p) {
-    if (p.type === 'texture') return [el('div', { class: 'texture-param', 'data-texture': p.path }, `${p.name}: `, el('code', {}, p.value))];
+    // A texture (its image path) and a glTF's own material (no override
+    // path: its values live in the glTF) are shown, not edited.
+    if (p.type === 'texture' || p.path === null) {
+      return [el('div', { class: 'readonly-param', 'data-readonly': p.name }, `${p.name}: `, el('code', {}, JSON.stringify(p.value)))];
+    }
     const { min, max, step } = sliderOf(p, p.value);
     const title = [p.doc, p.unit ? `unit: ${p.unit}` : null, `default ${JSON.stringify(p.default)}`].filter(Boolean).join(' · ');
     const label = p.unit ? `${p.name} (${p.unit})` : p.name;
@@ -125,7 +129,7 @@ export class MaterialsPanel {
   /** The selected instance's values into its controls (not a focused one). */
   values() {
     for (const p of this.report?.materials[this.selected]?.params ?? []) {
-      if (p.type === 'texture') continue;
+      if (p.type === 'texture' || p.path === null) continue;
       const parts = Array.isArray(p.value) ? p.value.map((v, k) => [`${p.path}[${k}]`, v]) : [[p.path, p.value]];
       for (const [path, v] of parts) {
         const input = this.params.querySelector(`[data-path="${CSS.escape(path)}"]`);

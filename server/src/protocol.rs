@@ -272,9 +272,10 @@ pub struct MaterialsReport {
 pub struct MaterialEntry {
     /// The entry's index in the scene, as the G-buffer stores it.
     pub index: u32,
-    /// The entry's `name`.
+    /// The entry's `name` (a glTF's own material: `FILE::MATERIAL`).
     pub name: String,
-    /// The material file as the scene writes it; `null` for the shorthand.
+    /// The material file as the scene writes it (the glTF file for a
+    /// glTF's own material); `null` for the shorthand.
     pub file: Option<String>,
     /// The definition's name (`shorthand` for the scene file's own).
     pub material: String,
@@ -287,8 +288,9 @@ pub struct MaterialEntry {
 pub struct MaterialParam {
     pub name: String,
     /// The scene override path that sets it (`materials[2].params.NAME`;
-    /// the shorthand's `materials[0].roughness`).
-    pub path: String,
+    /// the shorthand's `materials[0].roughness`); `None` for a glTF's own
+    /// materials, which no override sets.
+    pub path: Option<String>,
     /// `float`, `color` or `vec3`.
     #[serde(rename = "type")]
     pub ty: &'static str,
