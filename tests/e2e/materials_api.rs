@@ -9,7 +9,7 @@ use std::time::Duration;
 use loupe_tests::{Project, Server};
 use serde_json::Value;
 
-const LIMIT: Duration = Duration::from_secs(180);
+pub const LIMIT: Duration = Duration::from_secs(180);
 pub const SCENE: &str = "scenes/small_materials.toml";
 const PLASTIC: &str = "scenes/materials/plastic.mat";
 
@@ -38,7 +38,22 @@ fn materials_are_served_with_their_reports_and_a_broken_file_keeps_the_last_good
     let first = s.get_json("/api/materials");
     assert_eq!(first["scene"], SCENE);
     let names: Vec<&str> = first["materials"].as_array().unwrap().iter().map(|m| m["name"].as_str().unwrap()).collect();
-    assert_eq!(names, ["floor", "car paint", "polished metal", "rough metal", "hazy metal", "fabric", "skin", "plastic"]);
+    assert_eq!(
+        names,
+        [
+            "floor",
+            "car paint",
+            "polished metal",
+            "rough metal",
+            "hazy metal",
+            "fabric",
+            "skin",
+            "plastic",
+            "rust",
+            "thin glass",
+            "solid glass"
+        ]
+    );
     for (i, m) in first["materials"].as_array().unwrap().iter().enumerate() {
         assert_eq!(m["index"], i, "{m}");
     }

@@ -7,16 +7,19 @@
 
 use super::{Server, browser, shown, until};
 use crate::materials::generations;
-use crate::materials_api::{SCENE, small_materials};
+use crate::materials_api::{LIMIT, SCENE, small_materials};
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_materials_panel_shows_tree_report_and_live_parameters_and_names_a_pixels_material() {
     let p = small_materials("browser-materials");
     let s = Server::start(&p.root, &["--render", "on-change", "--scene", SCENE]);
+    // The library's first frame builds its pipelines (glass and textures
+    // included): longer on two busy cores than the page's wait allows.
+    s.wait_for("a first frame", LIMIT, || (s.get_json("/api/status")["frame"].as_u64() > Some(0)).then_some(()));
     let (_driver, c) = browser().await;
     c.goto(&s.url("/")).await.unwrap();
     until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
-    until(&c, &s, "the eight materials", "document.querySelectorAll('#materials-list [data-index]').length === 8").await;
+    until(&c, &s, "the eleven materials", "document.querySelectorAll('#materials-list [data-index]').length === 11").await;
 
     // Car paint: a layer over a mix; the tree folds and unfolds.
     let run = |js: String| {
