@@ -86,9 +86,15 @@ fn material_point_at(pixel: vec2<i32>, position: vec2<f32>, z: f32, n: vec3<f32>
     // The cotangent frame: the direction of growing u in the surface.
     let dp_y = cross(dp[1], n);
     let dp_x = cross(n, dp[0]);
-    let t = dp_y * duv[0].x + dp_x * duv[1].x;
-    let b = dp_y * duv[0].y + dp_x * duv[1].y;
-    let sign = select(1.0, -1.0, dot(cross(n, t), b) < 0.0);
+    // Its scale is 1/det of the quad's UV Jacobian, whose sign flips where
+    // the screen's axes (y down) wind against the normal: the gradients of
+    // u and v, not their negations.
+    let facing = select(-1.0, 1.0, dot(cross(dp[0], dp[1]), n) >= 0.0);
+    let t = (dp_y * duv[0].x + dp_x * duv[1].x) * facing;
+    let b = (dp_y * duv[0].y + dp_x * duv[1].y) * facing;
+    // Handedness as the vertices carry it (mesh/mod.rs): the bitangent
+    // cross(n, t) · w points up the image, against growing v.
+    let sign = select(1.0, -1.0, dot(cross(n, t), b) > 0.0);
     let tangent = select(vec4(0.0), vec4(normalize(t), sign), dot(t, t) > 0.0);
     return MaterialPoint(uv, duv[0], duv[1], tangent);
 }

@@ -26,8 +26,17 @@ pub fn loaded(text: &str, meshes: BTreeMap<String, Arc<MeshData>>) -> Loaded {
 /// A session on the test device over the repository's shaders, every
 /// pipeline of the frame built.
 pub fn session(loaded: &Loaded) -> Session {
+    session_patched(loaded, &[])
+}
+
+/// `session` over the repository's shaders with each `(file, from, to)`
+/// patch applied (file under `shaders/`; `from` must be there).
+pub fn session_patched(loaded: &Loaded, patches: &[(&str, &str, &str)]) -> Session {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
-    let lib = crate::shader::library::read_tree(&root).unwrap();
+    let mut lib = crate::shader::library::read_tree(&root).unwrap();
+    for (file, from, to) in patches {
+        patch(&mut lib, crate::diag::display_path(&root.join(file)), from, to);
+    }
     let gpu = crate::gpu::testing::device();
     let mut s = Session::new(gpu, &root, lib, loaded);
     assert_eq!(s.install_missing(), vec![], "the frame's shaders build");
@@ -66,13 +75,8 @@ pub const GUARD: &str = "select(vec3(0.0), s.radiance, finite(s.radiance))";
 
 /// Rebuilds the path tracer with `GUARD` taken out.
 pub fn without_guard(s: &mut Session) {
-    let display = s.shader_display(&super::PATH_TRACE);
     let mut lib = (**s.library()).clone();
-    let file = lib.get(&display).unwrap();
-    assert!(file.text.contains(GUARD), "path_trace.wgsl still has its guard against non-finite samples");
-    let text = file.text.replace(GUARD, "s.radiance");
-    let path = file.path.clone();
-    lib.upsert(crate::shader::SourceFile::from_bytes(&path, display, text.into_bytes()).unwrap());
+    patch(&mut lib, s.shader_display(&super::PATH_TRACE), GUARD, "s.radiance");
     s.apply_sources(lib);
     let keys: Vec<_> = s.wanted().into_iter().collect();
     for key in keys {
@@ -80,6 +84,26 @@ pub fn without_guard(s: &mut Session) {
         s.install(&key, job());
     }
     assert_eq!(s.pipeline_diagnostics(), vec![]);
+}
+
+/// The patches that make both renderers sample the same points the same
+/// way: the path tracer's camera rays through pixel centres, as the raster
+/// samples (no jitter), and the raster's textures at level 0, as the path
+/// tracer reads them (it has no ray differentials). With one point light,
+/// no environment and no bounce, one path-traced sample is then the value
+/// the raster computes at the same point, with no noise to tolerate.
+pub const SAME_SAMPLES: [(&str, &str, &str); 2] = [
+    ("passes/path_trace.wgsl", "let jitter = vec2(rand(), rand());", "let jitter = vec2(0.5);"),
+    ("passes/lighting.wgsl", "return MaterialPoint(uv, duv[0], duv[1], tangent);", "return MaterialPoint(uv, vec2(0.0), vec2(0.0), tangent);"),
+];
+
+/// Replaces `from` by `to` in `lib`'s file `display`.
+fn patch(lib: &mut crate::shader::library::Library, display: String, from: &str, to: &str) {
+    let file = lib.get(&display).unwrap();
+    assert!(file.text.contains(from), "{display} still has `{from}`");
+    let text = file.text.replace(from, to);
+    let path = file.path.clone();
+    lib.upsert(crate::shader::SourceFile::from_bytes(&path, display, text.into_bytes()).unwrap());
 }
 
 /// Renders to each count in `at` with every output captured, and asserts
