@@ -198,7 +198,7 @@ fn read_textures(program: &mut Program, files: &mut Vec<PathBuf>) -> Result<(), 
 /// whose compile time runs from `start` (before the analysis) through the
 /// back end, plus `parse_ms`, the time its file took to parse.
 fn compiled(analysis: crate::material::analysis::Analysis, start: Instant, parse_ms: f64) -> (Definition, Report) {
-    let mut report = Report::new(&analysis, crate::render::passes::gbuffer::BYTES_PER_PIXEL);
+    let mut report = Report::new(&analysis);
     let wgsl = crate::material::back::wgsl(std::slice::from_ref(&analysis.def), crate::material::back::Bindings::RENDERER);
     report.wgsl_bytes = Some(wgsl.len());
     report.compile_ms = Some(parse_ms + start.elapsed().as_secs_f64() * 1e3);

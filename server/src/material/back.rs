@@ -25,16 +25,10 @@ pub const IMPORT_PATH: &str = "loupe::material";
 /// Where the module sits among the shader files, as diagnostics show it: it
 /// is generated, never on disk.
 pub const DISPLAY: &str = "generated/material.wgsl";
-/// The def the path tracer's solid-glass code compiles under. The module
-/// cannot define it for its importers (naga_oil reads `#define` only in the
-/// entry shader), so the composer adds it to every shader composed with a
-/// module that has the code (`implied_defs`).
+/// The def the path tracer's solid-glass code compiles under, which a
+/// module with that code implies for its importers
+/// (`shader::compose::IMPLIES`).
 pub const TRANSMISSION_DEF: &str = "MATERIAL_TRANSMISSION";
-
-/// The defs the module `text` implies for the shaders importing it.
-pub fn implied_defs(text: &str) -> Option<&'static str> {
-    text.contains("\nfn material_inside(").then_some(TRANSMISSION_DEF)
-}
 
 /// Where the module's two buffers, and its textures and their sampler, are
 /// bound.
@@ -171,6 +165,7 @@ fn header(w: &mut String, definitions: &[Definition], f: Features, max: usize, b
     }
     if f.transmission {
         w.push_str("#import loupe::btdf::{dielectric_cos, dielectric_pdf, dielectric_direction, fresnel_dielectric}\n");
+        let _ = writeln!(w, "{}{TRANSMISSION_DEF}", crate::shader::compose::IMPLIES);
     }
     w.push_str("#ifdef LIGHT_RECT\n#import loupe::ltc::ltc_rect\n#endif\n\n");
     let _ = writeln!(w, "// A float parameter in .x, a colour or vector in .xyz; each instance's block starts at its slot.");

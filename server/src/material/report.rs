@@ -27,8 +27,10 @@ pub struct Report {
     /// Why not, one sentence per cause with its location; empty when it
     /// conserves energy.
     pub energy_reasons: Vec<String>,
-    /// Today every material costs the G-buffer's whole layout.
-    pub gbuffer_bytes_per_pixel: u32,
+    /// Today every material costs the G-buffer's whole layout; `None`
+    /// until the renderer's figure is filled in (the daemon does, from
+    /// `render::passes::gbuffer::BYTES_PER_PIXEL`).
+    pub gbuffer_bytes_per_pixel: Option<u32>,
     /// The generated WGSL's size; `None` until the back end has run.
     pub wgsl_bytes: Option<usize>,
     /// Parse to WGSL, in milliseconds; `None` until the back end has run.
@@ -58,7 +60,7 @@ pub struct FieldText {
 }
 
 impl Report {
-    pub fn new(analysis: &Analysis, gbuffer_bytes_per_pixel: u32) -> Report {
+    pub fn new(analysis: &Analysis) -> Report {
         let def = &analysis.def;
         let nodes = def
             .nodes
@@ -93,7 +95,7 @@ impl Report {
             features: analysis.features().into_iter().collect(),
             energy_conserving: analysis.energy_conserving(),
             energy_reasons: analysis.breaches.iter().map(breach_text).collect(),
-            gbuffer_bytes_per_pixel,
+            gbuffer_bytes_per_pixel: None,
             wgsl_bytes: None,
             compile_ms: None,
         }
@@ -217,7 +219,8 @@ mod tests {
         let rough = b.param("coat_roughness", Type::Float, Value::Float(0.03), Some((0.0, 1.0)));
         let coat = b.slab(&[(Field::BaseColor, black), (Field::SpecularRoughness, rough)]);
         let root = b.layer(coat, base);
-        let mut report = Report::new(&analyse(&b.finish(root)), 36);
+        let mut report = Report::new(&analyse(&b.finish(root)));
+        report.gbuffer_bytes_per_pixel = Some(36);
         report.wgsl_bytes = Some(4096);
         let expected = json!({
             "material": "paint",
@@ -266,7 +269,8 @@ mod tests {
         let hot = b.slab(&[(Field::BaseColor, bright)]);
         let sum = b.add(m, hot);
         let full = b.coverage(sum, sheen);
-        let report = Report::new(&analyse(&b.finish(full)), 24);
+        let mut report = Report::new(&analyse(&b.finish(full)));
+        report.gbuffer_bytes_per_pixel = Some(24);
         let value = serde_json::to_value(&report).unwrap();
         let expected = json!({
             "material": "glow",

@@ -5,6 +5,7 @@
 use crate::diag::display_path;
 use crate::loaded::Loaded;
 use crate::material::Program;
+use crate::material::report::Report;
 use crate::material::tree::{Param, Type, Value};
 use crate::protocol::{MaterialEntry, MaterialParam, MaterialsReport};
 use crate::scene::MaterialSource;
@@ -30,7 +31,10 @@ pub fn report(scene: &str, loaded: &Loaded) -> MaterialsReport {
         entry(program, i, name, file, material, None)
     });
     let materials = entries.chain(gltf).collect();
-    MaterialsReport { scene: scene.to_owned(), materials, definitions: loaded.reports.to_vec() }
+    // Every definition costs the G-buffer's whole layout today.
+    let bytes = Some(crate::render::passes::gbuffer::BYTES_PER_PIXEL);
+    let definitions = loaded.reports.iter().map(|r| Report { gbuffer_bytes_per_pixel: bytes, ..r.clone() }).collect();
+    MaterialsReport { scene: scene.to_owned(), materials, definitions }
 }
 
 /// Instance `i`'s entry; `prefix` is where its parameters' override paths

@@ -181,13 +181,17 @@ fn compose_and_validate(
     Ok(Composed { module, info, files })
 }
 
-/// `defs` and those the imported modules imply: naga_oil reads `#define`
-/// only in the entry, so a module cannot define for its importers what it
-/// provides (the generated material module's transmission code,
-/// `material::back::implied_defs`).
+/// How a module implies a def for the shaders importing it, a line of its
+/// own: `// loupe: implies NAME`. naga_oil reads `#define` only in the
+/// entry shader, so a module cannot define for its importers what it
+/// provides (the generated material module's transmission code).
+pub const IMPLIES: &str = "// loupe: implies ";
+
+/// `defs` and those the imported modules imply (`IMPLIES`).
 fn with_implied(defs: &ShaderDefs, deps: &[Arc<SourceFile>]) -> ShaderDefs {
-    let material = deps.iter().filter(|d| d.import_path.as_ref().is_some_and(|(name, _)| name == crate::material::back::IMPORT_PATH));
-    defs.iter().cloned().chain(material.flat_map(|d| crate::material::back::implied_defs(&d.text)).map(str::to_owned)).collect()
+    let implied =
+        deps.iter().flat_map(|d| d.text.lines().filter_map(|l| l.strip_prefix(IMPLIES)).map(|n| n.trim().to_owned()).collect::<Vec<_>>());
+    defs.iter().cloned().chain(implied).collect()
 }
 
 fn naga_oil_defs(defs: &ShaderDefs) -> HashMap<String, ShaderDefValue> {

@@ -9,6 +9,7 @@
 #import loupe::ambient::{ambient_light, gradient_irradiance, gradient_radiance}
 #import loupe::multiscatter::energy_compensation
 #import loupe::btdf::{dielectric_cos, dielectric_pdf, dielectric_direction, fresnel_dielectric}
+// loupe: implies MATERIAL_TRANSMISSION
 #ifdef LIGHT_RECT
 #import loupe::ltc::ltc_rect
 #endif
