@@ -270,6 +270,12 @@ fn check_material(path: &Path) -> (Checked, Vec<Definition>) {
     let compiled = guarded(&display, "the material compiler", || {
         let loaded = crate::material::front::load(path)?;
         let analysed = loaded.definitions.iter().map(crate::material::analysed).collect::<Result<Vec<_>, _>>()?;
+        // Its textures are read as a scene's are: a missing or undecodable
+        // image is an error here too.
+        let bad: Vec<_> = loaded.textures.iter().filter_map(|t| crate::material::texture::read(t).err()).collect();
+        if !bad.is_empty() {
+            return Err(bad);
+        }
         Ok((loaded.warnings, analysed.into_iter().map(|a| a.def).collect()))
     });
     let (diagnostics, definitions) = compiled.unwrap_or_else(|errors| (errors, Vec::new()));
