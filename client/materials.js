@@ -1,11 +1,11 @@
 // The materials panel: the scene's materials (`/api/materials` and the
 // `materials` event), and for the selected one its tree after the
 // analysis (collapsible, each node with its kind, id, depth, fields as
-// text and features), its compile report, and live controls for its
-// instance's parameters. A control sends a scene override on the
-// parameter's `path`: only the parameter buffer changes (no pipeline is
-// rebuilt); the scene panel's "save to file" writes it into the scene
-// file's `params` table. Colours get a slider per channel, each sending
+// text and features), its compile report, live controls for its
+// instance's parameters, and its preview (preview.js). A control sends a
+// scene override on the parameter's `path`: only the parameter buffer
+// changes (no pipeline is rebuilt); the scene panel's "save to file"
+// writes it into the scene file's `params` table. Colours get a slider per channel, each sending
 // the whole `[r, g, b]`.
 //
 // Pixel → material: a pixel pinned in the inspector is looked up in
@@ -20,6 +20,7 @@
 // entries, #pixel-material[data-index][data-name][data-node].
 
 import { controlRow } from './controls.js';
+import { MaterialPreview } from './preview.js';
 import { $, el } from './util.js';
 
 const MATERIAL = { pass: 'gbuffer', output: 'material', encoding: 'f32' };
@@ -47,6 +48,7 @@ export class MaterialsPanel {
     this.params = $('material-params');
     this.pixel = $('pixel-material');
     this.count = $('materials-count');
+    this.preview = new MaterialPreview($('material-preview'));
     this.pinned = null;
   }
 
@@ -75,6 +77,8 @@ export class MaterialsPanel {
     const key = (r) => JSON.stringify(r?.materials[this.selected] ? [r.materials[this.selected].params.map((p) => p.path), r.definitions[r.materials[this.selected].definition]?.nodes] : null);
     if (key(before) !== key(report)) this.show();
     else this.values();
+    // Any change to a material (its file, an override) changes the report.
+    if (JSON.stringify(before) !== JSON.stringify(report)) this.preview.show(this.selected);
     this.lookUp();
   }
 
@@ -82,6 +86,8 @@ export class MaterialsPanel {
     this.selected = index;
     for (const b of this.list.querySelectorAll('[data-index]')) b.setAttribute('aria-selected', String(Number(b.dataset.index) === index));
     this.show();
+    // A material chosen (a click, a pinned pixel) turns previews on.
+    this.preview.start(index);
   }
 
   show() {

@@ -1,8 +1,8 @@
 //! `GET /api/materials` on the library scene: one entry per scene
 //! material with its parameters and override paths, beside the compile
-//! report of each definition; a `.mat` edit changes the report, and a
-//! broken `.mat` keeps the last good one while the diagnostics carry the
-//! error.
+//! report of each definition, and each instance's preview; a `.mat` edit
+//! changes the report and the preview, and a broken `.mat` keeps the last
+//! good ones while the diagnostics carry the error.
 
 use std::time::Duration;
 
@@ -31,7 +31,7 @@ fn definition<'a>(report: &'a Value, name: &str) -> &'a Value {
 }
 
 #[test]
-fn materials_are_served_with_their_reports_and_a_broken_file_keeps_the_last_good_one() {
+fn materials_are_served_with_their_reports_and_previews_and_a_broken_file_keeps_the_last_good_one() {
     let p = small_materials("materials-api");
     let s = Server::start(&p.root, &["--render", "on-change", "--scene", SCENE]);
     s.wait_for("a first frame", LIMIT, || (s.get_json("/api/status")["frame"].as_u64() > Some(0)).then_some(()));
@@ -86,10 +86,34 @@ fn materials_are_served_with_their_reports_and_a_broken_file_keeps_the_last_good
     assert!(paint["wgsl_bytes"].as_u64() > Some(1000) && paint["compile_ms"].as_f64() > Some(0.0), "{paint}");
     assert_eq!(definition(&first, "plastic")["features"], serde_json::json!(["diffuse", "specular"]));
 
-    // An edit that adds fuzz: the report says so.
+    // Previews: plastic is the scene's green, raster and path traced; the
+    // corner is the sky, whichever the material.
+    let preview = |query: &str| {
+        let (status, body) = s.get(&format!("/api/materials/{query}"));
+        assert_eq!(status, 200, "{query}: {}\n{}", String::from_utf8_lossy(&body), s.log());
+        body
+    };
+    let green = preview("7/preview");
+    let [r, g, b] = preview_pixel(&green, 64, 64);
+    assert!(g > r + 20 && g > b + 20, "a green sphere in the middle: {:?}", [r, g, b]);
+    let metal = preview("2/preview?renderer=raster");
+    assert_eq!(preview_pixel(&metal, 2, 2), preview_pixel(&green, 2, 2), "the same sky behind both");
+    assert_ne!(preview_pixel(&metal, 64, 64), [r, g, b]);
+    let [r, g, b] = preview_pixel(&preview("7/preview?renderer=path"), 64, 64);
+    assert!(g > r + 20 && g > b + 20, "path traced, green too: {:?}", [r, g, b]);
+    let (status, body) = s.get("/api/materials/99/preview");
+    assert_eq!(status, 404, "{}", String::from_utf8_lossy(&body));
+    assert!(String::from_utf8_lossy(&body).contains("no material 99: the scene has 11"));
+    assert_eq!(s.get("/api/materials/7/preview?renderer=photon").0, 400);
+    assert_eq!(s.get("/api/materials/seven/preview").0, 404);
+
+    // An edit that adds fuzz, and a tint: the report says so, and the
+    // tint is new generated code the preview's pipelines are rebuilt from.
     let good = p.read(PLASTIC);
-    let fuzzy = good.replace("    specular_ior: specular_ior,\n", "    specular_ior: specular_ior,\n    fuzz_weight: 0.5,\n");
-    assert_ne!(fuzzy, good, "plastic.mat's slab moved: update this test");
+    let fuzzy = good
+        .replace("    specular_ior: specular_ior,\n", "    specular_ior: specular_ior,\n    fuzz_weight: 0.5,\n")
+        .replace("    base_color: base_color,\n", "    base_color: base_color * rgb(0.1, 0.2, 8.0),\n");
+    assert!(fuzzy.contains("fuzz_weight") && fuzzy.contains("8.0)"), "plastic.mat's slab moved: update this test");
     p.save_by_rename(PLASTIC, &fuzzy);
     let edited = s.wait_for("the report of the edit", LIMIT, || {
         let r = s.get_json("/api/materials");
@@ -97,6 +121,11 @@ fn materials_are_served_with_their_reports_and_a_broken_file_keeps_the_last_good
     });
     let node = &definition(&edited, "plastic")["nodes"][0];
     assert!(node["fields"].as_array().unwrap().iter().any(|f| f["field"] == "fuzz_weight" && f["value_text"] == "0.5"), "{node}");
+    let is_blue = |png: &[u8]| {
+        let [r, g, b] = preview_pixel(png, 64, 64);
+        b > r + 20 && b > g + 20
+    };
+    assert!(is_blue(&preview("7/preview")), "the preview shows the edit");
 
     // Broken: the diagnostics name the file and line; the report stays.
     p.save_by_rename(PLASTIC, fuzzy.replace("fuzz_weight: 0.5,", "fuzz_weight: 0.5 +,"));
@@ -106,4 +135,12 @@ fn materials_are_served_with_their_reports_and_a_broken_file_keeps_the_last_good
     });
     assert_eq!(diagnostic["location"]["line"], 16, "{diagnostic}");
     assert_eq!(s.get_json("/api/materials"), edited, "the last good report stays");
+    assert!(is_blue(&preview("7/preview")), "the last good preview stays");
+}
+
+/// A preview's pixel at (x, y), as 8-bit sRGB.
+fn preview_pixel(png: &[u8], x: u32, y: u32) -> [u8; 3] {
+    let img = image::load_from_memory(png).expect("a PNG").to_rgb8();
+    assert_eq!(img.dimensions(), (128, 128));
+    img.get_pixel(x, y).0
 }

@@ -72,6 +72,10 @@ fn every_documented_message_has_every_documented_key() {
     let good = p.read(reload::TONEMAP);
     p.write(reload::TONEMAP, reload::broken(&good));
     seen.until(&mut ws, "reload_failed", |_| true);
+    // A first preview needs the broken tonemap pipeline: it never built.
+    let (status, body) = s.get("/api/materials/0/preview");
+    assert_eq!(status, 422, "{}", String::from_utf8_lossy(&body));
+    seen.add("GET /api/materials/{index}/preview, 422", serde_json::from_slice(&body).expect("JSON"));
     for (route, name) in [("/api/diagnostics", "GET /api/diagnostics"), ("/api/passes", "GET /api/passes")] {
         seen.add(name, s.get_json(route));
     }

@@ -40,6 +40,7 @@ pub enum OpenError {
 }
 
 /// An open device and what it can do.
+#[derive(Clone)]
 pub struct Gpu {
     pub adapter: wgpu::Adapter,
     pub device: wgpu::Device,

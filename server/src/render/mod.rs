@@ -14,6 +14,7 @@ pub mod passes;
 pub mod path_geometry;
 pub mod pipelines;
 pub mod pool;
+pub mod preview;
 pub mod quads;
 pub mod readback;
 pub mod resource;

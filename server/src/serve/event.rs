@@ -36,6 +36,9 @@ pub enum Event {
     /// Capture every output of the next frame and report where a NaN/Inf
     /// started (`POST /api/frame/trace`).
     Trace,
+    /// Render a material's preview (`GET /api/materials/{index}/preview`):
+    /// the daemon hands it to the preview thread with its current scene.
+    Preview(super::preview::Request),
     /// Stop the daemon: the HTTP side is shutting down.
     Shutdown,
 }

@@ -3,7 +3,7 @@
 //! Client requests reach the render thread through the channel the
 //! watcher's and compile workers' events take (so the daemon waits on one
 //! receiver), but nothing a client does can grow it without bound:
-//! - commands (rebuild, scene overrides and saves, lose-device) count
+//! - commands (rebuild, scene overrides and saves, lose-device, previews) count
 //!   against [`COMMAND_QUEUE`] while they wait; one more is refused with
 //!   [`Refused::Busy`];
 //! - subscriptions are "latest wins" per client: a client's newest set
@@ -36,6 +36,7 @@ pub enum Command {
     Scene(SceneCommand),
     LoseDevice,
     Trace,
+    Preview(super::preview::Request),
 }
 
 impl Command {
@@ -45,13 +46,14 @@ impl Command {
             Command::Scene(c) => Event::Scene(c),
             Command::LoseDevice => Event::LoseDevice,
             Command::Trace => Event::Trace,
+            Command::Preview(r) => Event::Preview(r),
         }
     }
 }
 
 /// The events [`Command::into_event`] makes: counted while they wait.
 fn is_command(event: &Event) -> bool {
-    matches!(event, Event::Rebuild | Event::Scene(_) | Event::LoseDevice | Event::Trace)
+    matches!(event, Event::Rebuild | Event::Scene(_) | Event::LoseDevice | Event::Trace | Event::Preview(_))
 }
 
 #[derive(Debug, thiserror::Error)]

@@ -10,6 +10,7 @@ pub mod event;
 pub mod http;
 pub mod inbox;
 pub mod materials;
+pub mod preview;
 pub mod shared;
 pub mod watch;
 

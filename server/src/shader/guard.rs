@@ -10,11 +10,7 @@ use crate::diag::{Code, Diagnostic, Location};
 /// Runs `f`; a panic in it is a diagnostic naming `who` crashed on `display`.
 pub fn guarded<T>(display: &str, who: &str, f: impl FnOnce() -> Result<T, Vec<Diagnostic>>) -> Result<T, Vec<Diagnostic>> {
     std::panic::catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|payload| {
-        let msg = payload
-            .downcast_ref::<String>()
-            .cloned()
-            .or_else(|| payload.downcast_ref::<&str>().map(|s| (*s).to_owned()))
-            .unwrap_or_else(|| "unknown panic".to_owned());
+        let msg = panic_message(&*payload);
         Err(vec![
             Diagnostic::error(Code::CompilerPanic, format!("{who} crashed on this file"))
                 .at(Location::file_start(display))
@@ -22,4 +18,13 @@ pub fn guarded<T>(display: &str, who: &str, f: impl FnOnce() -> Result<T, Vec<Di
                 .with_note("this is a bug in the compiler, not necessarily in your shader"),
         ])
     })
+}
+
+/// What a caught panic said.
+pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| payload.downcast_ref::<&str>().map(|s| (*s).to_owned()))
+        .unwrap_or_else(|| "unknown panic".to_owned())
 }

@@ -2,10 +2,11 @@
 //! 64×36, in one page session: the list, the tree (collapsible), the
 //! report, a parameter slider that re-renders the frame through the
 //! parameter buffer alone (no pipeline generation moves), save writing the
-//! value into the scene file's `params` keeping its comments, and a pinned
-//! pixel naming its material.
+//! value into the scene file's `params` keeping its comments, the preview
+//! (raster and path traced) following the slider, and a pinned pixel
+//! naming its material.
 
-use super::{Server, browser, shown, until};
+use super::{Server, browser, shown, until, until_within};
 use crate::materials::generations;
 use crate::materials_api::{LIMIT, SCENE, small_materials};
 
@@ -43,6 +44,35 @@ async fn the_materials_panel_shows_tree_report_and_live_parameters_and_names_a_p
     let slider = "document.querySelector('#material-params [data-path=\"materials[7].params.specular_roughness\"]')";
     until(&c, &s, "plastic's roughness control", slider).await;
     until(&c, &s, "its value from the scene", &format!("Number({slider}.value).toFixed(2) === '0.20'")).await;
+
+    // Its preview, raster and path traced: the scene's green on a sphere.
+    let figure = |r: &str| format!("document.querySelector('#material-preview [data-renderer=\"{r}\"]')");
+    let preview = |r: &str, renders: u64| {
+        let f = figure(r);
+        // The image's middle pixel and the sum of all its bytes, once a
+        // render past `renders` of material 7 has landed and decoded.
+        format!(
+            "{f}.dataset.state === 'ready' && {f}.dataset.index === '7' && Number({f}.dataset.renders) > {renders}
+             && {f}.querySelector('img').complete && {f}.querySelector('img').naturalWidth === 128
+             && (() => {{ const img = {f}.querySelector('img'); const cv = document.createElement('canvas');
+                 cv.width = cv.height = 128; const g = cv.getContext('2d'); g.drawImage(img, 0, 0);
+                 const d = g.getImageData(0, 0, 128, 128).data; let sum = 0; for (const v of d) sum += v;
+                 const m = (64 * 128 + 64) * 4; return {{ middle: [d[m], d[m + 1], d[m + 2]], sum, renders: Number({f}.dataset.renders) }}; }})()"
+        )
+    };
+    let green = |v: &serde_json::Value| {
+        let m: Vec<u64> = v["middle"].as_array().unwrap().iter().map(|x| x.as_u64().unwrap()).collect();
+        m[1] > m[0] + 20 && m[1] > m[2] + 20
+    };
+    // Car paint's previews go first (its click turned them on), and the
+    // first builds the path tracer's pipeline, on cores the server's
+    // frames share.
+    let path = until_within(&c, &s, "plastic's path-traced preview", &preview("path", 0), LIMIT).await;
+    assert!(green(&path), "{path}");
+    let raster = until(&c, &s, "plastic's raster preview", &preview("raster", 0)).await;
+    assert!(green(&raster), "{raster}");
+    let caption = run(format!("return {}.querySelector('figcaption').textContent;", figure("path"))).await;
+    assert_eq!(caption, "path traced · 16 spp");
     let before = generations(&s);
     let frame = shown(&c).await;
     run(format!("const i = {slider}; i.value = '0.9'; i.dispatchEvent(new Event('change')); return true;")).await;
@@ -57,6 +87,9 @@ async fn the_materials_panel_shows_tree_report_and_live_parameters_and_names_a_p
         tokio::time::sleep(std::time::Duration::from_millis(100)).await;
     }
     assert_eq!(generations(&s), before, "a parameter changes a buffer, no pipeline");
+    // The preview follows: rougher, the highlight spreads.
+    let rougher = until(&c, &s, "the rougher preview", &preview("raster", raster["renders"].as_u64().unwrap())).await;
+    assert!(green(&rougher) && rougher["sum"] != raster["sum"], "{raster} then {rougher}");
 
     // Save: the value lands in the entry's params, every comment stays.
     let file = p.read(SCENE);

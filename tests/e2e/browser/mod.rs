@@ -184,6 +184,12 @@ fn number_after(text: &str, label: &str) -> f64 {
 
 /// Polls a JS expression until it is truthy; returns its value.
 async fn until(c: &Client, server: &impl Log, what: &str, js: &str) -> serde_json::Value {
+    until_within(c, server, what, js, LIMIT).await
+}
+
+/// `until` for what takes longer than a page's usual wait (a path-traced
+/// material preview on two busy cores).
+async fn until_within(c: &Client, server: &impl Log, what: &str, js: &str, limit: Duration) -> serde_json::Value {
     let start = Instant::now();
     loop {
         if let Ok(v) = c.execute(&format!("return ({js});"), vec![]).await
@@ -191,7 +197,7 @@ async fn until(c: &Client, server: &impl Log, what: &str, js: &str) -> serde_jso
         {
             return v;
         }
-        if start.elapsed() > LIMIT {
+        if start.elapsed() > limit {
             let html = c.source().await.unwrap_or_default();
             panic!("timed out waiting for {what}\n--- page ---\n{}\n--- server ---\n{}", &html[..html.len().min(4000)], server.log());
         }

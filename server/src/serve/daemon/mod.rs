@@ -134,6 +134,9 @@ pub struct Daemon {
     /// start elsewhere.
     trace_stale: bool,
     nan_report: Option<NanReport>,
+    /// The scene as installed, for material previews.
+    loaded: Arc<crate::loaded::Loaded>,
+    previews: super::preview::Previews,
 }
 
 impl Daemon {
@@ -169,7 +172,10 @@ impl Daemon {
         let mut session =
             Session::new(gpu, &config.shader_root, lib, &loaded).with_options(FrameOptions { nan_watch: true, ..FrameOptions::default() });
         session.set_serial(wall_clock);
+        let previews = super::preview::Previews::start(&config.shader_root);
         Daemon {
+            loaded: Arc::new(loaded.clone()),
+            previews,
             session,
             config,
             // Files whose names are not UTF-8 are left out, each with its warning.
@@ -297,6 +303,15 @@ impl Daemon {
                 self.trace_next = Some("request");
                 self.dirty = true;
             }
+            Event::Preview(request) => {
+                let current = super::preview::Current {
+                    gpu: self.gpu().clone(),
+                    device: self.device_resets,
+                    lib: self.session.library().clone(),
+                    loaded: self.loaded.clone(),
+                };
+                self.previews.submit(request, current);
+            }
             Event::Shutdown => {}
         }
     }
@@ -379,6 +394,7 @@ impl Daemon {
         self.trace_stale = true;
         self.publish_materials(&l);
         let changed = self.session.set_scene(&l);
+        self.loaded = Arc::new(l.clone());
         self.scene_files = l.files;
         self.scene_warnings = l.warnings;
         self.config.watch_files.set(&self.scene_files);

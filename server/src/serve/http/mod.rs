@@ -19,7 +19,8 @@
 //!
 //! One module per job: [`guard`] (the Host/Origin check every request
 //! passes, and the JSON error / `no-store` finishing every response gets),
-//! [`api`] (the JSON API and capture downloads), [`sources`] (source files
+//! [`api`] (the JSON API and capture downloads), [`preview`] (material
+//! previews, rendered while the request waits), [`sources`] (source files
 //! for diagnostic excerpts, with the path-traversal defences), [`ui`] (the
 //! embedded browser UI) and [`ws`] (the WebSocket stream).
 //!
@@ -29,6 +30,7 @@
 
 mod api;
 mod guard;
+mod preview;
 mod quads;
 mod sources;
 mod tensors;
@@ -136,6 +138,7 @@ fn build(shared: Arc<Shared>, allowed_hosts: Vec<String>) -> (Router, watch::Sen
         .route("/api/reload", post(api::reload))
         .route("/api/controls", get(api::controls))
         .route("/api/materials", get(api::materials))
+        .route("/api/materials/{index}/preview", get(preview::preview))
         .route("/api/tradeoffs", get(tradeoffs::results))
         .route("/api/tradeoffs/points/{file}", get(tradeoffs::point))
         .route("/api/scene/save", post(api::save_scene))
