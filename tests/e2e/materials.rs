@@ -180,8 +180,16 @@ fn lit(s: &Server) -> loupe_tests::Capture {
 /// pixels; returns it. The object's pixels moved by exactly what the texel
 /// did (its emission; the rest of its light is the same), and no other
 /// pixel moved.
-fn retexture_and_see(p: &Project, s: &Server, before: &loupe_tests::Capture, old: [u8; 3], new: [u8; 3]) -> loupe_tests::Capture {
+fn retexture_and_see(
+    p: &Project,
+    s: &Server,
+    ws: &mut loupe_tests::ws::Ws,
+    before: &loupe_tests::Capture,
+    old: [u8; 3],
+    new: [u8; 3],
+) -> loupe_tests::Capture {
     p.save_by_rename(TEXTURE, png(new));
+    rebuilds_nothing(ws);
     let after = s.wait_for("a frame showing the new texel", LIMIT, || {
         let now = lit(s);
         (now.frame > before.frame && now.data != before.data).then_some(now)
@@ -204,6 +212,13 @@ fn retexture_and_see(p: &Project, s: &Server, before: &loupe_tests::Capture, old
     after
 }
 
+/// The reload a texture save starts names the image and no pipeline: the
+/// texture array is uploaded again, no shader changed.
+fn rebuilds_nothing(ws: &mut loupe_tests::ws::Ws) {
+    let started = ws.event("reload_started", LIMIT, |e| e["files"].as_array().is_some_and(|f| f.iter().any(|f| f == TEXTURE)));
+    assert_eq!(started["pipelines"], serde_json::json!([]), "{started}");
+}
+
 #[test]
 fn a_texture_edit_reaches_the_frame_without_a_rebuild_and_a_broken_one_keeps_the_last_good_until_fixed() {
     let p = textured_project("materials-texture");
@@ -216,13 +231,14 @@ fn a_texture_edit_reaches_the_frame_without_a_rebuild_and_a_broken_one_keeps_the
     let first = generations(&s);
 
     // A new image: the texture array is uploaded again, no pipeline rebuilds.
-    let blue = retexture_and_see(&p, &s, &orange, [255, 128, 0], [0, 64, 255]);
+    let blue = retexture_and_see(&p, &s, &mut ws, &orange, [255, 128, 0], [0, 64, 255]);
     assert_eq!(generations(&s), first, "a texture edit rebuilds nothing");
 
     // Truncated, as a crashed export leaves it: an error naming the image,
     // and the last good texture keeps rendering.
     let whole = png([0, 255, 0]);
     p.save_by_rename(TEXTURE, &whole[..whole.len() / 2]);
+    rebuilds_nothing(&mut ws);
     let diagnostic = s.wait_for("the texture's error", LIMIT, || {
         s.get_json("/api/diagnostics")["diagnostics"].as_array()?.iter().find(|d| d["message"].as_str().is_some_and(|m| m.contains(TEXTURE))).cloned()
     });
@@ -235,7 +251,7 @@ fn a_texture_edit_reaches_the_frame_without_a_rebuild_and_a_broken_one_keeps_the
 
     // Fixed: the error clears and the new texel shows.
     let still = lit(&s);
-    retexture_and_see(&p, &s, &still, [0, 64, 255], [0, 255, 0]);
+    retexture_and_see(&p, &s, &mut ws, &still, [0, 64, 255], [0, 255, 0]);
     s.wait_for("the error to clear", LIMIT, || s.get_json("/api/diagnostics")["diagnostics"].as_array()?.is_empty().then_some(()));
     assert_eq!(generations(&s), first, "nothing rebuilt");
 }
