@@ -240,7 +240,11 @@ fn a_texture_edit_reaches_the_frame_without_a_rebuild_and_a_broken_one_keeps_the
     p.save_by_rename(TEXTURE, &whole[..whole.len() / 2]);
     rebuilds_nothing(&mut ws);
     let diagnostic = s.wait_for("the texture's error", LIMIT, || {
-        s.get_json("/api/diagnostics")["diagnostics"].as_array()?.iter().find(|d| d["message"].as_str().is_some_and(|m| m.contains(TEXTURE))).cloned()
+        s.get_json("/api/diagnostics")["diagnostics"]
+            .as_array()?
+            .iter()
+            .find(|d| d["message"].as_str().is_some_and(|m| m.contains(TEXTURE)))
+            .cloned()
     });
     assert_eq!(diagnostic["severity"], "error", "{diagnostic}");
     assert_eq!(diagnostic["location"]["file"], "scenes/textured.mat", "at the param naming the image: {diagnostic}");
