@@ -51,8 +51,8 @@ pub fn load_with(path: &Path, overrides: &Overrides) -> Result<Loaded, Diagnosti
     let scene::Read { mut scene, mut meshes, mut files } = scene::load_with(path, overrides)?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let (mut materials, mut reports) = materials(path, &scene, &mut files)?;
-    let warnings = gltf_objects::split(dir, &mut scene, &mut meshes, &mut materials, &mut reports)?;
-    read_textures(&mut materials, &mut files)?;
+    let mut warnings = gltf_objects::split(dir, &mut scene, &mut meshes, &mut materials, &mut reports)?;
+    warnings.extend(read_textures(&mut materials, &mut files)?);
     let denoiser = scene.denoiser.as_ref().map(|d| network(dir, d, &mut files)).transpose()?.map(Arc::new);
     Ok(Loaded { scene, meshes, materials: Arc::new(materials), reports: Arc::new(reports), denoiser, files, warnings })
 }
@@ -175,22 +175,38 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<(Pr
 }
 
 /// Reads and decodes the program's textures into its layers; each texture
-/// file joins `files`.
-fn read_textures(program: &mut Program, files: &mut Vec<PathBuf>) -> Result<(), Diagnostic> {
+/// file joins `files`. A texture of another size than the scene's largest
+/// is resampled to it (the layers of one array share a size): a warning at
+/// the param naming it, since its texels are not the file's.
+fn read_textures(program: &mut Program, files: &mut Vec<PathBuf>) -> Result<Vec<Diagnostic>, Diagnostic> {
     // Watched before they are read, so a fix is seen after a failure.
     files.extend(program.textures.iter().map(|t| t.path.clone()));
     let images = program.textures.iter().map(texture::read).collect::<Result<Vec<_>, _>>()?;
+    let sizes: Vec<(u32, u32)> = images.iter().map(|i| (i.width, i.height)).collect();
     let (layers, resampled) = texture::Layers::of(images);
-    for i in resampled {
-        log::warn!(
-            "texture `{}` is resampled to {}×{}, the size of the scene's textures",
-            display_path(&program.textures[i].path),
-            layers.width,
-            layers.height
-        );
-    }
+    let warnings = resampled
+        .into_iter()
+        .map(|i| {
+            let source = &program.textures[i];
+            let (w, h) = sizes[i];
+            Diagnostic::warning(
+                Code::Material,
+                format!(
+                    "texture `{}` is {w}×{h}: resampled to {}×{}, the size of the scene's textures",
+                    display_path(&source.path),
+                    layers.width,
+                    layers.height
+                ),
+            )
+            .with_label(source.location.clone(), "this image", true)
+            .with_note(format!(
+                "a scene's textures share one size (the largest, at most {} a side): make them alike to keep every texel",
+                texture::MAX_SIZE
+            ))
+        })
+        .collect();
     program.layers = Arc::new(layers);
-    Ok(())
+    Ok(warnings)
 }
 
 /// An analysed definition and its report, whose WGSL size is that of the

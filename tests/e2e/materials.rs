@@ -139,3 +139,123 @@ fn the_bundled_scenes_render_what_they_rendered_before_materials() {
         }
     }
 }
+
+const TEXTURED_SCENE: &str = "scenes/textured.toml";
+const TEXTURE: &str = "scenes/albedo.png";
+
+/// `minimal.toml` at 64×36 with a material that emits its texture's colour
+/// and reflects nothing, so a lit pixel of the object is the texel itself.
+fn textured_project(name: &str) -> Project {
+    let p = project(name);
+    let scene = p.read(SCENE).replace("width = 640\nheight = 360", "width = 64\nheight = 36");
+    assert!(scene.contains("width = 64\n"), "minimal.toml's [output] is 640×360");
+    p.write(TEXTURED_SCENE, scene.replace("file = \"paint.mat\"", "file = \"textured.mat\""));
+    p.write(
+        "scenes/textured.mat",
+        "param albedo: texture = \"albedo.png\"\n\nmaterial textured = slab {\n    base_color: grey(0.0),\n    specular_weight: 0.0,\n    emission_color: sample(albedo),\n    emission_luminance: 1.0,\n}\n",
+    );
+    p.write(TEXTURE, png([255, 128, 0]));
+    p
+}
+
+/// A 2×2 PNG of one sRGB colour.
+fn png(rgb: [u8; 3]) -> Vec<u8> {
+    let img = image::RgbImage::from_pixel(2, 2, image::Rgb(rgb));
+    let mut bytes = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).expect("encode a PNG");
+    bytes
+}
+
+/// An 8-bit sRGB channel, decoded to linear as the texture loader does.
+fn linear(c: u8) -> f32 {
+    let c = f32::from(c) / 255.0;
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+}
+
+fn lit(s: &Server) -> loupe_tests::Capture {
+    s.capture_f32("lighting/color").expect("the lighting pass is captured")
+}
+
+/// Saves the texture as an editor does and waits for a frame with other
+/// pixels; returns it. The object's pixels moved by exactly what the texel
+/// did (its emission; the rest of its light is the same), and no other
+/// pixel moved.
+fn retexture_and_see(
+    p: &Project,
+    s: &Server,
+    ws: &mut loupe_tests::ws::Ws,
+    before: &loupe_tests::Capture,
+    old: [u8; 3],
+    new: [u8; 3],
+) -> loupe_tests::Capture {
+    p.save_by_rename(TEXTURE, png(new));
+    rebuilds_nothing(ws);
+    let after = s.wait_for("a frame showing the new texel", LIMIT, || {
+        let now = lit(s);
+        (now.frame > before.frame && now.data != before.data).then_some(now)
+    });
+    let step: [f32; 3] = std::array::from_fn(|c| linear(new[c]) - linear(old[c]));
+    let mut object = 0;
+    for y in 0..before.height {
+        for x in 0..before.width {
+            let (was, is) = (before.pixel(x, y), after.pixel(x, y));
+            if was == is {
+                continue;
+            }
+            object += 1;
+            // Half-float texels and target: 2e-3.
+            let moved: [f32; 3] = std::array::from_fn(|c| is[c] - was[c]);
+            assert!((0..3).all(|c| (moved[c] - step[c]).abs() <= 2e-3), "pixel ({x}, {y}) moved by {moved:?}, the texel by {step:?}");
+        }
+    }
+    assert!(object >= 50, "the object covers {object} pixels of {}×{}", before.width, before.height);
+    after
+}
+
+/// The reload a texture save starts names the image and no pipeline: the
+/// texture array is uploaded again, no shader changed.
+fn rebuilds_nothing(ws: &mut loupe_tests::ws::Ws) {
+    let started = ws.event("reload_started", LIMIT, |e| e["files"].as_array().is_some_and(|f| f.iter().any(|f| f == TEXTURE)));
+    assert_eq!(started["pipelines"], serde_json::json!([]), "{started}");
+}
+
+#[test]
+fn a_texture_edit_reaches_the_frame_without_a_rebuild_and_a_broken_one_keeps_the_last_good_until_fixed() {
+    let p = textured_project("materials-texture");
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", TEXTURED_SCENE]);
+    // The lit frame is captured while a client subscribes to it.
+    let mut ws = s.ws();
+    ws.send(serde_json::json!({ "type": "subscribe", "pass": "lighting", "output": "color", "encoding": "f32" }));
+    let orange = s.wait_for("a first lit frame", LIMIT, || s.capture_f32("lighting/color"));
+    assert!(s.get_json("/api/diagnostics")["diagnostics"].as_array().unwrap().is_empty(), "{}", s.log());
+    let first = generations(&s);
+
+    // A new image: the texture array is uploaded again, no pipeline rebuilds.
+    let blue = retexture_and_see(&p, &s, &mut ws, &orange, [255, 128, 0], [0, 64, 255]);
+    assert_eq!(generations(&s), first, "a texture edit rebuilds nothing");
+
+    // Truncated, as a crashed export leaves it: an error naming the image,
+    // and the last good texture keeps rendering.
+    let whole = png([0, 255, 0]);
+    p.save_by_rename(TEXTURE, &whole[..whole.len() / 2]);
+    rebuilds_nothing(&mut ws);
+    let diagnostic = s.wait_for("the texture's error", LIMIT, || {
+        s.get_json("/api/diagnostics")["diagnostics"]
+            .as_array()?
+            .iter()
+            .find(|d| d["message"].as_str().is_some_and(|m| m.contains(TEXTURE)))
+            .cloned()
+    });
+    assert_eq!(diagnostic["severity"], "error", "{diagnostic}");
+    assert_eq!(diagnostic["location"]["file"], "scenes/textured.mat", "at the param naming the image: {diagnostic}");
+    // (A failed reload still marks the frame dirty: one more renders.)
+    s.wait_for("a frame after the error", LIMIT, || (lit(&s).frame > blue.frame).then_some(()));
+    assert_eq!(lit(&s).data, blue.data, "the last good texture still renders");
+    assert_eq!(generations(&s), first, "a broken texture rebuilds nothing");
+
+    // Fixed: the error clears and the new texel shows.
+    let still = lit(&s);
+    retexture_and_see(&p, &s, &mut ws, &still, [0, 64, 255], [0, 255, 0]);
+    s.wait_for("the error to clear", LIMIT, || s.get_json("/api/diagnostics")["diagnostics"].as_array()?.is_empty().then_some(()));
+    assert_eq!(generations(&s), first, "nothing rebuilt");
+}

@@ -115,6 +115,34 @@ fn material_files_are_compiled_and_their_references_checked() {
     assert_eq!(at(&e), (3, 8));
 }
 
+/// Textures of different sizes share the array at the largest: each other
+/// one is resampled, a warning at the param naming it (the scene's
+/// diagnostics, not only the log); textures of one size warn nothing.
+#[test]
+fn a_resampled_texture_is_a_warning_at_its_param() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = |name: &str, w: u32, h: u32| image::RgbImage::new(w, h).save(dir.path().join(name)).unwrap();
+    png("big.png", 4, 4);
+    png("small.png", 2, 2);
+    png("also_big.png", 4, 4);
+    let scene = dir.path().join("s.toml");
+    std::fs::write(&scene, "[[materials]]\nname = \"m\"\nfile = \"t.mat\"\n\n[[objects]]\nshape = \"sphere\"\nmaterial = \"m\"\n").unwrap();
+    let mat = |second: &str| {
+        let text = format!(
+            "param a: texture = \"big.png\"\nparam b: texture = \"{second}\"\nmaterial t = slab {{ base_color: sample(a) * sample(b) }}\n"
+        );
+        std::fs::write(dir.path().join("t.mat"), text).unwrap();
+        load(&scene).unwrap_or_else(|d| panic!("{d}")).warnings
+    };
+    let warnings = mat("small.png");
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    let w = &warnings[0];
+    assert_eq!(w.severity, crate::diag::Severity::Warning);
+    assert!(w.message.contains("small.png") && w.message.contains("2×2") && w.message.contains("4×4"), "{w}");
+    assert!(w.file().is_some_and(|f| f.ends_with("t.mat")) && at(w).0 == 2, "at the param naming it: {w:?}");
+    assert!(mat("also_big.png").is_empty(), "one size: nothing resampled");
+}
+
 fn load_error(scene: &Path, text: String) -> Diagnostic {
     std::fs::write(scene, text).unwrap();
     load(scene).unwrap_err()
