@@ -1,6 +1,8 @@
 //! Reading a user's file with a size cap: the length is checked before
 //! anything is allocated, so a file that claims or is gigabytes costs
-//! nothing.
+//! nothing; and only a regular file is opened, so a name that points at a
+//! FIFO or a device (`/dev/stdin`) is an error, not a read that waits for
+//! ever.
 
 use std::io::Read;
 use std::path::Path;
@@ -11,6 +13,7 @@ use crate::diag::{Code, Diagnostic};
 pub enum ReadError {
     Io(std::io::Error),
     TooLarge(u64),
+    NotAFile,
 }
 
 impl ReadError {
@@ -19,6 +22,7 @@ impl ReadError {
         match self {
             ReadError::Io(e) => Diagnostic::error(Code::Io, format!("cannot read {what}: {e}")),
             ReadError::TooLarge(len) => Diagnostic::error(Code::FileTooLarge, format!("{what} is {len} bytes; the limit is {limit} bytes")),
+            ReadError::NotAFile => Diagnostic::error(Code::Io, format!("cannot read {what}: it is not a regular file")),
         }
     }
 }
@@ -26,6 +30,9 @@ impl ReadError {
 /// Reads at most `limit` bytes: the length is checked before reading, and
 /// the read is capped in case the file grows meanwhile.
 pub fn read_capped(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
+    if !std::fs::metadata(path).map_err(ReadError::Io)?.is_file() {
+        return Err(ReadError::NotAFile);
+    }
     let file = std::fs::File::open(path).map_err(ReadError::Io)?;
     let len = file.metadata().map_err(ReadError::Io)?.len();
     if len > limit {

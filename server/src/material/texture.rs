@@ -9,12 +9,16 @@ use std::path::Path;
 
 use super::tree::{ColorSpace, TextureSource};
 use crate::diag::{Code, Diagnostic, display_path};
+use crate::files::ReadError;
 
 /// The common size's cap, per side: a larger texture is resampled to it.
 pub const MAX_SIZE: u32 = 2048;
 /// What a file may declare, per side, before it is decoded: beyond this it
 /// is refused (the decoded image alone would take gigabytes).
 pub const MAX_FILE_SIZE: u32 = 16384;
+/// The most bytes an image file may have (a 16384² RGBA half-float EXR,
+/// uncompressed, is 2 GiB: far past what a material needs).
+pub const MAX_FILE_BYTES: u64 = 512 << 20;
 
 /// A decoded image: linear RGBA, row after row.
 #[derive(Clone, PartialEq)]
@@ -85,9 +89,10 @@ impl Layers {
 pub fn read(source: &TextureSource) -> Result<Image, Diagnostic> {
     let shown = display_path(&source.path);
     let error = |message: String, label: &str| Diagnostic::error(Code::Material, message).with_label(source.location.clone(), label, true);
-    let bytes = std::fs::read(&source.path).map_err(|e| {
-        let label = if e.kind() == std::io::ErrorKind::NotFound { "no such file" } else { "cannot be read" };
-        error(format!("texture `{shown}`: {e}"), label)
+    let bytes = crate::files::read_capped(&source.path, MAX_FILE_BYTES).map_err(|e| match e {
+        ReadError::Io(e) if e.kind() == std::io::ErrorKind::NotFound => error(format!("texture `{shown}`: {e}"), "no such file"),
+        ReadError::Io(e) => error(format!("texture `{shown}`: {e}"), "cannot be read"),
+        other => error(other.diagnostic(&format!("texture `{shown}`"), MAX_FILE_BYTES).message, "cannot be read"),
     })?;
     decode(&source.path, &bytes, source.space).map_err(|why| error(format!("texture `{shown}`: {why}"), "this image"))
 }
@@ -261,6 +266,21 @@ mod tests {
         let empty = Layers::default();
         assert_eq!((empty.width, empty.height, empty.layers.len()), (1, 1, 1));
         assert_eq!(empty.layers[0][0].pixels, [[1.0; 4]]);
+    }
+
+    /// A texture path naming a FIFO is refused at once: opening it would
+    /// wait for a writer that never comes, and the scene would never load.
+    #[test]
+    fn a_fifo_is_refused_not_waited_on() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("mask.png");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
+        let source = TextureSource { path: fifo, space: ColorSpace::Linear, location: crate::diag::Location::file_start("a.mat") };
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || tx.send(read(&source).map(|_| ()).map_err(|d| d.message)));
+        let answer = rx.recv_timeout(std::time::Duration::from_secs(10)).expect("an answer, not a wait for a writer");
+        let message = answer.expect_err("a FIFO is not read");
+        assert!(message.contains("not a regular file"), "{message}");
     }
 
     #[test]
