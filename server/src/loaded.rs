@@ -48,12 +48,51 @@ pub fn load(path: &Path) -> Result<Loaded, Diagnostic> {
 
 /// `load` with live overrides applied on top of the file's text.
 pub fn load_with(path: &Path, overrides: &Overrides) -> Result<Loaded, Diagnostic> {
-    let scene::Read { mut scene, mut meshes, mut files } = scene::load_with(path, overrides)?;
+    load_keeping(path, overrides, None)
+}
+
+/// What a reload may keep from the scene it replaces: `previous`'s
+/// meshes, texture layers and denoiser network, each when none of the
+/// files it was read from is one `changed` names. A material edit or a
+/// live override then costs the scene file and the material files, not
+/// every mesh, image and weights file again.
+pub struct Keep<'a> {
+    pub previous: &'a Loaded,
+    pub changed: &'a dyn Fn(&Path) -> bool,
+}
+
+/// `load_with`, keeping what `keep` allows from the previous load.
+pub fn load_keeping(path: &Path, overrides: &Overrides, keep: Option<&Keep<'_>>) -> Result<Loaded, Diagnostic> {
     let dir = path.parent().unwrap_or(Path::new("."));
+    let unchanged = |files: &[PathBuf]| keep.filter(|k| !files.iter().any(|f| (k.changed)(f)));
+    let kept_mesh = |mesh_path: &Path, own: &[PathBuf]| {
+        unchanged(own)?.previous.meshes.iter().find(|(name, _)| dir.join(name) == mesh_path).map(|(_, m)| m.clone())
+    };
+    let scene::Read { mut scene, mut meshes, mut files } = scene::load_keeping(path, overrides, &kept_mesh)?;
     let (mut materials, mut reports) = materials(path, &scene, &mut files)?;
     let mut warnings = gltf_objects::split(dir, &mut scene, &mut meshes, &mut materials, &mut reports)?;
-    warnings.extend(read_textures(&mut materials, &mut files)?);
-    let denoiser = scene.denoiser.as_ref().map(|d| network(dir, d, &mut files)).transpose()?.map(Arc::new);
+    let kept_layers = keep.and_then(|k| {
+        let sources = |p: &Program| p.textures.iter().map(|t| (t.path.clone(), t.space)).collect::<Vec<_>>();
+        let paths: Vec<PathBuf> = materials.textures.iter().map(|t| t.path.clone()).collect();
+        (sources(&k.previous.materials) == sources(&materials) && unchanged(&paths).is_some()).then(|| k.previous.materials.layers.clone())
+    });
+    warnings.extend(read_textures(&mut materials, &mut files, kept_layers)?);
+    let kept_network = |d: &Denoiser| {
+        let k = keep?;
+        let before = k.previous.scene.denoiser.as_ref()?;
+        let weights: Vec<PathBuf> = d.weights.iter().map(|w| dir.join(w)).collect();
+        (before.weights == d.weights && before.mode == d.mode && unchanged(&weights).is_some()).then(|| k.previous.denoiser.clone())?
+    };
+    let denoiser = match scene.denoiser.as_ref() {
+        Some(d) => match kept_network(d) {
+            Some(n) => {
+                files.extend(d.weights.iter().map(|w| dir.join(w)));
+                Some(n)
+            }
+            None => Some(Arc::new(network(dir, d, &mut files)?)),
+        },
+        None => None,
+    };
     Ok(Loaded { scene, meshes, materials: Arc::new(materials), reports: Arc::new(reports), denoiser, files, warnings })
 }
 
@@ -87,7 +126,7 @@ fn network(dir: &Path, d: &Denoiser, files: &mut Vec<PathBuf>) -> Result<Network
 #[cfg(any(test, feature = "testing"))]
 pub fn materials_of(scene: &Scene) -> Arc<Program> {
     let mut program = materials(Path::new("scene.toml"), scene, &mut Vec::new()).unwrap_or_else(|d| panic!("{d}")).0;
-    read_textures(&mut program, &mut Vec::new()).unwrap_or_else(|d| panic!("{d}"));
+    read_textures(&mut program, &mut Vec::new(), None).unwrap_or_else(|d| panic!("{d}"));
     Arc::new(program)
 }
 
@@ -174,21 +213,27 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<(Pr
     Ok((program, reports))
 }
 
-/// Reads and decodes the program's textures into its layers; each texture
-/// file joins `files`. A texture of another size than the scene's largest
-/// is resampled to it (the layers of one array share a size): a warning at
-/// the param naming it, since its texels are not the file's.
-fn read_textures(program: &mut Program, files: &mut Vec<PathBuf>) -> Result<Vec<Diagnostic>, Diagnostic> {
+/// Reads and decodes the program's textures into its layers (or takes
+/// `kept`, the previous load's layers of the same unchanged files); each
+/// texture file joins `files`. A texture of another size than the scene's
+/// largest is resampled to it (the layers of one array share a size): a
+/// warning at the param naming it, since its texels are not the file's.
+fn read_textures(
+    program: &mut Program,
+    files: &mut Vec<PathBuf>,
+    kept: Option<Arc<texture::Layers>>,
+) -> Result<Vec<Diagnostic>, Diagnostic> {
     // Watched before they are read, so a fix is seen after a failure.
     files.extend(program.textures.iter().map(|t| t.path.clone()));
-    let images = program.textures.iter().map(texture::read).collect::<Result<Vec<_>, _>>()?;
-    let sizes: Vec<(u32, u32)> = images.iter().map(|i| (i.width, i.height)).collect();
-    let (layers, resampled) = texture::Layers::of(images);
-    let warnings = resampled
-        .into_iter()
+    let layers = match kept {
+        Some(layers) => layers,
+        None => Arc::new(texture::Layers::of(program.textures.iter().map(texture::read).collect::<Result<Vec<_>, _>>()?)),
+    };
+    let warnings = layers
+        .resampled()
         .map(|i| {
             let source = &program.textures[i];
-            let (w, h) = sizes[i];
+            let (w, h) = layers.sources[i];
             Diagnostic::warning(
                 Code::Material,
                 format!(
@@ -205,7 +250,7 @@ fn read_textures(program: &mut Program, files: &mut Vec<PathBuf>) -> Result<Vec<
             ))
         })
         .collect();
-    program.layers = Arc::new(layers);
+    program.layers = layers;
     Ok(warnings)
 }
 

@@ -246,3 +246,39 @@ fn the_showcase_uses_six_library_materials_and_a_gltf_asset_with_its_own() {
     assert_eq!(gltf.len(), 2, "the crate's wood and felt: {gltf:?}");
     assert!(l.materials.definitions.iter().any(|d| d.name.contains(".gltf::") && d.params.iter().any(|p| p.ty == Type::Texture)));
 }
+
+/// A reload keeps the previous load's meshes, texture layers and network
+/// when none of their files changed (a material edit, an override), and
+/// reads again exactly those whose files did.
+#[test]
+fn a_reload_keeps_what_did_not_change_and_reads_what_did() {
+    let path = scenes().join("showcase.toml");
+    let first = load(&path).unwrap_or_else(|d| panic!("{d}"));
+    assert!(first.denoiser.is_some() && !first.materials.textures.is_empty() && !first.meshes.is_empty());
+    let reload = |changed: &dyn Fn(&Path) -> bool| {
+        load_keeping(&path, &Overrides::new(), Some(&Keep { previous: &first, changed })).unwrap_or_else(|d| panic!("{d}"))
+    };
+    let same = |a: &Loaded, b: &Loaded, name: &str| Arc::ptr_eq(&a.meshes[name], &b.meshes[name]);
+    let nothing = reload(&|_| false);
+    // (A glTF's own materials split its mesh into `FILE#materialK` parts,
+    // made again each load.)
+    let named = |l: &Loaded| l.meshes.keys().filter(|m| !m.contains('#')).cloned().collect::<Vec<_>>();
+    assert!(!named(&first).is_empty() && named(&first).iter().all(|m| same(&first, &nothing, m)));
+    assert!(Arc::ptr_eq(&first.materials.layers, &nothing.materials.layers));
+    assert!(Arc::ptr_eq(first.denoiser.as_ref().unwrap(), nothing.denoiser.as_ref().unwrap()));
+    assert_eq!(nothing.files, first.files, "the same files are watched");
+
+    // One mesh file changed: that mesh alone is read again.
+    let name = &named(&first)[0];
+    let mesh_path = scenes().join(name);
+    let edited = reload(&|p| p == mesh_path);
+    assert!(!same(&first, &edited, name), "{name} read again");
+    assert!(named(&first).iter().filter(|m| *m != name).all(|m| same(&first, &edited, m)));
+    assert!(Arc::ptr_eq(&first.materials.layers, &edited.materials.layers));
+
+    // One texture changed: the layers are made again.
+    let texture = first.materials.textures[0].path.clone();
+    let retextured = reload(&|p| p == texture);
+    assert!(!Arc::ptr_eq(&first.materials.layers, &retextured.materials.layers));
+    assert_eq!(*first.materials.layers, *retextured.materials.layers, "from the same bytes");
+}

@@ -49,38 +49,35 @@ pub struct Layers {
     pub height: u32,
     /// Per layer, level 0 first.
     pub layers: Vec<Vec<Image>>,
+    /// Each image's own size, before it was resampled to the layers'.
+    pub sources: Vec<(u32, u32)>,
 }
 
 impl Default for Layers {
     fn default() -> Self {
-        Layers::of(Vec::new()).0
+        Layers::of(Vec::new())
     }
 }
 
 impl Layers {
     /// `images` at one size: the largest width and height among them,
-    /// capped at `MAX_SIZE`. Returns the names (index into `images`) of
-    /// those resampled to it.
-    pub fn of(images: Vec<Image>) -> (Layers, Vec<usize>) {
+    /// capped at `MAX_SIZE`.
+    pub fn of(images: Vec<Image>) -> Layers {
         let white = Image { width: 1, height: 1, pixels: vec![[1.0; 4]] };
         let images = if images.is_empty() { vec![white] } else { images };
         let width = images.iter().map(|i| i.width).max().unwrap_or(1).min(MAX_SIZE);
         let height = images.iter().map(|i| i.height).max().unwrap_or(1).min(MAX_SIZE);
-        let mut resampled = Vec::new();
+        let sources = images.iter().map(|i| (i.width, i.height)).collect();
         let layers = images
             .into_iter()
-            .enumerate()
-            .map(|(i, img)| {
-                let img = if (img.width, img.height) == (width, height) {
-                    img
-                } else {
-                    resampled.push(i);
-                    resample(&img, width, height)
-                };
-                mips(img)
-            })
+            .map(|img| mips(if (img.width, img.height) == (width, height) { img } else { resample(&img, width, height) }))
             .collect();
-        (Layers { width, height, layers }, resampled)
+        Layers { width, height, layers, sources }
+    }
+
+    /// The images (by index) resampled to the layers' size.
+    pub fn resampled(&self) -> impl Iterator<Item = usize> + '_ {
+        self.sources.iter().enumerate().filter(|(_, s)| **s != (self.width, self.height)).map(|(i, _)| i)
     }
 }
 
@@ -260,7 +257,8 @@ mod tests {
     #[test]
     fn layers_share_the_largest_size_and_a_scene_without_textures_has_a_white_one() {
         let img = |w, h| Image { width: w, height: h, pixels: vec![[0.25; 4]; (w * h) as usize] };
-        let (layers, resampled) = Layers::of(vec![img(4, 4), img(2, 8)]);
+        let layers = Layers::of(vec![img(4, 4), img(2, 8)]);
+        let resampled: Vec<usize> = layers.resampled().collect();
         assert_eq!((layers.width, layers.height, resampled), (4, 8, vec![0, 1]));
         assert!(layers.layers.iter().all(|l| l[0].pixels.iter().all(|p| *p == [0.25; 4])), "a flat image stays flat");
         let empty = Layers::default();

@@ -222,6 +222,16 @@ pub fn load(path: &Path) -> Result<Read, Diagnostic> {
 
 /// `load` with live overrides applied on top of the file's text.
 pub fn load_with(path: &Path, overrides: &overrides::Overrides) -> Result<Read, Diagnostic> {
+    load_keeping(path, overrides, &|_, _| None)
+}
+
+/// A mesh a reload may keep instead of importing it again: `kept(path,
+/// files)` gets the glTF's path and every file it is read from (itself
+/// and its external buffers) and gives the mesh when none of them changed.
+pub type KeptMesh<'a> = dyn Fn(&Path, &[PathBuf]) -> Option<Arc<MeshData>> + 'a;
+
+/// `load_with`, taking unchanged meshes from `kept`.
+pub fn load_keeping(path: &Path, overrides: &overrides::Overrides, kept: &KeptMesh<'_>) -> Result<Read, Diagnostic> {
     let display = crate::diag::display_path(path);
     let mut text = std::fs::read_to_string(path)
         .map_err(|e| Diagnostic::error(Code::Io, format!("cannot read scene: {e}")).at(Location::file_start(&display)))?;
@@ -236,8 +246,13 @@ pub fn load_with(path: &Path, overrides: &overrides::Overrides) -> Result<Read, 
     for (name, at) in scene.mesh_files() {
         let mesh_path = dir.join(name);
         let mesh_display = crate::diag::display_path(&mesh_path);
-        files.push(mesh_path.clone());
-        files.extend(crate::mesh::external_buffers(&mesh_path));
+        let mut own = vec![mesh_path.clone()];
+        own.extend(crate::mesh::external_buffers(&mesh_path));
+        files.extend(own.iter().cloned());
+        if let Some(mesh) = kept(&mesh_path, &own) {
+            meshes.insert(name.to_owned(), mesh);
+            continue;
+        }
         if !mesh_path.exists() {
             return Err(Diagnostic::error(Code::Scene, format!("mesh file `{mesh_display}` does not exist")).with_label(
                 at.clone(),

@@ -134,8 +134,12 @@ pub struct Daemon {
     /// start elsewhere.
     trace_stale: bool,
     nan_report: Option<NanReport>,
-    /// The scene as installed, for material previews.
+    /// The scene as installed, for material previews and for what its
+    /// reloads keep.
     loaded: Arc<crate::loaded::Loaded>,
+    /// The scene's files changed since `loaded` was read: what a reload
+    /// must read again (kept across failed reloads).
+    stale_inputs: BTreeSet<PathBuf>,
     previews: super::preview::Previews,
 }
 
@@ -175,6 +179,7 @@ impl Daemon {
         let previews = super::preview::Previews::start(&config.shader_root);
         Daemon {
             loaded: Arc::new(loaded.clone()),
+            stale_inputs: BTreeSet::new(),
             previews,
             session,
             config,
@@ -326,6 +331,7 @@ impl Daemon {
             let display = display_path(path);
             if self.scene_files.iter().any(|f| same_file(path, f)) {
                 scene_changed = true;
+                self.stale_inputs.insert(path.to_owned());
                 touched.insert(display);
                 continue;
             }
@@ -375,7 +381,7 @@ impl Daemon {
 
     /// Reloads the scene; returns the library files its reload changed.
     fn reload_scene(&mut self) -> BTreeSet<String> {
-        let changed = match crate::loaded::load_with(&self.config.scene_path, &self.overrides) {
+        let changed = match self.load_scene(&self.overrides) {
             Ok(l) => self.install_scene(l),
             // The last good scene keeps rendering.
             Err(d) => {
@@ -388,6 +394,14 @@ impl Daemon {
         changed
     }
 
+    /// Reads the scene with `overrides`, keeping the installed scene's
+    /// meshes, textures and network whose files have not changed since.
+    fn load_scene(&self, overrides: &Overrides) -> Result<crate::loaded::Loaded, Diagnostic> {
+        let stale = |p: &Path| self.stale_inputs.iter().any(|c| same_file(c, p));
+        let keep = crate::loaded::Keep { previous: &self.loaded, changed: &stale };
+        crate::loaded::load_keeping(&self.config.scene_path, overrides, Some(&keep))
+    }
+
     /// Swaps the scene in; returns the library files it changed (the
     /// generated material module).
     fn install_scene(&mut self, l: crate::loaded::Loaded) -> BTreeSet<String> {
@@ -395,6 +409,7 @@ impl Daemon {
         self.publish_materials(&l);
         let changed = self.session.set_scene(&l);
         self.loaded = Arc::new(l.clone());
+        self.stale_inputs.clear();
         self.scene_files = l.files;
         self.scene_warnings = l.warnings;
         self.config.watch_files.set(&self.scene_files);
@@ -428,7 +443,7 @@ impl Daemon {
                 return;
             }
         };
-        match crate::loaded::load_with(&self.config.scene_path, &overrides) {
+        match self.load_scene(&overrides) {
             Ok(l) => {
                 self.overrides = overrides;
                 let changed = self.install_scene(l);
