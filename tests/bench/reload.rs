@@ -88,18 +88,21 @@ fn start(bin: &std::path::Path, name: &str, extra: &[&str]) -> (Project, Server)
 }
 
 /// Milliseconds of `loupe::loaded::load_with` of the project's material
-/// scene, `n` times: the part of a material edit's reload that no timing
-/// of `reload_succeeded` covers (installing it on the device is not in it).
-fn scene_loads(project: &Project, n: usize) -> Vec<f64> {
+/// scene, `n` times, and of its first step alone (`loupe::scene::load_with`:
+/// the scene file and its meshes): the part of a material edit's reload
+/// that no timing of `reload_succeeded` covers (installing it on the
+/// device is not in it).
+fn scene_loads(project: &Project, n: usize) -> (Vec<f64>, Vec<f64>) {
     let scene = project.path(reload::MATERIAL_SCENE);
-    (0..n)
-        .map(|_| {
-            let start = std::time::Instant::now();
-            let loaded = loupe::loaded::load_with(&scene, &Default::default()).expect("the material scene loads");
-            std::hint::black_box(loaded);
-            start.elapsed().as_secs_f64() * 1e3
-        })
-        .collect()
+    let timed = |f: &dyn Fn()| {
+        let start = std::time::Instant::now();
+        f();
+        start.elapsed().as_secs_f64() * 1e3
+    };
+    let overrides = Default::default();
+    let whole = (0..n).map(|_| timed(&|| drop(loupe::loaded::load_with(&scene, &overrides).expect("the material scene loads")))).collect();
+    let meshes = (0..n).map(|_| timed(&|| drop(loupe::scene::load_with(&scene, &overrides).expect("the material scene loads")))).collect();
+    (whole, meshes)
 }
 
 fn latency(bin: &std::path::Path, o: &Options) -> bool {
@@ -107,7 +110,6 @@ fn latency(bin: &std::path::Path, o: &Options) -> bool {
     let mut driver = Driver::new(&project, &server);
     let series = [reload::Edits::shader(&project), reload::Edits::material()];
     let samples = reload::latency(&mut driver, o.warmup, o.edits, &series);
-    let loads = scene_loads(&project, o.edits);
     let adapter = server.get_json("/api/status")["adapter"].as_str().unwrap_or("?").to_owned();
     println!(
         "save-to-frame latency: {} edits of each series, alternating (after {} warm-up rounds), --render {}, scene {}",
@@ -117,7 +119,7 @@ fn latency(bin: &std::path::Path, o: &Options) -> bool {
         reload::MATERIAL_SCENE
     );
     println!("  adapter {adapter}; {}", machine());
-    println!("  {:<30} {:>9} {:>9} {:>11} {:>11}", "ms", "shader p50", "p95", "material p50", "p95");
+    println!("  {:<30} {:>12} {:>12} {:>12} {:>12}", "ms", "shader p50", "p95", "material p50", "p95");
     let rows: [(&str, fn(&Split) -> f64); 6] = [
         ("total (write -> frame event)", |s| s.total),
         ("watch + debounce", |s| s.watch),
@@ -131,16 +133,13 @@ fn latency(bin: &std::path::Path, o: &Options) -> bool {
     for (name, f) in rows {
         let (a, b) = (column(shader, f), column(material, f));
         let p = |v: &[f64], q| reload::percentile(v, q);
-        println!("  {name:<30} {:>9.1} {:>9.1} {:>11.1} {:>11.1}", p(&a, 0.5), p(&a, 0.95), p(&b, 0.5), p(&b, 0.95));
+        println!("  {name:<30} {:>12.1} {:>12.1} {:>12.1} {:>12.1}", p(&a, 0.5), p(&a, 0.95), p(&b, 0.5), p(&b, 0.95));
     }
-    println!(
-        "  {:<30} {:>9} {:>9} {:>11.1} {:>11.1}",
-        "  of which the scene's load",
-        "-",
-        "-",
-        reload::percentile(&loads, 0.5),
-        reload::percentile(&loads, 0.95)
-    );
+    let (whole, meshes) = scene_loads(&project, o.edits);
+    for (name, v) in [("  of which the scene's load", whole), ("    of which file + meshes", meshes)] {
+        let p = |q| reload::percentile(&v, q);
+        println!("  {name:<30} {:>12} {:>12} {:>12.1} {:>12.1}", "-", "-", p(0.5), p(0.95));
+    }
     // loupe's own time: everything but pipeline creation and rendering,
     // which are the driver's (lavapipe compiles shaders at the first draw).
     let own = |s: &Split| s.watch + s.compose + s.send;
