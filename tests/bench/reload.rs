@@ -105,6 +105,9 @@ fn scene_loads(project: &Project, n: usize) -> (Vec<f64>, Vec<f64>) {
     (whole, meshes)
 }
 
+/// One figure of a save's split.
+type Column = fn(&Split) -> f64;
+
 fn latency(bin: &std::path::Path, o: &Options) -> bool {
     let (project, server) = start(bin, "bench-latency", &["--render", &o.render, "--scene", reload::MATERIAL_SCENE]);
     let mut driver = Driver::new(&project, &server);
@@ -120,7 +123,7 @@ fn latency(bin: &std::path::Path, o: &Options) -> bool {
     );
     println!("  adapter {adapter}; {}", machine());
     println!("  {:<30} {:>12} {:>12} {:>12} {:>12}", "ms", "shader p50", "p95", "material p50", "p95");
-    let rows: [(&str, fn(&Split) -> f64); 6] = [
+    let rows: [(&str, Column); 6] = [
         ("total (write -> frame event)", |s| s.total),
         ("watch + debounce", |s| s.watch),
         ("compose + validate", |s| s.compose),
@@ -128,7 +131,7 @@ fn latency(bin: &std::path::Path, o: &Options) -> bool {
         ("render (first frame)", |s| s.render),
         ("send (the rest)", |s| s.send),
     ];
-    let column = |series: &[Split], f: fn(&Split) -> f64| series.iter().map(f).collect::<Vec<f64>>();
+    let column = |series: &[Split], f: Column| series.iter().map(f).collect::<Vec<f64>>();
     let [shader, material] = [&samples[0], &samples[1]];
     for (name, f) in rows {
         let (a, b) = (column(shader, f), column(material, f));
