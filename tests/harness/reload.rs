@@ -146,18 +146,65 @@ pub fn percentile(values: &[f64], q: f64) -> f64 {
     v[rank - 1]
 }
 
-/// Saves `edits` (after `warmup` unmeasured ones) valid versions of the
-/// tonemap shader, each a different constant colour, and measures each.
+/// The material file the material series edits, and the scene using it:
+/// `minimal.toml` with its material taken from that file.
+pub const MATERIAL: &str = "scenes/bench_paint.mat";
+pub const MATERIAL_SCENE: &str = "scenes/bench_paint.toml";
+
+/// Writes `MATERIAL_SCENE` and `MATERIAL` (in minimal's blue: the first
+/// edit, at `colour(0)`, changes it) into `project`.
+pub fn material_scene(project: &Project) {
+    let minimal = project.read("scenes/minimal.toml");
+    let shorthand = "base_color = [0.2, 0.45, 0.8]\nmetallic = 0.0\nroughness = 0.35\n";
+    assert!(minimal.contains(shorthand), "minimal.toml still has its shorthand material");
+    project.write(MATERIAL_SCENE, minimal.replace(shorthand, "file = \"bench_paint.mat\"\n"));
+    project.write(MATERIAL, material([0.2, 0.45, 0.8]));
+}
+
+/// The material file with `rgb` as its colour's default: a value edit,
+/// which rebuilds no pipeline (new parameters only).
+pub fn material(rgb: [f32; 3]) -> String {
+    let [r, g, b] = rgb;
+    format!(
+        "// The benchmark's paint: a plastic whose colour each edit changes.\nparam colour: color = rgb({r:?}, {g:?}, {b:?})\n\nmaterial bench_paint = slab {{\n    base_color: colour,\n    specular_roughness: 0.35,\n}}\n"
+    )
+}
+
+/// One kind of edit: the file an editor saves, and its `i`th content.
+pub struct Edits<'a> {
+    pub file: &'a str,
+    pub content: Box<dyn Fn(usize) -> String + 'a>,
+}
+
+impl Edits<'_> {
+    /// The tonemap shader at a new constant colour each time.
+    pub fn shader(project: &Project) -> Edits<'static> {
+        let good = project.read(TONEMAP);
+        Edits { file: TONEMAP, content: Box::new(move |i| constant_colour(&good, colour(i))) }
+    }
+
+    /// `MATERIAL` at a new colour each time.
+    pub fn material() -> Edits<'static> {
+        Edits { file: MATERIAL, content: Box::new(|i| material(colour(i))) }
+    }
+}
+
+/// `warmup + edits` rounds, each saving one valid version of every series'
+/// file in turn (so the series share the machine's load), the first
+/// `warmup` unmeasured; the splits of each series, in `series`' order.
 /// Panics when a save never shows.
-pub fn latency(driver: &mut Driver, warmup: usize, edits: usize) -> Vec<Split> {
-    let good = driver.project.read(TONEMAP);
-    (0..warmup + edits)
-        .filter_map(|i| {
-            let o = driver.save(TONEMAP, &constant_colour(&good, colour(i))).unwrap_or_else(|| panic!("edit {i} never reached a frame"));
-            assert!(o.succeeded, "edit {i} failed to reload");
-            (i >= warmup).then(|| Split::of(&o).expect("a success has timings"))
-        })
-        .collect()
+pub fn latency(driver: &mut Driver, warmup: usize, edits: usize, series: &[Edits]) -> Vec<Vec<Split>> {
+    let mut out = vec![Vec::new(); series.len()];
+    for i in 0..warmup + edits {
+        for (s, splits) in series.iter().zip(&mut out) {
+            let o = driver.save(s.file, &(s.content)(i)).unwrap_or_else(|| panic!("edit {i} of {} never reached a frame", s.file));
+            assert!(o.succeeded, "edit {i} of {} failed to reload", s.file);
+            if i >= warmup {
+                splits.push(Split::of(&o).expect("a success has timings"));
+            }
+        }
+    }
+    out
 }
 
 /// What a soak found.

@@ -206,6 +206,11 @@ impl Session {
         &self.scene
     }
 
+    /// The scene's materials, as last installed.
+    pub fn materials(&self) -> &Program {
+        &self.materials
+    }
+
     pub fn graph(&self) -> &Graph {
         &self.graph
     }

@@ -133,7 +133,7 @@ pub fn run(job: &Job, out: &Path) -> Result<Report, OfflineError> {
     let serial = session.gpu().is_cpu();
     let text = std::fs::read(&job.scene).map_err(|e| OfflineError::Io(format!("cannot read {}: {e}", job.scene.display())))?;
     let measured = Provenance::new(&job.scene, &text, session.library());
-    let all = sweep::series(session.scene(), job.reference_spp);
+    let all = sweep::series(session.scene(), session.materials(), job.reference_spp);
     let images = out.join("points");
     std::fs::create_dir_all(&images).map_err(|e| OfflineError::Io(format!("cannot create {}: {e}", images.display())))?;
     let mut reports = Vec::new();

@@ -3,6 +3,7 @@
 //! they affect, when they apply) are the settings table's
 //! (`scene::settings`); this only says how to sweep them.
 
+use crate::material::Program;
 use crate::scene::Scene;
 use crate::scene::overrides::Overrides;
 use crate::scene::settings;
@@ -71,9 +72,10 @@ fn text(t: &str) -> Value {
 }
 
 /// The series `scene` calls for: only settings that change its image (a
-/// scene without media sweeps no volume setting). `reference_spp`: the
-/// path tracer's samples for path-traced references.
-pub fn series(scene: &Scene, reference_spp: u32) -> Vec<Series> {
+/// scene without media sweeps no volume setting, one whose `materials` ask
+/// for no energy compensation no compensation). `reference_spp`: the path
+/// tracer's samples for path-traced references.
+pub fn series(scene: &Scene, materials: &Program, reference_spp: u32) -> Vec<Series> {
     let mut out = Vec::new();
     let overrides = |pairs: &[(&str, Value)]| -> Overrides { pairs.iter().map(|(k, v)| ((*k).to_owned(), v.clone())).collect() };
     let mut add = |setting: &'static str, values: Vec<Value>, with: &[(&str, Value)], reference: Reference| {
@@ -130,6 +132,19 @@ pub fn series(scene: &Scene, reference_spp: u32) -> Vec<Series> {
                 best("quality.rect_lights", text("sampled")),
             );
         }
+        // Only materials whose definition asks for compensation change with
+        // it (`.mat` files and glTF materials, never the shorthand): what it
+        // costs the lighting pass, and how far the image moves without it.
+        let compensates =
+            materials.instances.iter().any(|i| materials.definitions.get(i.definition as usize).is_some_and(|d| d.energy_compensation));
+        if compensates {
+            add(
+                "quality.energy_compensation",
+                vec![Value::Bool(false), Value::Bool(true)],
+                std::slice::from_ref(&raster),
+                best("quality.energy_compensation", Value::Bool(true)),
+            );
+        }
         let path = [("quality.renderer", text("path"))];
         if scene.denoiser.is_none() {
             add("quality.path_spp", doublings(1, 64), &path, Reference::PathTraced(reference_spp));
@@ -158,9 +173,15 @@ pub fn series(scene: &Scene, reference_spp: u32) -> Vec<Series> {
 mod tests {
     use super::*;
 
-    fn scene(name: &str) -> Scene {
+    fn loaded(name: &str) -> crate::loaded::Loaded {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes").join(name);
-        crate::scene::load_with(&path, &Overrides::new()).unwrap_or_else(|d| panic!("{d}")).scene
+        crate::loaded::load_with(&path, &Overrides::new()).unwrap_or_else(|d| panic!("{d}"))
+    }
+
+    /// The series of a bundled scene.
+    fn swept(name: &str) -> Vec<Series> {
+        let l = loaded(name);
+        series(&l.scene, &l.materials, 256)
     }
 
     /// Only what the scene calls for is swept: no volume series without
@@ -169,23 +190,27 @@ mod tests {
     #[test]
     fn a_scene_sweeps_only_the_settings_that_change_its_image() {
         let names = |s: &[Series]| s.iter().map(|s| s.name.clone()).collect::<Vec<_>>();
-        let minimal = series(&scene("minimal.toml"), 256);
+        let minimal = swept("minimal.toml");
         assert_eq!(names(&minimal), ["shadow_map_size", "shadow_filter", "path_spp", "two_triangles"]);
-        let volume = series(&scene("volume.toml"), 256);
+        let volume = swept("volume.toml");
         let steps: Vec<_> = volume.iter().filter(|s| s.setting == "quality.volume_steps").collect();
         assert_eq!(steps.len(), 2);
         assert_eq!(steps[0].reference, steps[1].reference, "one reference for both estimators");
         assert_eq!(steps[0].name, "volume_steps, volume_estimator=\"constant\"");
-        let pattern = series(&scene("pattern.toml"), 256);
+        let pattern = swept("pattern.toml");
         assert_eq!(names(&pattern), ["two_triangles"], "no geometry: nothing to path trace");
         for s in minimal.iter().chain(&volume) {
             let ints: Vec<i64> = s.values.iter().filter_map(|v| if let Value::Int(i) = v { Some(*i) } else { None }).collect();
             assert!(ints.windows(2).all(|w| w[0] < w[1]), "{}: cheapest first", s.name);
         }
         // With a [denoiser]: the samples without it, then with it in each precision.
-        let mut denoised = scene("minimal.toml");
-        denoised.denoiser = crate::scene::parse("d.toml", "[denoiser]\nweights = \"w.tza\"\n").unwrap().denoiser;
-        let paths: Vec<_> = series(&denoised, 256).into_iter().filter(|s| s.setting == "quality.path_spp").map(|s| s.name).collect();
+        let mut denoised = loaded("minimal.toml");
+        denoised.scene.denoiser = crate::scene::parse("d.toml", "[denoiser]\nweights = \"w.tza\"\n").unwrap().denoiser;
+        let paths: Vec<_> = series(&denoised.scene, &denoised.materials, 256)
+            .into_iter()
+            .filter(|s| s.setting == "quality.path_spp")
+            .map(|s| s.name)
+            .collect();
         assert_eq!(
             paths,
             ["path_spp, denoise=false", "path_spp, precision=\"f32\", denoise=true", "path_spp, precision=\"f16\", denoise=true"]
@@ -193,5 +218,20 @@ mod tests {
         let path = minimal.iter().find(|s| s.setting == "quality.path_spp").unwrap();
         assert!(path.accumulates());
         assert_eq!(path.reference_overrides()["quality.path_spp"], Value::Int(256));
+    }
+
+    /// Energy compensation is swept where a material asks for it: the
+    /// showcase's library materials, off against on (the reference, so the
+    /// "off" point's error is what compensation changes). The shorthand
+    /// materials of `minimal.toml` never compensate: no series there (the
+    /// test above).
+    #[test]
+    fn energy_compensation_is_swept_where_a_material_asks_for_it() {
+        let showcase = swept("showcase.toml");
+        let s = showcase.iter().find(|s| s.setting == "quality.energy_compensation").expect("a series for energy compensation");
+        assert_eq!(s.values, [Value::Bool(false), Value::Bool(true)], "off first: the cheaper");
+        assert_eq!(s.with["quality.renderer"], text("raster"));
+        assert_eq!(s.reference_overrides()["quality.energy_compensation"], Value::Bool(true));
+        assert!(settings::find(s.setting).is_some_and(|d| d.affects.contains(&"lighting")), "its time is the lighting pass's");
     }
 }
