@@ -9,9 +9,9 @@
 //! own two small buffers (its parameter values, and one instance header
 //! naming the definition, compensation on as for any `.mat` material).
 //!
-//! The kernels read `input` as `sampling`'s do (`input[0].xyz` the view,
-//! n = +z; `input[2 + i]` invocation i's operand), so `sampling`'s
-//! quadrature, draw layout and chi-square fit serve them unchanged.
+//! The kernels read `input` as `sampling`'s do (`sampling::INPUT`), so
+//! `sampling`'s quadrature, draw layout and chi-square fit serve them
+//! unchanged.
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -27,12 +27,6 @@ use wgpu::util::DeviceExt;
 
 const PRELUDE: &str = r#"
 #import loupe::material::{material_init, material_eval, material_pdf, material_sample}
-
-@group(0) @binding(0) var<storage, read> input: array<vec4<f32>>;
-
-const N = vec3(0.0, 0.0, 1.0);
-
-fn view() -> vec3<f32> { return input[0].xyz; }
 "#;
 
 /// Invocation i evaluates direction `input[2 + i].xyz`: (material_pdf,
@@ -117,7 +111,8 @@ impl Library {
         let text = back::wgsl(&definitions, Bindings { group: 1, params: 0, instances: 1, textures: 2, sampler: 3 });
         let module = SourceFile::from_text(back::DISPLAY.into(), back::DISPLAY.into(), text.into());
         let kernel = |body: &str| {
-            Kernel::with_modules(gpu, &format!("{PRELUDE}{body}"), "main", std::slice::from_ref(&module)).unwrap_or_else(|e| panic!("{e}"))
+            Kernel::with_modules(gpu, &format!("{}{PRELUDE}{body}", sampling::INPUT), "main", std::slice::from_ref(&module))
+                .unwrap_or_else(|e| panic!("{e}"))
         };
         Library { density: kernel(DENSITY), sample: kernel(SAMPLE), names, definitions }
     }

@@ -15,17 +15,24 @@ use crate::chi2::{self, Axis, Fit, GAUSS};
 use loupe::gpu::Gpu;
 use loupe::gpu::testing::Kernel;
 
-/// What every kernel here reads: `input[0]` is the view (local frame,
-/// n = +z) and roughness, `input[1]` the base colour and metallic, and
-/// `input[2 + i]` invocation i's operand.
-const PRELUDE: &str = r#"
-#import loupe::brdf::{brdf_cos, brdf_pdf, brdf_sample}
-
+/// What every kernel of the suite reads (`sampling`'s, `transmission`'s,
+/// `library`'s, `furnace`'s): `input[0].xyz` is the view in the local
+/// frame, n = +z, and `input[2 + i]` invocation i's operand; what
+/// `input[0].w` and `input[1]` hold is each kernel family's own. The
+/// quadrature, the draw layout and the chi-square fit here rely on it.
+pub const INPUT: &str = r#"
 @group(0) @binding(0) var<storage, read> input: array<vec4<f32>>;
 
 const N = vec3(0.0, 0.0, 1.0);
 
 fn view() -> vec3<f32> { return input[0].xyz; }
+"#;
+
+/// `INPUT`'s rest for the kernels here: `input[0].w` is the roughness,
+/// `input[1]` the base colour and metallic.
+const PRELUDE: &str = r#"
+#import loupe::brdf::{brdf_cos, brdf_pdf, brdf_sample}
+
 fn roughness() -> f32 { return input[0].w; }
 fn base() -> vec3<f32> { return input[1].rgb; }
 fn metallic() -> f32 { return input[1].w; }
@@ -129,10 +136,10 @@ impl Kernels {
     }
 }
 
-/// A kernel of `body` after the prelude (the view, material and operands
-/// it reads), entry point `main`.
+/// A kernel of `body` after `INPUT` and the prelude (the view, material
+/// and operands it reads), entry point `main`.
 pub fn kernel(gpu: &Gpu, body: &str) -> Kernel {
-    Kernel::new(gpu, &format!("{PRELUDE}{body}"), "main").unwrap_or_else(|e| panic!("{e}"))
+    Kernel::new(gpu, &format!("{INPUT}{PRELUDE}{body}"), "main").unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// What `input[0]` and `input[1]` hold for a case (see `PRELUDE`).

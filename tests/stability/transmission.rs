@@ -11,16 +11,11 @@ use crate::sampling::{self, Density};
 use loupe::gpu::Gpu;
 use loupe::gpu::testing::Kernel;
 
-/// `input[0]`: the view (local frame, n = +z) and roughness; `input[1]`:
-/// eta and thin; `input[2 + i]`: invocation i's operand.
+/// `sampling::INPUT`'s rest here: `input[0].w` is the roughness,
+/// `input[1]` eta and thin.
 const PRELUDE: &str = r#"
 #import loupe::btdf::{dielectric_cos, dielectric_pdf, dielectric_direction}
 
-@group(0) @binding(0) var<storage, read> input: array<vec4<f32>>;
-
-const N = vec3(0.0, 0.0, 1.0);
-
-fn view() -> vec3<f32> { return input[0].xyz; }
 fn roughness() -> f32 { return input[0].w; }
 fn eta() -> f32 { return input[1].x; }
 fn thin() -> f32 { return input[1].y; }
@@ -117,7 +112,8 @@ pub struct Kernels {
 
 impl Kernels {
     pub fn new(gpu: &Gpu) -> Kernels {
-        let kernel = |body: &str| Kernel::new(gpu, &format!("{PRELUDE}{body}"), "main").unwrap_or_else(|e| panic!("{e}"));
+        let kernel =
+            |body: &str| Kernel::new(gpu, &format!("{}{PRELUDE}{body}", sampling::INPUT), "main").unwrap_or_else(|e| panic!("{e}"));
         Kernels { sample: kernel(SAMPLE), density: kernel(DENSITY) }
     }
 }
