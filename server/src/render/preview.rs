@@ -28,14 +28,13 @@ pub const PATH_SPP: u32 = 16;
 #[derive(Debug, Clone)]
 pub struct Preview {
     pub png: Vec<u8>,
-    pub renderer: Renderer,
     /// Samples per pixel (1 for the raster).
     pub samples: u32,
 }
 
 #[derive(Debug, thiserror::Error)]
 pub enum PreviewError {
-    #[error("no material instance {index}: the scene has {count}")]
+    #[error("no material {index}: the scene has {count}")]
     NoSuchMaterial { index: usize, count: usize },
     /// A pipeline the preview needs never built; the diagnostics say why.
     #[error("the preview's pipelines did not build")]
@@ -117,12 +116,8 @@ impl Previewer {
                 let mut changed = changed_files(session.library(), source.lib);
                 session.apply_sources(source.lib.clone());
                 changed.extend(session.set_scene(&loaded));
-                let lib = session.library().clone();
-                let affected: BTreeSet<String> = changed.iter().flat_map(|d| lib.dependents(d)).collect();
-                for key in session.built_from(&affected) {
-                    let result = session.compose_job(&key)();
-                    session.install(&key, result);
-                }
+                let stale = session.built_from(&changed);
+                session.install_now(stale);
                 session
             }
             slot => {
@@ -147,7 +142,7 @@ impl Previewer {
                 png = c.to_png();
             }
         }
-        Ok(Preview { png, renderer, samples })
+        Ok(Preview { png, samples })
     }
 }
 

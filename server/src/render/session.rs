@@ -293,11 +293,13 @@ impl Session {
         self.wanted().into_iter().filter(|k| !self.cache.entries.contains_key(k)).collect()
     }
 
-    /// The pipelines the frame uses that were built from any of `files`
-    /// (shader displays): what a change to them rebuilds. Pipelines kept
-    /// from earlier frames that were built from them are dropped instead:
-    /// they would be stale, and the frame does not use them.
-    pub fn built_from(&mut self, files: &BTreeSet<String>) -> BTreeSet<PipelineKey> {
+    /// The pipelines the frame uses that were built from any of `changed`
+    /// (shader displays) or from a file importing one of them: what a
+    /// change to them rebuilds. Pipelines kept from earlier frames that
+    /// were built from them are dropped instead: they would be stale, and
+    /// the frame does not use them.
+    pub fn built_from(&mut self, changed: &BTreeSet<String>) -> BTreeSet<PipelineKey> {
+        let files: BTreeSet<String> = changed.iter().flat_map(|d| self.lib.dependents(d)).collect();
         let wanted = self.wanted();
         let touched: BTreeSet<PipelineKey> = self
             .cache
@@ -352,8 +354,15 @@ impl Session {
     /// Composes and installs every pipeline the frame lacks, here and now;
     /// returns the diagnostics of those that failed.
     pub fn install_missing(&mut self) -> Vec<Diagnostic> {
+        let missing = self.missing();
+        self.install_now(missing)
+    }
+
+    /// Composes and installs `keys` here and now; returns the diagnostics
+    /// of those that failed.
+    pub fn install_now(&mut self, keys: BTreeSet<PipelineKey>) -> Vec<Diagnostic> {
         let mut errors = Vec::new();
-        for key in self.missing() {
+        for key in keys {
             let result = self.compose_job(&key)();
             self.install(&key, result);
             errors.extend(self.cache.entries[&key].diagnostics.iter().cloned());

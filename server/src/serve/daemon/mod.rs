@@ -372,9 +372,7 @@ impl Daemon {
         self.publish_measured();
         // Exactly the pipelines whose sources depend on a touched file, plus
         // any the (new) graph needs that were never built.
-        let lib = self.session.library().clone();
-        let affected: BTreeSet<String> = touched.iter().flat_map(|d| lib.dependents(d)).collect();
-        let mut keys = self.session.built_from(&affected);
+        let mut keys = self.session.built_from(&touched);
         keys.extend(self.session.missing());
         self.start_reload(keys, touched.into_iter().collect(), watch_ms);
     }
@@ -448,9 +446,7 @@ impl Daemon {
                 self.overrides = overrides;
                 let changed = self.install_scene(l);
                 self.dirty = true;
-                let lib = self.session.library().clone();
-                let affected: BTreeSet<String> = changed.iter().flat_map(|d| lib.dependents(d)).collect();
-                let mut keys = self.session.built_from(&affected);
+                let mut keys = self.session.built_from(&changed);
                 keys.extend(self.session.missing());
                 self.start_reload(keys, vec![display], 0.0);
             }

@@ -41,9 +41,7 @@ pub(super) async fn preview(State(st): State<Arc<AppState>>, UrlPath(index): Url
             (StatusCode::OK, [(header::CONTENT_TYPE, "image/png"), (header::HeaderName::from_static("x-loupe-samples"), &samples)], p.png)
                 .into_response()
         }
-        Ok(Err(Failed::Preview(PreviewError::NoSuchMaterial { index, count }))) => {
-            error(StatusCode::NOT_FOUND, &format!("no material {index}: the scene has {count}"))
-        }
+        Ok(Err(missing @ Failed::Preview(PreviewError::NoSuchMaterial { .. }))) => error(StatusCode::NOT_FOUND, &missing.to_string()),
         Ok(Err(Failed::Preview(PreviewError::Pipelines(diagnostics)))) => json_response(
             StatusCode::UNPROCESSABLE_ENTITY,
             &serde_json::json!({ "error": "the preview's pipelines did not build", "diagnostics": diagnostics }),
