@@ -7,7 +7,8 @@
 //! auto exposure on, or path traced. One that no context shows (the
 //! volume settings without media, the denoiser's without `[denoiser]`)
 //! changes no pass and is left out. Pairs the file may not hold
-//! (`settings::ORDERED`) are left out too.
+//! (`settings::ORDERED`) are left out too, and so is a variant equal to
+//! one already tried (an extreme the scene already holds).
 //!
 //! Two frames each (auto exposure and the path tracer's accumulation move
 //! on), every output but depth textures captured (`scanned`), at 64 × 36;
@@ -62,7 +63,10 @@ pub fn variants(base: &Scene) -> Vec<(String, Scene)> {
                 setting.set(&mut s, &value).ok()?;
                 ((setting.shown_when)(&s) && ordered(&s)).then_some(s)
             });
-            if let Some(s) = shown {
+            // A value the scene already holds renders a variant tried
+            // before (the scene as written, or this setting's other
+            // context): rendering it again finds nothing new.
+            if let Some(s) = shown.filter(|s| out.iter().all(|(_, tried)| tried != s)) {
                 out.push((format!("{} = {value}", setting.path), s));
             }
         }
