@@ -6,7 +6,7 @@
 #import loupe::view::{view, world_position}
 #import loupe::lights::{Light, lights, incident, light_type, rect_area, rect_cosine, LIGHT_RECT}
 #import loupe::environment::environment_radiance
-#import loupe::material::{Surface, MaterialPoint, material_init_at, material_eval, material_ambient, material_emission}
+#import loupe::material::{Surface, MaterialPoint, material_point, material_init_at, material_eval, material_ambient, material_emission}
 #ifdef SHADOWS
 #import loupe::shadows::shadow
 #endif
@@ -66,6 +66,7 @@ fn visibility(light: Light, p: vec3<f32>, n: vec3<f32>, l: vec3<f32>, distance: 
     return v;
 }
 
+#ifdef MATERIAL_POINT
 // Where the material is evaluated: the G-buffer's UV with its derivatives
 // across the 2×2 quad (for the textures' mip level) and a tangent from the
 // derivatives of position and UV (the G-buffer stores none). Derivatives
@@ -98,12 +99,19 @@ fn material_point_at(pixel: vec2<i32>, position: vec2<f32>, z: f32, n: vec3<f32>
     let tangent = select(vec4(0.0), vec4(normalize(t), sign), dot(t, t) > 0.0);
     return MaterialPoint(uv, duv[0], duv[1], tangent);
 }
+#endif
 
 @fragment
 fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
     let pixel = vec2<i32>(in.position.xy);
     let z = textureLoad(depth, pixel, 0);
+#ifdef MATERIAL_POINT
     let point = material_point_at(pixel, in.position.xy, z, normalize(textureLoad(gbuffer_normal, pixel, 0).xyz), textureLoad(gbuffer_material, pixel, 0).z);
+#else
+    // No material reads it (the generated module implies MATERIAL_POINT
+    // when one does).
+    let point = material_point(vec2(0.0), vec4(0.0));
+#endif
     if z >= 1.0 {
         let p = world_position(in.position.xy, 1.0);
         return vec4(environment_radiance(normalize(p - view.position.xyz)), 1.0);

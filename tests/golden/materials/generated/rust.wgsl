@@ -7,6 +7,7 @@
 #import loupe::brdf::{BrdfSample, PI, slab_cos, slab_pdf, slab_direction, specular_f0, f_schlick_edge, luminance_of}
 #import loupe::ambient::{ambient_light, gradient_irradiance}
 #import loupe::multiscatter::energy_compensation
+// loupe: implies MATERIAL_POINT
 #ifdef LIGHT_RECT
 #import loupe::ltc::ltc_rect
 #endif
