@@ -46,6 +46,9 @@ pub enum Feature {
     /// a solid, or straight through a thin wall): a transmission weight
     /// above 0 and metalness below 1.
     Transmission,
+    /// A thin film over the interface (iridescence): a film weight above
+    /// 0, on a specular or metal lobe.
+    ThinFilm,
 }
 
 /// Why a material is not energy-conserving.
@@ -435,6 +438,11 @@ fn slab_features(def: &Definition, slab: &Slab, in_layer_top: bool) -> BTreeSet<
     let specular = !metal_only && !is(Field::SpecularWeight, zero);
     let metal = !is(Field::BaseMetalness, zero);
     let lobe = specular || metal;
+    // A mean free path, when set, decides the medium's colour instead.
+    let absorbs = match slab.get(Field::MeanFreePath) {
+        Some(_) => !is(Field::MeanFreePath, |x| x == f32::MAX),
+        None => !is(Field::TransmissionColor, white),
+    };
     [
         (Feature::Diffuse, !metal_only && !is(Field::BaseColor, zero)),
         (Feature::Specular, specular),
@@ -443,8 +451,9 @@ fn slab_features(def: &Definition, slab: &Slab, in_layer_top: bool) -> BTreeSet<
         (Feature::Haze, lobe && !is(Field::HazeWeight, zero)),
         (Feature::Fuzz, !is(Field::FuzzWeight, zero) && !is(Field::FuzzColor, zero)),
         (Feature::Emission, !is(Field::EmissionLuminance, zero) && !is(Field::EmissionColor, zero)),
-        (Feature::Absorption, in_layer_top && !is(Field::Thickness, zero) && !is(Field::TransmissionColor, white)),
+        (Feature::Absorption, in_layer_top && !is(Field::Thickness, zero) && absorbs),
         (Feature::Transmission, !metal_only && !is(Field::TransmissionWeight, zero)),
+        (Feature::ThinFilm, lobe && !is(Field::ThinFilmWeight, zero)),
     ]
     .into_iter()
     .filter_map(|(feature, on)| on.then_some(feature))
