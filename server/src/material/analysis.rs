@@ -694,6 +694,43 @@ mod tests {
     }
 
     #[test]
+    fn a_thin_film_needs_a_weight_and_a_lobe() {
+        let mut b = Build::new("m");
+        let one = b.float(1.0);
+        let zero = b.float(0.0);
+        let film = b.slab(&[(Field::ThinFilmWeight, one)]);
+        let none = b.slab(&[(Field::ThinFilmWeight, zero)]);
+        let bare = b.slab(&[(Field::ThinFilmWeight, one), (Field::SpecularWeight, zero)]);
+        let half = b.float(0.5);
+        let m1 = b.mix(film, none, half);
+        let root = b.mix(m1, bare, half);
+        let a = analyse(&b.finish(root));
+        let filmed = |n: NodeId| a.features[n.0 as usize].contains(&Feature::ThinFilm);
+        assert!(filmed(film), "{:?}", a.features);
+        assert!(!filmed(none), "thin_film_weight: 0 is no film");
+        assert!(!filmed(bare), "no specular lobe, nothing for a film to change");
+    }
+
+    #[test]
+    fn a_mean_free_path_decides_the_absorption() {
+        let mut b = Build::new("m");
+        let thick = b.float(0.2);
+        let short = b.rgb([0.1, 1.0, 5.0]);
+        let clear = b.rgb([f32::MAX; 3]);
+        let white = b.rgb([1.0; 3]);
+        let green = b.rgb([0.5, 1.0, 0.5]);
+        let absorbing = b.slab(&[(Field::MeanFreePath, short), (Field::Thickness, thick), (Field::TransmissionColor, white)]);
+        let infinite = b.slab(&[(Field::MeanFreePath, clear), (Field::Thickness, thick), (Field::TransmissionColor, green)]);
+        let base = b.slab(&[]);
+        let inner = b.layer(infinite, base);
+        let root = b.layer(absorbing, inner);
+        let a = analyse(&b.finish(root));
+        let absorbs = |n: NodeId| a.features[n.0 as usize].contains(&Feature::Absorption);
+        assert!(absorbs(absorbing), "a mean free path absorbs, whatever the colour says: {:?}", a.features);
+        assert!(!absorbs(infinite), "an endless mean free path absorbs nothing, whatever the colour says");
+    }
+
+    #[test]
     fn add_and_out_of_range_constants_break_energy_conservation() {
         let mut b = Build::new("m");
         let bright = b.float(1.25);
