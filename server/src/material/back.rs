@@ -11,8 +11,8 @@
 //!
 //! A closure's core is `brdf.wgsl`'s slab (Lambert through Fresnel plus
 //! GGX, `slab_cos`); a feature no definition uses (edge tint, haze, fuzz,
-//! emission, absorption through a layer's top) leaves its fields and its
-//! code out of the module. The scene file's shorthand makes closures whose
+//! emission, absorption through a layer's top, transmission, a thin film)
+//! leaves its fields and its code out of the module. The scene file's shorthand makes closures whose
 //! F0 is `specular_f0` and F90 white, with weight 1, so its evaluation is
 //! `brdf_cos` to the bit and the old scenes render what they did.
 
