@@ -23,7 +23,7 @@
 //   gives back the base's own (exact, unpolarised) Fresnel.
 #define_import_path loupe::iridescence
 
-#import loupe::brdf::{PI, alpha, d_ggx, v_smith}
+#import loupe::brdf::{PI, slab_cos}
 
 // Amplitude reflection coefficients (s, p) at an interface from index n1
 // to n2, with cosines c1 before and c2 after. A negative one reflects with
@@ -122,18 +122,17 @@ fn film_slab_cos(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>
     if !(n_l > 0.0) {
         return vec3(0.0);
     }
-    let h = normalize(v + l);
     let n_v = max(dot(n, v), 1e-4);
-    let a = alpha(roughness);
-    let f = scale * thin_film_fresnel(max(dot(v, h), 0.0), thickness, film_ior, base);
-    let specular = d_ggx(n, h, a) * v_smith(n_v, n_l, a) * f;
+    let f = scale * thin_film_fresnel(max(dot(v, normalize(v + l)), 0.0), thickness, film_ior, base);
     var diffuse = vec3(0.0);
     if metallic < 1.0 {
         let f_l = scale * thin_film_fresnel(n_l, thickness, film_ior, base);
         let f_v = scale * thin_film_fresnel(n_v, thickness, film_ior, base);
         diffuse = (1.0 - metallic) * (vec3(1.0) - f_l) * (vec3(1.0) - f_v) * base_color / PI;
     }
-    return (diffuse + specular) * n_l;
+    // The specular: `slab_cos` of a metal whose F0 and F90 are both the
+    // film's F at v·h (Schlick between equal ends is that F).
+    return slab_cos(n, v, l, vec3(0.0), 1.0, f, f, roughness) + diffuse * n_l;
 }
 
 // The F0 whose Schlick Fresnel at n·v is `f`: how the sampling's lobe
