@@ -46,6 +46,9 @@ pub enum Feature {
     /// a solid, or straight through a thin wall): a transmission weight
     /// above 0 and metalness below 1.
     Transmission,
+    /// A thin film over the interface (iridescence): a film weight above
+    /// 0, on a specular or metal lobe.
+    ThinFilm,
 }
 
 /// Why a material is not energy-conserving.
@@ -435,6 +438,11 @@ fn slab_features(def: &Definition, slab: &Slab, in_layer_top: bool) -> BTreeSet<
     let specular = !metal_only && !is(Field::SpecularWeight, zero);
     let metal = !is(Field::BaseMetalness, zero);
     let lobe = specular || metal;
+    // A mean free path, when set, decides the medium's colour instead.
+    let absorbs = match slab.get(Field::MeanFreePath) {
+        Some(_) => !is(Field::MeanFreePath, |x| x == f32::MAX),
+        None => !is(Field::TransmissionColor, white),
+    };
     [
         (Feature::Diffuse, !metal_only && !is(Field::BaseColor, zero)),
         (Feature::Specular, specular),
@@ -443,8 +451,9 @@ fn slab_features(def: &Definition, slab: &Slab, in_layer_top: bool) -> BTreeSet<
         (Feature::Haze, lobe && !is(Field::HazeWeight, zero)),
         (Feature::Fuzz, !is(Field::FuzzWeight, zero) && !is(Field::FuzzColor, zero)),
         (Feature::Emission, !is(Field::EmissionLuminance, zero) && !is(Field::EmissionColor, zero)),
-        (Feature::Absorption, in_layer_top && !is(Field::Thickness, zero) && !is(Field::TransmissionColor, white)),
+        (Feature::Absorption, in_layer_top && !is(Field::Thickness, zero) && absorbs),
         (Feature::Transmission, !metal_only && !is(Field::TransmissionWeight, zero)),
+        (Feature::ThinFilm, lobe && !is(Field::ThinFilmWeight, zero)),
     ]
     .into_iter()
     .filter_map(|(feature, on)| on.then_some(feature))
@@ -682,6 +691,43 @@ mod tests {
         assert!(transmits(glass), "{:?}", a.features);
         assert!(!transmits(opaque), "transmission_weight: 0 transmits nothing");
         assert!(!transmits(metal), "metal does not transmit");
+    }
+
+    #[test]
+    fn a_thin_film_needs_a_weight_and_a_lobe() {
+        let mut b = Build::new("m");
+        let one = b.float(1.0);
+        let zero = b.float(0.0);
+        let film = b.slab(&[(Field::ThinFilmWeight, one)]);
+        let none = b.slab(&[(Field::ThinFilmWeight, zero)]);
+        let bare = b.slab(&[(Field::ThinFilmWeight, one), (Field::SpecularWeight, zero)]);
+        let half = b.float(0.5);
+        let m1 = b.mix(film, none, half);
+        let root = b.mix(m1, bare, half);
+        let a = analyse(&b.finish(root));
+        let filmed = |n: NodeId| a.features[n.0 as usize].contains(&Feature::ThinFilm);
+        assert!(filmed(film), "{:?}", a.features);
+        assert!(!filmed(none), "thin_film_weight: 0 is no film");
+        assert!(!filmed(bare), "no specular lobe, nothing for a film to change");
+    }
+
+    #[test]
+    fn a_mean_free_path_decides_the_absorption() {
+        let mut b = Build::new("m");
+        let thick = b.float(0.2);
+        let short = b.rgb([0.1, 1.0, 5.0]);
+        let clear = b.rgb([f32::MAX; 3]);
+        let white = b.rgb([1.0; 3]);
+        let green = b.rgb([0.5, 1.0, 0.5]);
+        let absorbing = b.slab(&[(Field::MeanFreePath, short), (Field::Thickness, thick), (Field::TransmissionColor, white)]);
+        let infinite = b.slab(&[(Field::MeanFreePath, clear), (Field::Thickness, thick), (Field::TransmissionColor, green)]);
+        let base = b.slab(&[]);
+        let inner = b.layer(infinite, base);
+        let root = b.layer(absorbing, inner);
+        let a = analyse(&b.finish(root));
+        let absorbs = |n: NodeId| a.features[n.0 as usize].contains(&Feature::Absorption);
+        assert!(absorbs(absorbing), "a mean free path absorbs, whatever the colour says: {:?}", a.features);
+        assert!(!absorbs(infinite), "an endless mean free path absorbs nothing, whatever the colour says");
     }
 
     #[test]

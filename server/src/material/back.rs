@@ -11,8 +11,8 @@
 //!
 //! A closure's core is `brdf.wgsl`'s slab (Lambert through Fresnel plus
 //! GGX, `slab_cos`); a feature no definition uses (edge tint, haze, fuzz,
-//! emission, absorption through a layer's top) leaves its fields and its
-//! code out of the module. The scene file's shorthand makes closures whose
+//! emission, absorption through a layer's top, transmission, a thin film)
+//! leaves its fields and its code out of the module. The scene file's shorthand makes closures whose
 //! F0 is `specular_f0` and F90 white, with weight 1, so its evaluation is
 //! `brdf_cos` to the bit and the old scenes render what they did.
 
@@ -75,6 +75,8 @@ pub struct Features {
     pub textures: bool,
     /// A slab sets its own `normal` (each closure carries one).
     pub normal: bool,
+    /// A thin film over the specular lobe (`shaders/lib/iridescence.wgsl`).
+    pub thin_film: bool,
 }
 
 impl Features {
@@ -88,9 +90,10 @@ impl Features {
                 f.haze |= set(Field::HazeWeight);
                 f.fuzz |= set(Field::FuzzWeight);
                 f.emission |= set(Field::EmissionLuminance);
-                f.absorption |= set(Field::Thickness) && set(Field::TransmissionColor);
+                f.absorption |= set(Field::Thickness) && (set(Field::TransmissionColor) || set(Field::MeanFreePath));
                 f.normal |= slab.get(Field::Normal).is_some();
                 f.transmission |= set(Field::TransmissionWeight);
+                f.thin_film |= set(Field::ThinFilmWeight);
             }
             f.textures |= d.exprs.iter().any(|e| matches!(e.kind, ExprKind::Call(Builtin::Sample | Builtin::NormalMap, _)));
             // Compensation scales F0 and F90 alike: F90 must be a field.
@@ -118,6 +121,7 @@ impl Features {
             (self.compensated, "energy compensation"),
             (self.textures, "textures"),
             (self.normal, "normal"),
+            (self.thin_film, "thin film"),
         ]
         .into_iter()
         .filter_map(|(on, name)| on.then_some(name))
@@ -178,6 +182,9 @@ fn header(w: &mut String, definitions: &[Definition], f: Features, max: usize, b
         w.push_str("#import loupe::btdf::{dielectric_cos, dielectric_pdf, dielectric_direction, fresnel_dielectric}\n");
         let _ = writeln!(w, "{}{TRANSMISSION_DEF}", crate::shader::compose::IMPLIES);
     }
+    if f.thin_film {
+        w.push_str("#import loupe::iridescence::{thin_film_fresnel, film_slab_cos, f0_to_ior, schlick_f0_of}\n");
+    }
     if f.reads_point() {
         let _ = writeln!(w, "{}{POINT_DEF}", crate::shader::compose::IMPLIES);
     }
@@ -223,6 +230,9 @@ fn closure_struct(w: &mut String, f: Features) {
     if f.transmission {
         w.push_str("    // The share of the closure that is a transmitting dielectric, the\n    // relative IOR across its interface from v's side, 1: a thin wall,\n    // and the colour kept per unit of distance inside (once through a\n    // thin wall).\n    transmission: f32,\n    eta: f32,\n    thin: f32,\n    tint: vec3<f32>,\n");
     }
+    if f.thin_film {
+        w.push_str("    // The film: x its weight, y its thickness (µm), z its IOR; the\n    // base's IOR under it per channel; and what scales its Fresnel\n    // (specular weight and tint, energy compensation).\n    film: vec3<f32>,\n    film_base: vec3<f32>,\n    film_scale: vec3<f32>,\n");
+    }
     w.push_str("}\n\nstruct Surface {\n    closures: array<Closure, MATERIAL_CLOSURES>,\n    count: u32,\n}\n\n");
     w.push_str("// A closure with every optional part neutral and weight 1.\nfn make_closure(base_color: vec3<f32>, metallic: f32, reflectance: vec3<f32>, roughness: f32) -> Closure {\n    var c: Closure;\n");
     w.push_str("    c.weight = vec3(1.0);\n    c.base_color = base_color;\n    c.metallic = metallic;\n    c.reflectance = reflectance;\n    c.roughness = roughness;\n");
@@ -237,6 +247,9 @@ fn closure_struct(w: &mut String, f: Features) {
     }
     if f.haze && f.compensated {
         w.push_str("    c.haze_compensation = vec3(1.0);\n");
+    }
+    if f.thin_film {
+        w.push_str("    c.film = vec3(0.0, 0.5, 1.5);\n    c.film_base = vec3(1.5);\n    c.film_scale = vec3(1.0);\n");
     }
     w.push_str("    return c;\n}\n\n");
 }
@@ -377,10 +390,10 @@ impl Init<'_> {
             let (ec, el) = (self.field(slab, Field::EmissionColor), self.field(slab, Field::EmissionLuminance));
             let _ = writeln!(self.w, "        c.emission = max({ec}, vec3(0.0)) * max({el}, 0.0);");
         }
-        if set(Field::Thickness) && set(Field::TransmissionColor) {
-            let (tc, th) = (self.field(slab, Field::TransmissionColor), self.field(slab, Field::Thickness));
+        if set(Field::Thickness) && (set(Field::TransmissionColor) || set(Field::MeanFreePath)) {
+            let (tc, th) = (self.medium(slab), self.field(slab, Field::Thickness));
             // Down to the base and back up, along the view's slant.
-            let _ = writeln!(self.w, "        c.transmittance = pow(saturate({tc}), vec3(2.0 * max({th}, 0.0) / n_v));");
+            let _ = writeln!(self.w, "        c.transmittance = pow({tc}, vec3(2.0 * max({th}, 0.0) / n_v));");
         }
         if set(Field::Normal) {
             let normal = self.field(slab, Field::Normal);
@@ -388,15 +401,37 @@ impl Init<'_> {
         }
         if set(Field::TransmissionWeight) {
             let (tw, ior) = (self.field(slab, Field::TransmissionWeight), self.field(slab, Field::SpecularIor));
-            let (thin, tc) = (self.field(slab, Field::ThinWalled), self.field(slab, Field::TransmissionColor));
+            let (thin, tc) = (self.field(slab, Field::ThinWalled), self.medium(slab));
             // Metal does not transmit; an IOR of 1 would make refraction's
             // half vector undefined (v + η l = 0), so η stays above it.
             let _ = writeln!(
                 self.w,
-                "        c.transmission = saturate({tw}) * (1.0 - metallic);\n        c.eta = max({ior}, 1.01);\n        c.thin = select(0.0, 1.0, {thin} > 0.5);\n        c.tint = saturate({tc});"
+                "        c.transmission = saturate({tw}) * (1.0 - metallic);\n        c.eta = max({ior}, 1.01);\n        c.thin = select(0.0, 1.0, {thin} > 0.5);\n        c.tint = {tc};"
+            );
+        }
+        if set(Field::ThinFilmWeight) {
+            let (fw, ft, fi) =
+                (self.field(slab, Field::ThinFilmWeight), self.field(slab, Field::ThinFilmThickness), self.field(slab, Field::ThinFilmIor));
+            let (ior, tint, weight) =
+                (self.field(slab, Field::SpecularIor), self.field(slab, Field::SpecularColor), self.field(slab, Field::SpecularWeight));
+            // The base under the film: the dielectric's IOR, a metal's
+            // from its colour (its F0); the specular weight and the
+            // dielectric's tint scale the film's Fresnel as they scale F0.
+            let _ = writeln!(
+                self.w,
+                "        c.film = vec3(saturate({fw}), max({ft}, 0.0), max({fi}, 1.0));\n        c.film_base = mix(vec3(max({ior}, 1.0)), f0_to_ior(base_color), metallic);\n        c.film_scale = mix(saturate({tint}), vec3(1.0), metallic) * saturate({weight});"
             );
         }
         let _ = writeln!(self.w, "        s.closures[{k}] = c;\n    }}");
+    }
+
+    /// The colour the slab's medium keeps over one unit of distance: from
+    /// its mean free path when set, else its transmission colour.
+    fn medium(&self, slab: &super::tree::Slab) -> String {
+        match slab.get(Field::MeanFreePath) {
+            Some(_) => format!("exp(-1.0 / max({}, vec3(1e-6)))", self.field(slab, Field::MeanFreePath)),
+            None => format!("saturate({})", self.field(slab, Field::TransmissionColor)),
+        }
     }
 
     fn expr(&self, id: ExprId) -> String {
@@ -493,6 +528,9 @@ fn dispatch(w: &mut String, count: usize, f: Features) {
             // metal 9 % dark head-on and 4 % over 1 at grazing views.
             w.push_str("            s.closures[k].haze_compensation = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].haze.y) / e;\n");
         }
+        if f.thin_film {
+            w.push_str("            s.closures[k].film_scale *= e;\n");
+        }
         w.push_str("            s.closures[k].reflectance *= e;\n            s.closures[k].edge *= e;\n        }\n    }\n");
     }
     w.push_str("    return s;\n}\n\n");
@@ -553,6 +591,9 @@ fn common(f: Features) -> String {
         w,
         "fn closure_albedo(c: Closure, n_v: f32) -> vec3<f32> {{\n    let fr = f_schlick_edge(c.reflectance, {f90}, n_v);\n    var e = fr + (1.0 - c.metallic) * c.base_color * (vec3(1.0) - fr);"
     );
+    if f.thin_film {
+        w.push_str("    let film = closure_film(c, n_v);\n    e = mix(e, film + (1.0 - c.metallic) * c.base_color * (vec3(1.0) - film), c.film.x);\n");
+    }
     if f.transmission {
         w.push_str("    // The transmitting share reflects only what its interface does.\n    e = mix(e, vec3(fresnel_dielectric(n_v, c.eta)), c.transmission);\n");
     }
@@ -560,6 +601,9 @@ fn common(f: Features) -> String {
         w.push_str("    e = e * (1.0 - max3(c.fuzz_color)) + c.fuzz_color;\n");
     }
     w.push_str("    return min(e, vec3(1.0));\n}\n\n");
+    if f.thin_film {
+        w.push_str(FILM);
+    }
     let t = if f.absorption { "c.transmittance" } else { "vec3(1.0)" };
     let _ = writeln!(w, "fn closure_transmittance(c: Closure) -> vec3<f32> {{\n    return {t};\n}}\n");
 
@@ -572,6 +616,9 @@ fn common(f: Features) -> String {
         w,
         "// BSDF × cosine of one closure, without its weight.\nfn closure_cos(c: Closure, {ng}: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {{\n{own}    var f = slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, {f90}, c.roughness);"
     );
+    if f.thin_film {
+        w.push_str("    f = mix(f, film_slab_cos(n, v, l, c.base_color, c.metallic, c.roughness, c.film.y, c.film.z, c.film_base, c.film_scale), c.film.x);\n");
+    }
     if f.haze {
         let _ = writeln!(w, "    f = mix(f, slab_cos(n, v, l, c.base_color, c.metallic, {haze_f0}, {haze_f90}, c.haze.y), c.haze.x);");
     }
@@ -583,12 +630,19 @@ fn common(f: Features) -> String {
     }
     w.push_str("    return f;\n}\n\n");
 
+    // The F0 the lobe choice reads: with a film, the Schlick F0 that
+    // matches its Fresnel at n·v.
+    let (f0, own) = if f.thin_film {
+        ("f0", format!("{own}    let f0 = mix(c.reflectance, closure_film_f0(c, max(dot(n, v), 1e-4)), c.film.x);\n"))
+    } else {
+        ("c.reflectance", own.to_owned())
+    };
     let _ = write!(
         w,
-        "// The pdf of `closure_direction`'s directions.\nfn closure_pdf(c: Closure, {ng}: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {{\n{own}    var p = slab_pdf(n, v, l, c.base_color, c.metallic, c.reflectance, c.roughness);\n"
+        "// The pdf of `closure_direction`'s directions.\nfn closure_pdf(c: Closure, {ng}: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {{\n{own}    var p = slab_pdf(n, v, l, c.base_color, c.metallic, {f0}, c.roughness);\n"
     );
     if f.haze {
-        w.push_str("    p = mix(p, slab_pdf(n, v, l, c.base_color, c.metallic, c.reflectance, c.haze.y), c.haze.x);\n");
+        let _ = writeln!(w, "    p = mix(p, slab_pdf(n, v, l, c.base_color, c.metallic, {f0}, c.haze.y), c.haze.x);");
     }
     if f.transmission {
         w.push_str("    p = mix(p, dielectric_pdf(n, v, l, c.eta, c.roughness, c.thin), c.transmission);\n");
@@ -614,9 +668,12 @@ fn common(f: Features) -> String {
     if f.transmission {
         // Below the surface only the transmitting lobe's pdf counts: a
         // reflection drawn below must end the path, not pass for one.
-        w.push_str("    let l = slab_direction(n, v, vec3(x, u.yz), c.base_color, c.metallic, c.reflectance, roughness);\n    return select(vec3(0.0), l, dot(n, l) > 0.0);\n}\n\n");
+        let _ = write!(
+            w,
+            "    let l = slab_direction(n, v, vec3(x, u.yz), c.base_color, c.metallic, {f0}, roughness);\n    return select(vec3(0.0), l, dot(n, l) > 0.0);\n}}\n\n"
+        );
     } else {
-        w.push_str("    return slab_direction(n, v, vec3(x, u.yz), c.base_color, c.metallic, c.reflectance, roughness);\n}\n\n");
+        let _ = write!(w, "    return slab_direction(n, v, vec3(x, u.yz), c.base_color, c.metallic, {f0}, roughness);\n}}\n\n");
     }
     if f.fuzz {
         w.push_str("fn fuzz_share(c: Closure) -> f32 {\n    return max3(c.fuzz_color) * 0.5;\n}\n\n");
@@ -645,6 +702,10 @@ fn common(f: Features) -> String {
             "        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, {haze_f0}, c.haze.y, dfg), c.haze.x);"
         );
     }
+    if f.thin_film {
+        // The split sum with the film's Fresnel at n·v as Schlick's F0.
+        w.push_str("        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, closure_film_f0(c, max(dot(n, v), 1e-4)), c.roughness, dfg), c.film.x);\n");
+    }
     if f.transmission {
         // The raster's approximation: the transmitting share reflects the
         // split-sum specular and shows the environment behind, along the
@@ -670,6 +731,11 @@ fn common(f: Features) -> String {
             "        let h = ltc_rect(n, v, p, c.haze.y, corners, two_sided, ltc_matrix, ltc_amplitude);\n        lit = mix(lit, diffuse + {haze_f0} * h.specular.x + {haze_f90} * h.specular.y, c.haze.x);"
         );
     }
+    if f.thin_film {
+        // The film's Fresnel at the lobe's mirror direction (v·h = n·v)
+        // on both of the LTC's Fresnel terms.
+        w.push_str("        lit = mix(lit, diffuse + closure_film(c, max(dot(n, v), 1e-4)) * (r.specular.x + r.specular.y), c.film.x);\n");
+    }
     if f.transmission {
         w.push_str("        lit -= c.transmission * diffuse;\n");
     }
@@ -679,6 +745,19 @@ fn common(f: Features) -> String {
     w.push_str("        e += c.weight * lit;\n    }\n    return e;\n}\n#endif\n");
     w
 }
+
+/// A closure's film, when a definition has one.
+const FILM: &str = "// The film's Fresnel at cosine x, scaled as the closure's F0 is.
+fn closure_film(c: Closure, x: f32) -> vec3<f32> {
+    return c.film_scale * thin_film_fresnel(x, c.film.y, c.film.z, c.film_base);
+}
+
+// The Schlick F0 matching the film's Fresnel at n·v.
+fn closure_film_f0(c: Closure, n_v: f32) -> vec3<f32> {
+    return schlick_f0_of(closure_film(c, n_v), n_v);
+}
+
+";
 
 /// Helpers every module carries (small; the built-ins' and the loops').
 const HELPERS: &str = "fn max3(x: vec3<f32>) -> f32 {

@@ -24,7 +24,7 @@ use crate::mesh::json_path::JsonPath;
 use crate::mesh::uri::{self, Uri};
 
 /// The material extensions loupe maps into the tree.
-pub const SUPPORTED: [&str; 7] = [
+pub const SUPPORTED: [&str; 8] = [
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_specular",
@@ -32,6 +32,7 @@ pub const SUPPORTED: [&str; 7] = [
     "KHR_materials_sheen",
     "KHR_materials_transmission",
     "KHR_materials_volume",
+    "KHR_materials_iridescence",
 ];
 
 /// Extensions that change nothing a material shows here: the geometry's
@@ -353,6 +354,7 @@ impl Builder<'_> {
                     self.volume(ext, &ext_path, &mut base);
                 }
                 "KHR_materials_clearcoat" => coat = self.coat(e, &at),
+                "KHR_materials_iridescence" => self.iridescence(e, &at, &mut base),
                 // Read with the emission and the transmission.
                 _ => {}
             }
@@ -381,11 +383,35 @@ impl Builder<'_> {
         base.push((Field::EmissionLuminance, strength));
     }
 
+    /// `KHR_materials_iridescence` as the base's thin film: the factor ×
+    /// the texture's R as its weight, its IOR, and its thickness in
+    /// nanometres made micrometres: the maximum, or the minimum to the
+    /// maximum by the thickness texture's G.
+    fn iridescence(&mut self, e: &Json, at: &JsonPath, base: &mut Vec<(Field, ExprId)>) {
+        let weight = self.float("iridescence_factor", e, "iridescenceFactor", 0.0, Field::ThinFilmWeight, at);
+        let texture = self.texture("iridescence_texture", e, "iridescenceTexture", ColorSpace::Linear, at);
+        base.push((Field::ThinFilmWeight, self.times(weight, texture, Some(0))));
+        let ior = self.float("iridescence_ior", e, "iridescenceIor", 1.3, Field::ThinFilmIor, at);
+        base.push((Field::ThinFilmIor, ior));
+        let most = self.float("iridescence_thickness_maximum", e, "iridescenceThicknessMaximum", 400.0, Field::ThinFilmThickness, at);
+        let nanometres = match self.texture("iridescence_thickness_texture", e, "iridescenceThicknessTexture", ColorSpace::Linear, at) {
+            Some(t) => {
+                let least =
+                    self.float("iridescence_thickness_minimum", e, "iridescenceThicknessMinimum", 100.0, Field::ThinFilmThickness, at);
+                let g = self.channel(t, 1);
+                self.expr(ExprKind::Call(Builtin::Lerp, vec![least, most, g]), Type::Float)
+            }
+            None => most,
+        };
+        let per_micrometre = self.constant(Value::Float(1000.0));
+        let thickness = self.expr(ExprKind::Binary(BinOp::Div, nanometres, per_micrometre), Type::Float);
+        base.push((Field::ThinFilmThickness, thickness));
+    }
+
     /// `KHR_materials_volume` beside a transmission: thin-walled when its
-    /// thickness is 0 (or it is absent); else the colour kept per unit of
-    /// distance, `attenuationColor^(1 / attenuationDistance)` (Beer–Lambert
-    /// in the glTF's units, as `transmittance_to_mfp` reads a colour kept
-    /// after a distance).
+    /// thickness is 0 (or it is absent); else a mean free path,
+    /// `transmittance_to_mfp(attenuationColor, attenuationDistance)`
+    /// (Beer–Lambert in the glTF's units; no attenuation distance: none).
     fn volume(&mut self, ext: &Json, ext_path: &JsonPath, base: &mut Vec<(Field, ExprId)>) {
         let key = "KHR_materials_volume";
         let (v, at) = (ext.get(key).unwrap_or(&Json::Null), ext_path.field(key));
@@ -406,10 +432,17 @@ impl Builder<'_> {
             .and_then(Json::as_array)
             .filter(|a| a.len() >= 3)
             .map_or([1.0; 3], |a| std::array::from_fn(|k| a[k].as_f64().unwrap_or(1.0) as f32));
-        let distance = v.get("attenuationDistance").and_then(Json::as_f64).filter(|d| *d > 0.0).map_or(f32::INFINITY, |d| d as f32);
-        let per_unit = color.map(|c| c.max(0.0).powf(1.0 / distance));
-        let kept = self.param("attenuation_per_unit", Type::Color, Value::Vec3(per_unit), Some((0.0, 1.0)), &at.field("attenuationColor"));
-        base.push((Field::TransmissionColor, kept));
+        let Some(distance) = v.get("attenuationDistance").and_then(Json::as_f64).filter(|d| *d > 0.0) else { return };
+        let kept = self.param("attenuation_color", Type::Color, Value::Vec3(color), Some((0.0, 1.0)), &at.field("attenuationColor"));
+        let distance = self.param(
+            "attenuation_distance",
+            Type::Float,
+            Value::Float(distance as f32),
+            Some((f32::MIN_POSITIVE, f32::MAX)),
+            &at.field("attenuationDistance"),
+        );
+        let path = self.expr(ExprKind::Call(Builtin::TransmittanceToMfp, vec![kept, distance]), Type::Color);
+        base.push((Field::MeanFreePath, path));
     }
 
     /// `KHR_materials_clearcoat` as a clear dielectric slab (IOR 1.5, black

@@ -251,3 +251,51 @@ fn the_starter_library_generates_its_golden_wgsl() {
         );
     }
 }
+
+/// `mean_free_path: transmittance_to_mfp(C, d)` keeps what a transmission
+/// colour of C^(1/d) per unit did: through a layer's top (absorption) and
+/// through a thin wall (transmission), the same evaluation either way.
+#[test]
+fn a_mean_free_path_keeps_what_the_transmission_colour_kept() {
+    let (kept, d) = ([0.3f32, 0.6, 0.9], 2.5f32);
+    let definition = |path: bool| {
+        let mut b = super::build::Build::new("medium");
+        let medium = if path {
+            let (colour, distance) = (b.rgb(kept), b.float(d));
+            (Field::MeanFreePath, b.call(super::tree::Builtin::TransmittanceToMfp, &[colour, distance]))
+        } else {
+            (Field::TransmissionColor, b.rgb(kept.map(|k| k.powf(1.0 / d))))
+        };
+        let (thick, one) = (b.float(0.4), b.float(1.0));
+        // A coat 0.4 thick over a plain slab, beside a thin wall.
+        let coat = b.slab(&[medium, (Field::Thickness, thick)]);
+        let base = b.slab(&[]);
+        let layer = b.layer(coat, base);
+        let wall = b.slab(&[medium, (Field::TransmissionWeight, one), (Field::ThinWalled, one)]);
+        let root = b.add(layer, wall);
+        b.finish(root)
+    };
+    let program = Program {
+        definitions: vec![definition(false), definition(true)],
+        instances: (0..2).map(|definition| Instance { definition, values: vec![], compensated: false }).collect(),
+        ..Program::default()
+    };
+    let (file, [params, instances]) = module(&program);
+    let gpu = shared();
+    let kernel = Kernel::with_modules(gpu, SHADER, "main", &[file]).unwrap();
+    // Light from above and, through the wall, from below.
+    let mut per = queries(1);
+    per.extend(queries(1).into_iter().map(|q| Query { l: [q.l[0], q.l[1], -q.l[2], 0.0], ..q }));
+    let q: Vec<Query> = (0..2).flat_map(|i| per.iter().map(move |q| Query { v: [q.v[0], q.v[1], q.v[2], i as f32], ..*q })).collect();
+    let out: Vec<Out> = kernel.run_bound(gpu, &q, q.len(), &[], &[&params, &instances]).unwrap();
+    let n = per.len();
+    let below = (n / 2..n).filter(|&k| out[k].material[..3].iter().any(|x| *x > 0.0)).count();
+    assert!(below > 0, "the wall lets light through from below");
+    for k in 0..n {
+        let (colour, path) = (out[k].material, out[n + k].material);
+        for c in 0..3 {
+            let tolerance = 1e-5 * colour[c].abs().max(1e-3);
+            assert!((path[c] - colour[c]).abs() <= tolerance, "channel {c} of {:?}: {} against {}", per[k], path[c], colour[c]);
+        }
+    }
+}

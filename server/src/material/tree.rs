@@ -216,10 +216,25 @@ pub enum Field {
     /// shell, and light passes straight through it instead of refracting
     /// into a solid.
     ThinWalled,
+    /// OpenPBR `thin_film_weight`: how much of the specular lobe's Fresnel
+    /// is a thin film's (iridescence, Belcour & Barla 2017) instead of the
+    /// bare interface's: `mix(F, F_film, weight)`.
+    ThinFilmWeight,
+    /// The film's thickness in micrometres (OpenPBR's unit; glTF's
+    /// nanometres are converted on import).
+    ThinFilmThickness,
+    /// The film's index of refraction.
+    ThinFilmIor,
+    /// The medium's mean free path per channel, in scene units: light
+    /// keeps `exp(-distance / mean_free_path)` of itself. When set it
+    /// replaces `transmission_color` (which is then `exp(-1 / mfp)`, the
+    /// colour kept over one unit); `transmittance_to_mfp(color, d)` gives
+    /// the path that keeps `color` after `d`.
+    MeanFreePath,
 }
 
 impl Field {
-    pub const ALL: [Field; 19] = [
+    pub const ALL: [Field; 23] = [
         Field::BaseColor,
         Field::BaseMetalness,
         Field::SpecularWeight,
@@ -239,6 +254,10 @@ impl Field {
         Field::Normal,
         Field::TransmissionWeight,
         Field::ThinWalled,
+        Field::ThinFilmWeight,
+        Field::ThinFilmThickness,
+        Field::ThinFilmIor,
+        Field::MeanFreePath,
     ];
 
     /// The name written in material files.
@@ -263,6 +282,10 @@ impl Field {
             Field::Normal => "normal",
             Field::TransmissionWeight => "transmission_weight",
             Field::ThinWalled => "thin_walled",
+            Field::ThinFilmWeight => "thin_film_weight",
+            Field::ThinFilmThickness => "thin_film_thickness",
+            Field::ThinFilmIor => "thin_film_ior",
+            Field::MeanFreePath => "mean_free_path",
         }
     }
 
@@ -277,7 +300,8 @@ impl Field {
             | Field::SpecularEdgeColor
             | Field::FuzzColor
             | Field::EmissionColor
-            | Field::TransmissionColor => Type::Color,
+            | Field::TransmissionColor
+            | Field::MeanFreePath => Type::Color,
             Field::Normal => Type::Vec3,
             _ => Type::Float,
         }
@@ -301,6 +325,11 @@ impl Field {
             Field::EmissionColor => Value::Vec3([1.0; 3]),
             // Never used as a value: an unset normal is the geometry's.
             Field::Normal => Value::Vec3([0.0, 0.0, 1.0]),
+            Field::ThinFilmWeight => Value::Float(0.0),
+            Field::ThinFilmThickness => Value::Float(0.5),
+            Field::ThinFilmIor => Value::Float(1.5),
+            // Clear: light crosses any distance whole.
+            Field::MeanFreePath => Value::Vec3([f32::MAX; 3]),
         }
     }
 
@@ -308,8 +337,8 @@ impl Field {
     /// Parameters feeding a field are checked against it too.
     pub fn range(self) -> Option<(f32, f32)> {
         match self {
-            Field::SpecularIor => Some((1.0, 5.0)),
-            Field::EmissionLuminance | Field::Thickness => Some((0.0, f32::MAX)),
+            Field::SpecularIor | Field::ThinFilmIor => Some((1.0, 5.0)),
+            Field::EmissionLuminance | Field::Thickness | Field::ThinFilmThickness | Field::MeanFreePath => Some((0.0, f32::MAX)),
             Field::Normal => None,
             _ => Some((0.0, 1.0)),
         }

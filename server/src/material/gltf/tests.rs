@@ -126,15 +126,19 @@ fn clearcoat_is_a_coat_slab_layered_over_the_base_and_the_other_extensions_are_f
         (Field::FuzzColor, "sheen_color_factor"),
         (Field::FuzzRoughness, "sheen_roughness_factor"),
         (Field::TransmissionWeight, "transmission_factor"),
-        (Field::TransmissionColor, "attenuation_per_unit"),
         (Field::EmissionColor, "emissive_factor"),
         (Field::EmissionLuminance, "emissive_strength"),
     ] {
         assert_eq!(param_name(def, base.get(field).unwrap_or_else(|| panic!("{field:?} unset"))), name);
     }
     assert!(base.get(Field::ThinWalled).is_none(), "a volume with thickness is a solid");
-    // Beer–Lambert per unit: 0.25 kept after 2 units is 0.5 per unit.
-    assert_eq!(p("attenuation_per_unit"), Value::Vec3([0.5, 1.0, 1.0]));
+    // A mean free path keeping 0.25 of the red after 2 units: 0.5 per unit.
+    let path = base.get(Field::MeanFreePath).expect("the volume's mean free path");
+    let ExprKind::Call(Builtin::TransmittanceToMfp, args) = &def.expr(path).kind else { panic!("{:?}", def.expr(path)) };
+    assert_eq!((param_name(def, args[0]), param_name(def, args[1])), ("attenuation_color", "attenuation_distance"));
+    let values: Vec<Value> = def.params.iter().map(|p| p.default).collect();
+    let Value::Vec3(mfp) = crate::material::analysis::eval(def, path, &values) else { panic!("not a colour") };
+    assert!(((-1.0 / mfp[0]).exp() - 0.5).abs() < 1e-6 && mfp[1] > 1e5, "{mfp:?}");
     assert_eq!(p("emissive_strength"), Value::Float(4.0));
     crate::material::analysed(def).unwrap_or_else(|d| panic!("{d:?}"));
     // Without a volume, transmission is thin-walled; without a coat factor, no layer.
@@ -145,10 +149,49 @@ fn clearcoat_is_a_coat_slab_layered_over_the_base_and_the_other_extensions_are_f
 }
 
 #[test]
+fn iridescence_is_the_base_slabs_thin_film_in_micrometres() {
+    let text = r#"{
+  "asset": {"version": "2.0"},
+  "extensionsUsed": ["KHR_materials_iridescence"],
+  "materials": [{
+    "extensions": {"KHR_materials_iridescence": {
+      "iridescenceFactor": 0.75, "iridescenceIor": 1.8,
+      "iridescenceThicknessMinimum": 200, "iridescenceThicknessMaximum": 600,
+      "iridescenceTexture": {"index": 0}
+    }}
+  }],
+  "textures": [{"source": 0}],
+  "images": [{"uri": "film.png"}]
+}"#;
+    let (m, warnings) = import(text, Some(0));
+    assert!(warnings.is_empty() && m.warnings.is_empty(), "{warnings:?} {:?}", m.warnings);
+    let def = &m.definition;
+    let base = slab(def, def.root);
+    let weight = base.get(Field::ThinFilmWeight).expect("a film weight");
+    assert_eq!(factor_times_texture(def, weight), ("iridescence_factor", "iridescence_texture", Some([1.0 / LUMINANCE[0], 0.0, 0.0])));
+    assert_eq!(param_name(def, base.get(Field::ThinFilmIor).unwrap()), "iridescence_ior");
+    // Without a thickness texture, the maximum: 600 nm is 0.6 µm.
+    let values: Vec<Value> = def.params.iter().map(|p| p.default).collect();
+    let thickness = base.get(Field::ThinFilmThickness).unwrap();
+    assert_eq!(crate::material::analysis::eval(def, thickness, &values), Value::Float(0.6));
+    let p = |name: &str| def.params.iter().find(|p| p.name == name).unwrap_or_else(|| panic!("no param {name}")).default;
+    assert_eq!((p("iridescence_factor"), p("iridescence_ior")), (Value::Float(0.75), Value::Float(1.8)));
+    crate::material::analysed(def).unwrap_or_else(|d| panic!("{d:?}"));
+    // With one, the minimum to the maximum by its green.
+    let textured = text.replace("\"iridescenceTexture\"", "\"iridescenceThicknessTexture\"");
+    let (m, _) = import(&textured, Some(0));
+    let def = &m.definition;
+    let thickness = slab(def, def.root).get(Field::ThinFilmThickness).unwrap();
+    let ExprKind::Binary(BinOp::Div, nanometres, _) = def.expr(thickness).kind else { panic!("{:?}", def.expr(thickness)) };
+    let ExprKind::Call(Builtin::Lerp, args) = &def.expr(nanometres).kind else { panic!("{:?}", def.expr(nanometres)) };
+    assert_eq!((param_name(def, args[0]), param_name(def, args[1])), ("iridescence_thickness_minimum", "iridescence_thickness_maximum"));
+}
+
+#[test]
 fn what_loupe_cannot_represent_is_a_located_warning_naming_it() {
     let text = r#"{
   "asset": {"version": "2.0"},
-  "extensionsUsed": ["KHR_materials_sheen", "KHR_materials_anisotropy", "KHR_materials_iridescence"],
+  "extensionsUsed": ["KHR_materials_sheen", "KHR_materials_anisotropy", "KHR_materials_dispersion"],
   "materials": [{
     "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1}},
     "occlusionTexture": {"index": 0},
@@ -161,7 +204,7 @@ fn what_loupe_cannot_represent_is_a_located_warning_naming_it() {
     let named: Vec<(&str, u32)> = warnings.iter().map(|w| (w.message.as_str(), w.location.as_ref().unwrap().line)).collect();
     assert_eq!(named.len(), 2, "{named:?}");
     assert!(named[0].0.starts_with("KHR_materials_anisotropy") && named[0].1 == 3, "{named:?}");
-    assert!(named[1].0.starts_with("KHR_materials_iridescence") && named[1].1 == 3, "{named:?}");
+    assert!(named[1].0.starts_with("KHR_materials_dispersion") && named[1].1 == 3, "{named:?}");
     assert!(warnings.iter().all(|w| w.severity == Severity::Warning && w.file() == Some("a.gltf")));
     // The material's own: a second UV set; occlusion, as a note.
     let own: Vec<&str> = m.warnings.iter().map(|w| w.message.as_str()).collect();

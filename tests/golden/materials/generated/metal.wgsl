@@ -2,12 +2,14 @@
 // from the scene's materials; never on disk. Definitions:
 //   0: rough_metal (../scenes/materials/metal.mat:15:10)
 //   1: polished_metal (../scenes/materials/metal.mat:21:10)
-// Features: core, edge, energy compensation.
+//   2: anodized_metal (../scenes/materials/metal.mat:38:10)
+// Features: core, edge, energy compensation, thin film.
 #define_import_path loupe::material
 
 #import loupe::brdf::{BrdfSample, PI, slab_cos, slab_pdf, slab_direction, specular_f0, f_schlick_edge, luminance_of}
 #import loupe::ambient::{ambient_light, gradient_irradiance}
 #import loupe::multiscatter::energy_compensation
+#import loupe::iridescence::{thin_film_fresnel, film_slab_cos, f0_to_ior, schlick_f0_of}
 #ifdef LIGHT_RECT
 #import loupe::ltc::ltc_rect
 #endif
@@ -28,6 +30,12 @@ struct Closure {
     roughness: f32,
     // F90, the grazing reflectance.
     edge: vec3<f32>,
+    // The film: x its weight, y its thickness (µm), z its IOR; the
+    // base's IOR under it per channel; and what scales its Fresnel
+    // (specular weight and tint, energy compensation).
+    film: vec3<f32>,
+    film_base: vec3<f32>,
+    film_scale: vec3<f32>,
 }
 
 struct Surface {
@@ -44,6 +52,9 @@ fn make_closure(base_color: vec3<f32>, metallic: f32, reflectance: vec3<f32>, ro
     c.reflectance = reflectance;
     c.roughness = roughness;
     c.edge = vec3(1.0);
+    c.film = vec3(0.0, 0.5, 1.5);
+    c.film_base = vec3(1.5);
+    c.film_scale = vec3(1.0);
     return c;
 }
 
@@ -78,6 +89,23 @@ fn material_1_init(slot: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> S
     return s;
 }
 
+// anodized_metal (../scenes/materials/metal.mat:38:10)
+fn material_2_init(slot: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> Surface {
+    let n_v = max(dot(n, v), 1e-4);
+    var s: Surface;
+    s.count = 1u;
+    {
+        let base_color = saturate(material_params[slot + 0u].xyz);
+        let metallic = saturate(1.0);
+        var c = make_closure(base_color, metallic, specular_f0(base_color, metallic), saturate(0.25));
+        c.film = vec3(saturate(1.0), max(material_params[slot + 1u].x, 0.0), max(material_params[slot + 2u].x, 1.0));
+        c.film_base = mix(vec3(max(1.5, 1.0)), f0_to_ior(base_color), metallic);
+        c.film_scale = mix(saturate(vec3<f32>(1.0, 1.0, 1.0)), vec3(1.0), metallic) * saturate(1.0);
+        s.closures[0] = c;
+    }
+    return s;
+}
+
 // Where a material is evaluated: the UV, its screen-space derivatives
 // (zero: the finest mip level) and the tangent (xyz, w: the bitangent's sign;
 // zero: none, so normal maps are flat).
@@ -98,6 +126,7 @@ fn material_init_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint)
     var s: Surface;
     switch header.x {
         case 1u: { s = material_1_init(header.y, n, v, p); }
+        case 2u: { s = material_2_init(header.y, n, v, p); }
         default: { s = material_0_init(header.y, n, v, p); }
     }
     if header.z != 0u {
@@ -105,6 +134,7 @@ fn material_init_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint)
         for (var k = 0u; k < s.count; k++) {
             // Turquin's factor scales the whole lobe: F0 and F90 alike.
             let e = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness);
+            s.closures[k].film_scale *= e;
             s.closures[k].reflectance *= e;
             s.closures[k].edge *= e;
         }
@@ -137,7 +167,19 @@ fn transmittance_to_mfp(color: vec3<f32>, distance: f32) -> vec3<f32> {
 fn closure_albedo(c: Closure, n_v: f32) -> vec3<f32> {
     let fr = f_schlick_edge(c.reflectance, c.edge, n_v);
     var e = fr + (1.0 - c.metallic) * c.base_color * (vec3(1.0) - fr);
+    let film = closure_film(c, n_v);
+    e = mix(e, film + (1.0 - c.metallic) * c.base_color * (vec3(1.0) - film), c.film.x);
     return min(e, vec3(1.0));
+}
+
+// The film's Fresnel at cosine x, scaled as the closure's F0 is.
+fn closure_film(c: Closure, x: f32) -> vec3<f32> {
+    return c.film_scale * thin_film_fresnel(x, c.film.y, c.film.z, c.film_base);
+}
+
+// The Schlick F0 matching the film's Fresnel at n·v.
+fn closure_film_f0(c: Closure, n_v: f32) -> vec3<f32> {
+    return schlick_f0_of(closure_film(c, n_v), n_v);
 }
 
 fn closure_transmittance(c: Closure) -> vec3<f32> {
@@ -147,20 +189,23 @@ fn closure_transmittance(c: Closure) -> vec3<f32> {
 // BSDF × cosine of one closure, without its weight.
 fn closure_cos(c: Closure, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     var f = slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, c.edge, c.roughness);
+    f = mix(f, film_slab_cos(n, v, l, c.base_color, c.metallic, c.roughness, c.film.y, c.film.z, c.film_base, c.film_scale), c.film.x);
     return f;
 }
 
 // The pdf of `closure_direction`'s directions.
 fn closure_pdf(c: Closure, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {
-    var p = slab_pdf(n, v, l, c.base_color, c.metallic, c.reflectance, c.roughness);
+    let f0 = mix(c.reflectance, closure_film_f0(c, max(dot(n, v), 1e-4)), c.film.x);
+    var p = slab_pdf(n, v, l, c.base_color, c.metallic, f0, c.roughness);
     return p;
 }
 
 // A direction from one closure; u.x picks the lobe, u.yz place it.
 fn closure_direction(c: Closure, n: vec3<f32>, v: vec3<f32>, u: vec3<f32>) -> vec3<f32> {
+    let f0 = mix(c.reflectance, closure_film_f0(c, max(dot(n, v), 1e-4)), c.film.x);
     var x = u.x;
     var roughness = c.roughness;
-    return slab_direction(n, v, vec3(x, u.yz), c.base_color, c.metallic, c.reflectance, roughness);
+    return slab_direction(n, v, vec3(x, u.yz), c.base_color, c.metallic, f0, roughness);
 }
 
 // BSDF × cosine for light from l, seen from v.
@@ -266,6 +311,7 @@ fn material_ambient(s: Surface, n: vec3<f32>, v: vec3<f32>, top: vec3<f32>, bott
     for (var k = 0u; k < s.count; k++) {
         let c = s.closures[k];
         var a = ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance, c.roughness, dfg);
+        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, closure_film_f0(c, max(dot(n, v), 1e-4)), c.roughness, dfg), c.film.x);
         e += c.weight * a;
     }
     return e;
@@ -280,6 +326,7 @@ fn material_rect(s: Surface, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, corners: 
         let r = ltc_rect(n, v, p, c.roughness, corners, two_sided, ltc_matrix, ltc_amplitude);
         let diffuse = c.base_color * (1.0 - c.metallic) * r.diffuse;
         var lit = diffuse + c.reflectance * r.specular.x + c.edge * r.specular.y;
+        lit = mix(lit, diffuse + closure_film(c, max(dot(n, v), 1e-4)) * (r.specular.x + r.specular.y), c.film.x);
         e += c.weight * lit;
     }
     return e;
