@@ -46,6 +46,9 @@ pub enum Feature {
     /// a solid, or straight through a thin wall): a transmission weight
     /// above 0 and metalness below 1.
     Transmission,
+    /// A GGX lobe stretched along a direction on the surface: a roughness
+    /// anisotropy above 0, on a specular or metal lobe.
+    Anisotropy,
 }
 
 /// Why a material is not energy-conserving.
@@ -445,6 +448,7 @@ fn slab_features(def: &Definition, slab: &Slab, in_layer_top: bool) -> BTreeSet<
         (Feature::Emission, !is(Field::EmissionLuminance, zero) && !is(Field::EmissionColor, zero)),
         (Feature::Absorption, in_layer_top && !is(Field::Thickness, zero) && !is(Field::TransmissionColor, white)),
         (Feature::Transmission, !metal_only && !is(Field::TransmissionWeight, zero)),
+        (Feature::Anisotropy, lobe && !is(Field::SpecularAnisotropy, zero)),
     ]
     .into_iter()
     .filter_map(|(feature, on)| on.then_some(feature))

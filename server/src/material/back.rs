@@ -70,6 +70,9 @@ pub struct Features {
     pub textures: bool,
     /// A slab sets its own `normal` (each closure carries one).
     pub normal: bool,
+    /// A slab stretches its GGX lobe (`specular_roughness_anisotropy`):
+    /// each closure carries its anisotropy and direction.
+    pub anisotropy: bool,
 }
 
 impl Features {
@@ -86,6 +89,7 @@ impl Features {
                 f.absorption |= set(Field::Thickness) && set(Field::TransmissionColor);
                 f.normal |= slab.get(Field::Normal).is_some();
                 f.transmission |= set(Field::TransmissionWeight);
+                f.anisotropy |= set(Field::SpecularAnisotropy);
             }
             f.textures |= d.exprs.iter().any(|e| matches!(e.kind, ExprKind::Call(Builtin::Sample | Builtin::NormalMap, _)));
             // Compensation scales F0 and F90 alike: F90 must be a field.
@@ -107,6 +111,7 @@ impl Features {
             (self.compensated, "energy compensation"),
             (self.textures, "textures"),
             (self.normal, "normal"),
+            (self.anisotropy, "anisotropy"),
         ]
         .into_iter()
         .filter_map(|(on, name)| on.then_some(name))
@@ -142,6 +147,9 @@ pub fn wgsl(definitions: &[Definition], bindings: Bindings) -> String {
     if features.textures {
         w.push_str(TEXTURES);
     }
+    if features.anisotropy {
+        w.push_str(TANGENT);
+    }
     w.push_str(&common(features));
     w
 }
@@ -159,6 +167,9 @@ fn header(w: &mut String, definitions: &[Definition], f: Features, max: usize, b
     let _ = writeln!(w, "#import loupe::ambient::{{ambient_light, gradient_irradiance{radiance}}}");
     if f.fuzz {
         w.push_str("#import loupe::fuzz::fuzz_cos\n");
+    }
+    if f.anisotropy {
+        w.push_str("#import loupe::brdf::{slab_cos_aniso, slab_pdf_aniso, slab_direction_aniso}\n");
     }
     if f.compensated {
         w.push_str("#import loupe::multiscatter::energy_compensation\n");
@@ -206,6 +217,9 @@ fn closure_struct(w: &mut String, f: Features) {
     if f.normal {
         w.push_str("    // The slab's shading normal; zero: the geometry's.\n    normal: vec3<f32>,\n");
     }
+    if f.anisotropy {
+        w.push_str("    // The GGX lobe's anisotropy (0: isotropic) and the direction of its\n    // longer roughness, world space.\n    anisotropy: f32,\n    tangent: vec3<f32>,\n");
+    }
     if f.transmission {
         w.push_str("    // The share of the closure that is a transmitting dielectric, the\n    // relative IOR across its interface from v's side, 1: a thin wall,\n    // and the colour kept per unit of distance inside (once through a\n    // thin wall).\n    transmission: f32,\n    eta: f32,\n    thin: f32,\n    tint: vec3<f32>,\n");
     }
@@ -223,6 +237,9 @@ fn closure_struct(w: &mut String, f: Features) {
     }
     if f.haze && f.compensated {
         w.push_str("    c.haze_compensation = vec3(1.0);\n");
+    }
+    if f.anisotropy {
+        w.push_str("    c.anisotropy = 0.0;\n    c.tangent = vec3(0.0);\n");
     }
     w.push_str("    return c;\n}\n\n");
 }
@@ -371,6 +388,14 @@ impl Init<'_> {
         if set(Field::Normal) {
             let normal = self.field(slab, Field::Normal);
             let _ = writeln!(self.w, "        c.normal = normalize({normal});");
+        }
+        if set(Field::SpecularAnisotropy) {
+            let (a, turns) = (self.field(slab, Field::SpecularAnisotropy), self.field(slab, Field::SpecularRotation));
+            // Where the point has no tangent the lobe stays isotropic.
+            let _ = writeln!(
+                self.w,
+                "        c.tangent = material_tangent(n, p.tangent, {turns});\n        c.anisotropy = select(0.0, saturate({a}), dot(c.tangent, c.tangent) > 0.0);"
+            );
         }
         if set(Field::TransmissionWeight) {
             let (tw, ior) = (self.field(slab, Field::TransmissionWeight), self.field(slab, Field::SpecularIor));
@@ -524,6 +549,23 @@ fn material_normal_map(texel: vec3<f32>, strength: f32, n: vec3<f32>, tangent: v
 
 ";
 
+/// The direction an anisotropic slab's `specular_rotation` names.
+const TANGENT: &str = "// The direction `turns` of a turn from the surface's tangent toward its
+// bitangent (cross(n, t) · w, glTF's), in the plane of n; zero where the
+// point has no tangent.
+fn material_tangent(n: vec3<f32>, tangent: vec4<f32>, turns: f32) -> vec3<f32> {
+    let t = tangent.xyz - n * dot(n, tangent.xyz);
+    if dot(t, t) < 1e-12 {
+        return vec3(0.0);
+    }
+    let tn = normalize(t);
+    let b = cross(n, tn) * select(1.0, -1.0, tangent.w < 0.0);
+    let angle = 2.0 * PI * turns;
+    return tn * cos(angle) + b * sin(angle);
+}
+
+";
+
 /// The per-closure loops: the same text for every program, with the
 /// optional parts switched by `f`.
 fn common(f: Features) -> String {
@@ -554,9 +596,17 @@ fn common(f: Features) -> String {
     if f.normal {
         w.push_str("fn closure_normal(c: Closure, n: vec3<f32>) -> vec3<f32> {\n    return select(n, c.normal, dot(c.normal, c.normal) > 0.0);\n}\n\n");
     }
-    let _ = writeln!(
+    let _ = write!(
         w,
-        "// BSDF × cosine of one closure, without its weight.\nfn closure_cos(c: Closure, {ng}: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {{\n{own}    var f = slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, {f90}, c.roughness);"
+        "// BSDF × cosine of one closure, without its weight.\nfn closure_cos(c: Closure, {ng}: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {{\n{own}{}",
+        lobe(
+            f,
+            "var f",
+            "vec3<f32>",
+            "c.anisotropy",
+            &format!("slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, {f90}, c.roughness)"),
+            &format!("slab_cos_aniso(n, c.tangent, v, l, c.base_color, c.metallic, c.reflectance, {f90}, c.roughness, c.anisotropy)"),
+        )
     );
     if f.haze {
         let _ = writeln!(w, "    f = mix(f, slab_cos(n, v, l, c.base_color, c.metallic, {haze_f0}, {haze_f90}, c.haze.y), c.haze.x);");
@@ -571,7 +621,15 @@ fn common(f: Features) -> String {
 
     let _ = write!(
         w,
-        "// The pdf of `closure_direction`'s directions.\nfn closure_pdf(c: Closure, {ng}: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {{\n{own}    var p = slab_pdf(n, v, l, c.base_color, c.metallic, c.reflectance, c.roughness);\n"
+        "// The pdf of `closure_direction`'s directions.\nfn closure_pdf(c: Closure, {ng}: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {{\n{own}{}",
+        lobe(
+            f,
+            "var p",
+            "f32",
+            "c.anisotropy",
+            "slab_pdf(n, v, l, c.base_color, c.metallic, c.reflectance, c.roughness)",
+            "slab_pdf_aniso(n, c.tangent, v, l, c.base_color, c.metallic, c.reflectance, c.roughness, c.anisotropy)",
+        )
     );
     if f.haze {
         w.push_str("    p = mix(p, slab_pdf(n, v, l, c.base_color, c.metallic, c.reflectance, c.haze.y), c.haze.x);\n");
@@ -594,13 +652,30 @@ fn common(f: Features) -> String {
     if f.transmission {
         w.push_str("    if x < c.transmission {\n        return dielectric_direction(n, v, vec3(x / c.transmission, u.yz), c.eta, c.roughness, c.thin);\n    }\n    x = min((x - c.transmission) / max(1.0 - c.transmission, 1e-8), 0.99999994);\n");
     }
-    if f.haze {
-        w.push_str("    if x < c.haze.x {\n        roughness = c.haze.y;\n        x = x / c.haze.x;\n    } else {\n        x = (x - c.haze.x) / max(1.0 - c.haze.x, 1e-8);\n    }\n    x = min(x, 0.99999994);\n");
+    if f.anisotropy {
+        // The haze lobe is isotropic: drawing it draws no stretched lobe.
+        let binding = if f.haze { "var" } else { "let" };
+        let _ = writeln!(w, "    {binding} anisotropy = c.anisotropy;");
     }
+    if f.haze {
+        let isotropic = if f.anisotropy { "        anisotropy = 0.0;\n" } else { "" };
+        let _ = write!(w, "    if x < c.haze.x {{\n{isotropic}");
+        w.push_str("        roughness = c.haze.y;\n        x = x / c.haze.x;\n    } else {\n        x = (x - c.haze.x) / max(1.0 - c.haze.x, 1e-8);\n    }\n    x = min(x, 0.99999994);\n");
+    }
+    let reflected = lobe(
+        f,
+        "let l",
+        "vec3<f32>",
+        "anisotropy",
+        "slab_direction(n, v, vec3(x, u.yz), c.base_color, c.metallic, c.reflectance, roughness)",
+        "slab_direction_aniso(n, c.tangent, v, vec3(x, u.yz), c.base_color, c.metallic, c.reflectance, roughness, anisotropy)",
+    );
     if f.transmission {
         // Below the surface only the transmitting lobe's pdf counts: a
         // reflection drawn below must end the path, not pass for one.
-        w.push_str("    let l = slab_direction(n, v, vec3(x, u.yz), c.base_color, c.metallic, c.reflectance, roughness);\n    return select(vec3(0.0), l, dot(n, l) > 0.0);\n}\n\n");
+        let _ = write!(w, "{reflected}    return select(vec3(0.0), l, dot(n, l) > 0.0);\n}}\n\n");
+    } else if f.anisotropy {
+        let _ = write!(w, "{reflected}    return l;\n}}\n\n");
     } else {
         w.push_str("    return slab_direction(n, v, vec3(x, u.yz), c.base_color, c.metallic, c.reflectance, roughness);\n}\n\n");
     }
@@ -664,6 +739,20 @@ fn common(f: Features) -> String {
     }
     w.push_str("        e += c.weight * lit;\n    }\n    return e;\n}\n#endif\n");
     w
+}
+
+/// `binding` (`var f`, `let l`) of the closure's main lobe: the
+/// isotropic call, or, in a module with anisotropy, the anisotropic one
+/// where `stretched` (the anisotropy in force) is above 0, so an isotropic
+/// closure keeps brdf.wgsl's isotropic code to the bit.
+fn lobe(f: Features, binding: &str, ty: &str, stretched: &str, isotropic: &str, anisotropic: &str) -> String {
+    if !f.anisotropy {
+        return format!("    {binding} = {isotropic};\n");
+    }
+    let name = binding.rsplit(' ').next().unwrap_or(binding);
+    format!(
+        "    var {name}: {ty};\n    if {stretched} > 0.0 {{\n        {name} = {anisotropic};\n    }} else {{\n        {name} = {isotropic};\n    }}\n"
+    )
 }
 
 /// Helpers every module carries (small; the built-ins' and the loops').

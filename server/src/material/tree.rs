@@ -216,10 +216,18 @@ pub enum Field {
     /// shell, and light passes straight through it instead of refracting
     /// into a solid.
     ThinWalled,
+    /// OpenPBR `specular_roughness_anisotropy`: 0 an isotropic lobe, toward
+    /// 1 a lobe stretched along the direction `specular_rotation` gives
+    /// (α_t = r² √(2 / (1 + (1 − a)²)), α_b = (1 − a) α_t).
+    SpecularAnisotropy,
+    /// Standard Surface `specular_rotation`: the direction of the longer
+    /// roughness, in turns (0..1) from the surface's tangent (growing u)
+    /// toward its bitangent.
+    SpecularRotation,
 }
 
 impl Field {
-    pub const ALL: [Field; 19] = [
+    pub const ALL: [Field; 21] = [
         Field::BaseColor,
         Field::BaseMetalness,
         Field::SpecularWeight,
@@ -239,6 +247,8 @@ impl Field {
         Field::Normal,
         Field::TransmissionWeight,
         Field::ThinWalled,
+        Field::SpecularAnisotropy,
+        Field::SpecularRotation,
     ];
 
     /// The name written in material files.
@@ -263,6 +273,8 @@ impl Field {
             Field::Normal => "normal",
             Field::TransmissionWeight => "transmission_weight",
             Field::ThinWalled => "thin_walled",
+            Field::SpecularAnisotropy => "specular_roughness_anisotropy",
+            Field::SpecularRotation => "specular_rotation",
         }
     }
 
@@ -296,6 +308,7 @@ impl Field {
             Field::SpecularRoughness => Value::Float(0.5),
             Field::HazeWeight | Field::FuzzWeight | Field::EmissionLuminance | Field::Thickness => Value::Float(0.0),
             Field::TransmissionWeight | Field::ThinWalled => Value::Float(0.0),
+            Field::SpecularAnisotropy | Field::SpecularRotation => Value::Float(0.0),
             Field::HazeRoughness => Value::Float(0.7),
             Field::FuzzRoughness => Value::Float(0.5),
             Field::EmissionColor => Value::Vec3([1.0; 3]),
