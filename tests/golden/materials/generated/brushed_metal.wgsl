@@ -174,7 +174,7 @@ fn closure_pdf(c: Closure, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {
 fn closure_direction(c: Closure, n: vec3<f32>, v: vec3<f32>, u: vec3<f32>) -> vec3<f32> {
     var x = u.x;
     var roughness = c.roughness;
-    var anisotropy = c.anisotropy;
+    let anisotropy = c.anisotropy;
     var l: vec3<f32>;
     if anisotropy > 0.0 {
         l = slab_direction_aniso(n, c.tangent, v, vec3(x, u.yz), c.base_color, c.metallic, c.reflectance, roughness, anisotropy);
