@@ -495,9 +495,16 @@ fn dispatch(w: &mut String, count: usize, f: Features) {
         // Once, after the operators, for every closure: one copy of the
         // fit in the module, not one per slab (with one per slab,
         // lavapipe's pipeline compiles took four times as long).
-        w.push_str(
-            "    if header.z != 0u {\n        let n_v = max(dot(n, v), 1e-4);\n        for (var k = 0u; k < s.count; k++) {\n            // Turquin's factor scales the whole lobe: F0 and F90 alike.\n            let e = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness);\n",
-        );
+        w.push_str("    if header.z != 0u {\n        let n_v = max(dot(n, v), 1e-4);\n        for (var k = 0u; k < s.count; k++) {\n            // Turquin's factor scales the whole lobe: F0 and F90 alike.\n");
+        let factor = "energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness)";
+        if f.anisotropy {
+            // The isotropic table misjudges a stretched lobe's loss (it
+            // returned 1.02 of the light at n·v 0.1 for the library's
+            // white brushed metal): such a lobe is left uncompensated.
+            let _ = writeln!(w, "            let e = select({factor}, vec3(1.0), s.closures[k].anisotropy > 0.0);");
+        } else {
+            let _ = writeln!(w, "            let e = {factor};");
+        }
         if f.haze {
             // The haze lobe loses what GGX loses at its own roughness:
             // the first lobe's factor on it would leave a white hazy

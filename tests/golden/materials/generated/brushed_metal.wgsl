@@ -94,7 +94,7 @@ fn material_init_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint)
         let n_v = max(dot(n, v), 1e-4);
         for (var k = 0u; k < s.count; k++) {
             // Turquin's factor scales the whole lobe: F0 and F90 alike.
-            let e = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness);
+            let e = select(energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness), vec3(1.0), s.closures[k].anisotropy > 0.0);
             s.closures[k].reflectance *= e;
             s.closures[k].edge *= e;
         }
