@@ -88,8 +88,13 @@ fn slab_cos(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, met
     let n_v = max(dot(n, v), 1e-4);
     let a = alpha(roughness);
     let specular = d_ggx(n, h, a) * v_smith(n_v, n_l, a) * f_schlick_edge(f0, f90, max(dot(v, h), 0.0));
-    let diffuse = (1.0 - metallic) * (1.0 - f0) * schlick_transmission(n_l) * schlick_transmission(n_v) * base_color / PI;
-    return (diffuse + specular) * n_l;
+    return (slab_diffuse(n_l, n_v, base_color, metallic, f0) + specular) * n_l;
+}
+
+// The slab's diffuse BRDF (without the cosine): what Fresnel lets in
+// toward l and out toward v.
+fn slab_diffuse(n_l: f32, n_v: f32, base_color: vec3<f32>, metallic: f32, f0: vec3<f32>) -> vec3<f32> {
+    return (1.0 - metallic) * (1.0 - f0) * schlick_transmission(n_l) * schlick_transmission(n_v) * base_color / PI;
 }
 
 // ---- importance sampling (the path tracer) --------------------------------
@@ -140,7 +145,13 @@ fn g1_smith(n_x: f32, a: f32) -> f32 {
 
 // A visible normal for view `ve` (local frame, z along n).
 fn sample_vndf(ve: vec3<f32>, a: f32, u: vec2<f32>) -> vec3<f32> {
-    let vh = normalize(vec3(a * ve.x, a * ve.y, ve.z));
+    return sample_vndf_aniso(ve, vec2(a), u);
+}
+
+// `sample_vndf` with alpha a.x along the frame's x and a.y along its y:
+// Heitz's stretch makes the anisotropic lobe the isotropic one of alpha 1.
+fn sample_vndf_aniso(ve: vec3<f32>, a: vec2<f32>, u: vec2<f32>) -> vec3<f32> {
+    let vh = normalize(vec3(a.x * ve.x, a.y * ve.y, ve.z));
     let len2 = vh.x * vh.x + vh.y * vh.y;
     let t1 = select(vec3(1.0, 0.0, 0.0), vec3(-vh.y, vh.x, 0.0) * inverseSqrt(len2), len2 > 0.0);
     let t2 = cross(vh, t1);
@@ -150,7 +161,7 @@ fn sample_vndf(ve: vec3<f32>, a: f32, u: vec2<f32>) -> vec3<f32> {
     let s = 0.5 * (1.0 + vh.z);
     let p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
     let nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
-    return normalize(vec3(a * nh.x, a * nh.y, max(nh.z, 0.0)));
+    return normalize(vec3(a.x * nh.x, a.y * nh.y, max(nh.z, 0.0)));
 }
 
 // The mixture pdf (solid angle) of sampling `l` with `brdf_sample`.
@@ -200,15 +211,108 @@ fn brdf_sample(n: vec3<f32>, v: vec3<f32>, u: vec3<f32>, base_color: vec3<f32>, 
 // The direction `brdf_sample` draws, for a slab with its F0 given: a
 // material mixing slabs weighs it by its own pdf and evaluation.
 fn slab_direction(n: vec3<f32>, v: vec3<f32>, u: vec3<f32>, base_color: vec3<f32>, metallic: f32, f0: vec3<f32>, roughness: f32) -> vec3<f32> {
-    let frame = basis(n);
     let n_v = max(dot(n, v), 1e-4);
+    return lobes_direction(basis(n), v, u, specular_probability(n_v, base_color, metallic, f0), vec2(alpha(roughness)));
+}
+
+// The specular lobe (alphas along the frame's x and y) with probability
+// `p`, else the diffuse; `frame`'s z is the normal.
+fn lobes_direction(frame: mat3x3<f32>, v: vec3<f32>, u: vec3<f32>, p: f32, a: vec2<f32>) -> vec3<f32> {
     var l: vec3<f32>;
-    if u.x < specular_probability(n_v, base_color, metallic, f0) {
+    if u.x < p {
         let ve = normalize(transpose(frame) * v);
-        let h = frame * sample_vndf(ve, alpha(roughness), u.yz);
+        let h = frame * sample_vndf_aniso(ve, a, u.yz);
         l = reflect(-v, h);
     } else {
         l = cosine_direction(frame, u.yz);
     }
     return l;
+}
+
+// ---- anisotropic GGX (a material's `specular_roughness_anisotropy`) -------
+//
+// The slab's lobes with the specular stretched along `t`, a direction on
+// the surface (made perpendicular to n here, so a closure's own normal
+// can tilt away from the tangent it was given). Only materials that use
+// anisotropy call these; an isotropic closure keeps the functions above,
+// to the bit.
+
+// OpenPBR's mapping (specification 1.0, "Specular reflection"): alpha
+// along t, α_t = r² √(2 / (1 + (1 − a)²)), and across it, α_b = (1 − a) α_t,
+// so α_t² + α_b² = 2 r⁴: the lobe keeps its isotropic roughness's mean
+// square alpha, which is why the albedo table, the split sum and the LTC
+// fit read `roughness` unchanged. Both keep `alpha`'s floor.
+fn alpha_aniso(roughness: f32, anisotropy: f32) -> vec2<f32> {
+    let b = 1.0 - anisotropy;
+    let t = alpha(roughness) * sqrt(2.0 / (1.0 + b * b));
+    return vec2(t, max(b * t, alpha(0.0)));
+}
+
+// (t, b, n): `t` made perpendicular to unit `n`; `basis(n)` where t lies
+// along n.
+fn tangent_frame(n: vec3<f32>, t: vec3<f32>) -> mat3x3<f32> {
+    let p = t - n * dot(n, t);
+    if dot(p, p) < 1e-12 {
+        return basis(n);
+    }
+    let x = normalize(p);
+    return mat3x3(x, cross(n, x), n);
+}
+
+// GGX's distribution of local half vector `h` (z along n), alphas a:
+// 1 / (π a.x a.y d²), d = (h.x / a.x)² + (h.y / a.y)² + h.z². Every term
+// is a square, nothing cancels near the peak.
+fn d_ggx_aniso(h: vec3<f32>, a: vec2<f32>) -> f32 {
+    if !(h.z > 0.0) {
+        return 0.0;
+    }
+    let s = vec3(h.x / a.x, h.y / a.y, h.z);
+    let d = dot(s, s);
+    return 1.0 / (PI * a.x * a.y * d * d);
+}
+
+// |(a.x w.x, a.y w.y, w.z)| with w.z = `n_w`: Smith's Λ(w) is
+// (this / n_w − 1) / 2.
+fn smith_length(w: vec3<f32>, n_w: f32, a: vec2<f32>) -> f32 {
+    return length(vec3(a.x * w.x, a.y * w.y, n_w));
+}
+
+// Slab lobes × cosine, specular anisotropic: `slab_cos` with alphas
+// `alpha_aniso(roughness, anisotropy)` along t and across it.
+fn slab_cos_aniso(n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, metallic: f32, f0: vec3<f32>, f90: vec3<f32>, roughness: f32, anisotropy: f32) -> vec3<f32> {
+    let n_l = dot(n, l);
+    if !(n_l > 0.0) {
+        return vec3(0.0);
+    }
+    let local = transpose(tangent_frame(n, t));
+    let h = normalize(v + l);
+    let n_v = max(dot(n, v), 1e-4);
+    let a = alpha_aniso(roughness, anisotropy);
+    // Height-correlated Smith: G2 / (4 n·l n·v) = 0.5 / (n·l |v'| + n·v |l'|).
+    let vis = 0.5 / max(n_l * smith_length(local * v, n_v, a) + n_v * smith_length(local * l, n_l, a), 1e-7);
+    let specular = d_ggx_aniso(local * h, a) * vis * f_schlick_edge(f0, f90, max(dot(v, h), 0.0));
+    return (slab_diffuse(n_l, n_v, base_color, metallic, f0) + specular) * n_l;
+}
+
+// The pdf (solid angle) of `slab_direction_aniso`'s directions: the
+// visible normals' G1(v) D(h) / (4 n·v) against the cosine lobe.
+fn slab_pdf_aniso(n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, metallic: f32, f0: vec3<f32>, roughness: f32, anisotropy: f32) -> f32 {
+    let n_l = dot(n, l);
+    if !(n_l > 0.0) {
+        return 0.0;
+    }
+    let local = transpose(tangent_frame(n, t));
+    let n_v = max(dot(n, v), 1e-4);
+    let a = alpha_aniso(roughness, anisotropy);
+    let g1 = 2.0 * n_v / (n_v + smith_length(local * v, n_v, a));
+    let specular = g1 * d_ggx_aniso(local * normalize(v + l), a) / (4.0 * n_v);
+    let p = specular_probability(n_v, base_color, metallic, f0);
+    return p * specular + (1.0 - p) * (n_l / PI);
+}
+
+// A direction from the anisotropic slab: visible normals of the stretched
+// lobe in the tangent frame, or the cosine lobe.
+fn slab_direction_aniso(n: vec3<f32>, t: vec3<f32>, v: vec3<f32>, u: vec3<f32>, base_color: vec3<f32>, metallic: f32, f0: vec3<f32>, roughness: f32, anisotropy: f32) -> vec3<f32> {
+    let n_v = max(dot(n, v), 1e-4);
+    return lobes_direction(tangent_frame(n, t), v, u, specular_probability(n_v, base_color, metallic, f0), alpha_aniso(roughness, anisotropy));
 }

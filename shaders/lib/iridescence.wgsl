@@ -23,7 +23,7 @@
 //   gives back the base's own (exact, unpolarised) Fresnel.
 #define_import_path loupe::iridescence
 
-#import loupe::brdf::{PI, slab_cos}
+#import loupe::brdf::PI
 
 // Amplitude reflection coefficients (s, p) at an interface from index n1
 // to n2, with cosines c1 before and c2 after. A negative one reflects with
@@ -108,31 +108,6 @@ fn thin_film_fresnel(cos_i: f32, thickness: f32, film_ior: f32, base: vec3<f32>)
 fn f0_to_ior(f0: vec3<f32>) -> vec3<f32> {
     let s = sqrt(clamp(f0, vec3(0.0), vec3(0.99)));
     return (vec3(1.0) + s) / (vec3(1.0) - s);
-}
-
-// `slab_cos`'s lobes with the film's Fresnel: `fresnel(x)` is
-// `scale × thin_film_fresnel(x)`; the specular takes it at v·h, and the
-// diffuse below gets what it lets in at n·l and out at n·v. Not divided
-// by 1 − F(1) as `slab_cos`'s Schlick coupling is: a film's F can dip
-// below its value head-on, and the division would then return more light
-// than arrives.
-fn film_slab_cos(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, base_color: vec3<f32>, metallic: f32, roughness: f32, thickness: f32, film_ior: f32, base: vec3<f32>, scale: vec3<f32>) -> vec3<f32> {
-    let n_l = dot(n, l);
-    // A NaN takes this branch too.
-    if !(n_l > 0.0) {
-        return vec3(0.0);
-    }
-    let n_v = max(dot(n, v), 1e-4);
-    let f = scale * thin_film_fresnel(max(dot(v, normalize(v + l)), 0.0), thickness, film_ior, base);
-    var diffuse = vec3(0.0);
-    if metallic < 1.0 {
-        let f_l = scale * thin_film_fresnel(n_l, thickness, film_ior, base);
-        let f_v = scale * thin_film_fresnel(n_v, thickness, film_ior, base);
-        diffuse = (1.0 - metallic) * (vec3(1.0) - f_l) * (vec3(1.0) - f_v) * base_color / PI;
-    }
-    // The specular: `slab_cos` of a metal whose F0 and F90 are both the
-    // film's F at v·h (Schlick between equal ends is that F).
-    return slab_cos(n, v, l, vec3(0.0), 1.0, f, f, roughness) + diffuse * n_l;
 }
 
 // The F0 whose Schlick Fresnel at n·v is `f`: how the sampling's lobe

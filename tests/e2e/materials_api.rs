@@ -104,7 +104,7 @@ fn materials_are_served_with_their_reports_and_previews_and_a_broken_file_keeps_
     assert!(g > r + 20 && g > b + 20, "path traced, green too: {:?}", [r, g, b]);
     let (status, body) = s.get("/api/materials/99/preview");
     assert_eq!(status, 404, "{}", String::from_utf8_lossy(&body));
-    assert!(String::from_utf8_lossy(&body).contains("no material 99: the scene has 11"));
+    assert!(String::from_utf8_lossy(&body).contains("no material 99: the scene has 13"));
     assert_eq!(s.get("/api/materials/7/preview?renderer=photon").0, 400);
     assert_eq!(s.get("/api/materials/seven/preview").0, 404);
 

@@ -26,7 +26,13 @@ use loupe::shader::SourceFile;
 use wgpu::util::DeviceExt;
 
 const PRELUDE: &str = r#"
-#import loupe::material::{material_init, material_eval, material_pdf, material_sample}
+#import loupe::material::{Surface, material_init_at, material_point, material_eval, material_pdf, material_sample}
+
+// Instance 0 seen from v, its tangent along x (the views lie in the x-z
+// plane): the direction an anisotropic lobe is stretched from.
+fn surface(v: vec3<f32>) -> Surface {
+    return material_init_at(0u, N, v, material_point(vec2(0.0), vec4(1.0, 0.0, 0.0, 1.0)));
+}
 "#;
 
 /// Invocation i evaluates direction `input[2 + i].xyz`: (material_pdf,
@@ -38,7 +44,7 @@ const DENSITY: &str = r#"
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= arrayLength(&output) { return; }
     let l = input[2u + id.x].xyz;
-    let s = material_init(0u, N, view());
+    let s = surface(view());
     output[id.x] = vec4(material_pdf(s, N, view(), l), material_eval(s, N, view(), l));
 }
 "#;
@@ -55,7 +61,7 @@ const SAMPLE: &str = r#"
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= arrayLength(&output) { return; }
     let v = view();
-    let s = material_init(0u, N, v);
+    let s = surface(v);
     let m = material_sample(s, N, v, input[2u + id.x].xyz);
     output[id.x] = array(vec4(m.l, m.pdf), vec4(m.weight, 0.0), vec4(0.0));
 }
@@ -203,7 +209,11 @@ fn narrowest(d: &Definition, values: &[Value]) -> f32 {
             Value::Vec3(c) => c[0],
             Value::Texture(_) => unreachable!("a texture is never a field's value"),
         };
-        least = least.min(field(Field::SpecularRoughness));
+        // An anisotropic lobe is narrowest across its direction:
+        // α_b = (1 − a) α_t (brdf.wgsl's `alpha_aniso`), as a roughness.
+        let a = field(Field::SpecularAnisotropy).clamp(0.0, 1.0);
+        let across = (1.0 - a) * (2.0 / (1.0 + (1.0 - a) * (1.0 - a))).sqrt();
+        least = least.min(field(Field::SpecularRoughness) * across.sqrt());
         if field(Field::HazeWeight) > 0.0 {
             least = least.min(field(Field::HazeRoughness));
         }
@@ -278,14 +288,19 @@ const SAMPLES: usize = 1 << 18;
 /// a mix of pigment and flakes), a mixed one (OpenPBR with its coat on
 /// half the surface: a mix of the base and the base under a coat), a hazy
 /// one (two GGX lobes) and a fuzz one (fabric: sheen over a rough
-/// dielectric), each with its roughness parameter swept from below the
-/// module's clamp (0.045) to 1. (material, its parameters, the one swept.)
-fn chi2_materials() -> [(&'static str, Params, &'static str); 4] {
+/// dielectric) and an anisotropic one (brushed metal at anisotropy 0.6,
+/// its direction an eighth of a turn off the plane of incidence; at 1 its
+/// lobe at roughness 1 spans α 1.41 one way and 0.002 the other, which
+/// cells sized for either cannot resolve), each
+/// with its roughness parameter swept from below the module's clamp
+/// (0.045) to 1. (material, its parameters, the one swept.)
+fn chi2_materials() -> [(&'static str, Params, &'static str); 5] {
     [
         ("car_paint::car_paint", vec![], "coat_roughness"),
         ("openpbr::openpbr", vec![("coat_weight", Value::Float(0.5))], "coat_roughness"),
         ("hazy_metal::hazy_metal", vec![], "specular_roughness"),
         ("fabric::fabric", vec![], "fuzz_roughness"),
+        ("brushed_metal::brushed_metal", vec![("anisotropy", Value::Float(0.6)), ("rotation", Value::Float(0.125))], "specular_roughness"),
     ]
 }
 

@@ -49,6 +49,9 @@ pub enum Feature {
     /// A thin film over the interface (iridescence): a film weight above
     /// 0, on a specular or metal lobe.
     ThinFilm,
+    /// A GGX lobe stretched along a direction on the surface: a roughness
+    /// anisotropy above 0, on a specular or metal lobe.
+    Anisotropy,
 }
 
 /// Why a material is not energy-conserving.
@@ -454,6 +457,7 @@ fn slab_features(def: &Definition, slab: &Slab, in_layer_top: bool) -> BTreeSet<
         (Feature::Absorption, in_layer_top && !is(Field::Thickness, zero) && absorbs),
         (Feature::Transmission, !metal_only && !is(Field::TransmissionWeight, zero)),
         (Feature::ThinFilm, lobe && !is(Field::ThinFilmWeight, zero)),
+        (Feature::Anisotropy, lobe && !is(Field::SpecularAnisotropy, zero)),
     ]
     .into_iter()
     .filter_map(|(feature, on)| on.then_some(feature))

@@ -24,7 +24,7 @@ use crate::mesh::json_path::JsonPath;
 use crate::mesh::uri::{self, Uri};
 
 /// The material extensions loupe maps into the tree.
-pub const SUPPORTED: [&str; 8] = [
+pub const SUPPORTED: [&str; 9] = [
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_specular",
@@ -33,6 +33,7 @@ pub const SUPPORTED: [&str; 8] = [
     "KHR_materials_transmission",
     "KHR_materials_volume",
     "KHR_materials_iridescence",
+    "KHR_materials_anisotropy",
 ];
 
 /// Extensions that change nothing a material shows here: the geometry's
@@ -69,11 +70,7 @@ pub fn document_warnings(d: &Document) -> Vec<Diagnostic> {
             if SUPPORTED.contains(&name) || NOT_MATERIAL.contains(&name) {
                 return None;
             }
-            let why = if name == "KHR_materials_anisotropy" {
-                "anisotropy is not representable in loupe's slabs yet: the material renders isotropic".to_owned()
-            } else {
-                format!("loupe cannot represent {name}: it is ignored, and the asset may look different than intended")
-            };
+            let why = format!("loupe cannot represent {name}: it is ignored, and the asset may look different than intended");
             Some(warning(d, &JsonPath::top("extensionsUsed").index(i), format!("{name}: {why}")))
         })
         .collect()
@@ -355,6 +352,7 @@ impl Builder<'_> {
                 }
                 "KHR_materials_clearcoat" => coat = self.coat(e, &at),
                 "KHR_materials_iridescence" => self.iridescence(e, &at, &mut base),
+                "KHR_materials_anisotropy" => self.anisotropy(e, &at, &mut base),
                 // Read with the emission and the transmission.
                 _ => {}
             }
@@ -443,6 +441,26 @@ impl Builder<'_> {
         );
         let path = self.expr(ExprKind::Call(Builtin::TransmittanceToMfp, vec![kept, distance]), Type::Color);
         base.push((Field::MeanFreePath, path));
+    }
+
+    /// `KHR_materials_anisotropy`: the strength as the slab's roughness
+    /// anisotropy (OpenPBR's mapping of it, not glTF's: docs/materials.md),
+    /// the rotation (radians from the tangent toward the bitangent) in
+    /// turns. The texture's per-texel direction and strength are not read.
+    fn anisotropy(&mut self, e: &Json, at: &JsonPath, base: &mut Vec<(Field, ExprId)>) {
+        let strength = self.float("anisotropy_strength", e, "anisotropyStrength", 0.0, Field::SpecularAnisotropy, at);
+        let radians = e.get("anisotropyRotation").and_then(Json::as_f64).unwrap_or(0.0);
+        let turns = (radians / std::f64::consts::TAU).rem_euclid(1.0) as f32;
+        let range = Field::SpecularRotation.range();
+        let rotation = self.param("anisotropy_rotation", Type::Float, Value::Float(turns), range, &at.field("anisotropyRotation"));
+        if e.get("anisotropyTexture").is_some() {
+            self.warn(
+                &at.field("anisotropyTexture"),
+                format!("{at}.anisotropyTexture (direction and strength per texel) is not read: the factors alone apply"),
+            );
+        }
+        base.push((Field::SpecularAnisotropy, strength));
+        base.push((Field::SpecularRotation, rotation));
     }
 
     /// `KHR_materials_clearcoat` as a clear dielectric slab (IOR 1.5, black

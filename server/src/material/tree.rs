@@ -231,10 +231,18 @@ pub enum Field {
     /// colour kept over one unit); `transmittance_to_mfp(color, d)` gives
     /// the path that keeps `color` after `d`.
     MeanFreePath,
+    /// OpenPBR `specular_roughness_anisotropy`: 0 an isotropic lobe, toward
+    /// 1 a lobe stretched along the direction `specular_rotation` gives
+    /// (α_t = r² √(2 / (1 + (1 − a)²)), α_b = (1 − a) α_t).
+    SpecularAnisotropy,
+    /// Standard Surface `specular_rotation`: the direction of the longer
+    /// roughness, in turns (0..1) from the surface's tangent (growing u)
+    /// toward its bitangent.
+    SpecularRotation,
 }
 
 impl Field {
-    pub const ALL: [Field; 23] = [
+    pub const ALL: [Field; 25] = [
         Field::BaseColor,
         Field::BaseMetalness,
         Field::SpecularWeight,
@@ -258,6 +266,8 @@ impl Field {
         Field::ThinFilmThickness,
         Field::ThinFilmIor,
         Field::MeanFreePath,
+        Field::SpecularAnisotropy,
+        Field::SpecularRotation,
     ];
 
     /// The name written in material files.
@@ -286,6 +296,8 @@ impl Field {
             Field::ThinFilmThickness => "thin_film_thickness",
             Field::ThinFilmIor => "thin_film_ior",
             Field::MeanFreePath => "mean_free_path",
+            Field::SpecularAnisotropy => "specular_roughness_anisotropy",
+            Field::SpecularRotation => "specular_rotation",
         }
     }
 
@@ -320,6 +332,7 @@ impl Field {
             Field::SpecularRoughness => Value::Float(0.5),
             Field::HazeWeight | Field::FuzzWeight | Field::EmissionLuminance | Field::Thickness => Value::Float(0.0),
             Field::TransmissionWeight | Field::ThinWalled => Value::Float(0.0),
+            Field::SpecularAnisotropy | Field::SpecularRotation => Value::Float(0.0),
             Field::HazeRoughness => Value::Float(0.7),
             Field::FuzzRoughness => Value::Float(0.5),
             Field::EmissionColor => Value::Vec3([1.0; 3]),

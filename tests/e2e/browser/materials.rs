@@ -20,7 +20,7 @@ async fn the_materials_panel_shows_tree_report_and_live_parameters_and_names_a_p
     let (_driver, c) = browser().await;
     c.goto(&s.url("/")).await.unwrap();
     until(&c, &s, "a frame", "Number(document.querySelector('#frame').dataset.frame || 0)").await;
-    until(&c, &s, "the twelve materials", "document.querySelectorAll('#materials-list [data-index]').length === 12").await;
+    until(&c, &s, "the thirteen materials", "document.querySelectorAll('#materials-list [data-index]').length === 13").await;
 
     // Car paint: a layer over a mix; the tree folds and unfolds.
     let run = |js: String| {

@@ -191,11 +191,11 @@ fn iridescence_is_the_base_slabs_thin_film_in_micrometres() {
 fn what_loupe_cannot_represent_is_a_located_warning_naming_it() {
     let text = r#"{
   "asset": {"version": "2.0"},
-  "extensionsUsed": ["KHR_materials_sheen", "KHR_materials_anisotropy", "KHR_materials_dispersion"],
+  "extensionsUsed": ["KHR_materials_sheen", "KHR_materials_dispersion", "KHR_materials_diffuse_transmission"],
   "materials": [{
     "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1}},
     "occlusionTexture": {"index": 0},
-    "extensions": {"KHR_materials_anisotropy": {"anisotropyStrength": 0.5}}
+    "extensions": {"KHR_materials_dispersion": {"dispersion": 0.5}}
   }],
   "textures": [{"source": 0}],
   "images": [{"uri": "data:image/png;base64,AAAA"}]
@@ -203,8 +203,8 @@ fn what_loupe_cannot_represent_is_a_located_warning_naming_it() {
     let (m, warnings) = import(text, Some(0));
     let named: Vec<(&str, u32)> = warnings.iter().map(|w| (w.message.as_str(), w.location.as_ref().unwrap().line)).collect();
     assert_eq!(named.len(), 2, "{named:?}");
-    assert!(named[0].0.starts_with("KHR_materials_anisotropy") && named[0].1 == 3, "{named:?}");
-    assert!(named[1].0.starts_with("KHR_materials_dispersion") && named[1].1 == 3, "{named:?}");
+    assert!(named[0].0.starts_with("KHR_materials_dispersion") && named[0].1 == 3, "{named:?}");
+    assert!(named[1].0.starts_with("KHR_materials_diffuse_transmission") && named[1].1 == 3, "{named:?}");
     assert!(warnings.iter().all(|w| w.severity == Severity::Warning && w.file() == Some("a.gltf")));
     // The material's own: a second UV set; occlusion, as a note.
     let own: Vec<&str> = m.warnings.iter().map(|w| w.message.as_str()).collect();
@@ -226,4 +226,31 @@ fn the_default_material_is_gltfs_white_rough_metal() {
         p,
         [("base_color_factor", Value::Vec3([1.0; 3])), ("metallic_factor", Value::Float(1.0)), ("roughness_factor", Value::Float(1.0))]
     );
+}
+
+#[test]
+fn anisotropy_maps_to_the_slabs_anisotropy_and_rotation_in_turns() {
+    let text = r#"{
+  "asset": {"version": "2.0"},
+  "extensionsUsed": ["KHR_materials_anisotropy"],
+  "materials": [{
+    "extensions": {"KHR_materials_anisotropy": {"anisotropyStrength": 0.6, "anisotropyRotation": -1.5707963267948966}}
+  }]
+}"#;
+    let (m, warnings) = import(text, Some(0));
+    assert!(warnings.is_empty() && m.warnings.is_empty(), "{warnings:?} {:?}", m.warnings);
+    let def = &m.definition;
+    let base = slab(def, def.root);
+    assert_eq!(param_name(def, base.get(Field::SpecularAnisotropy).unwrap()), "anisotropy_strength");
+    assert_eq!(param_name(def, base.get(Field::SpecularRotation).unwrap()), "anisotropy_rotation");
+    let p = |name: &str| def.params.iter().find(|p| p.name == name).unwrap_or_else(|| panic!("no param {name}")).default;
+    assert_eq!(p("anisotropy_strength"), Value::Float(0.6));
+    // A quarter turn clockwise is three quarters counter-clockwise.
+    assert_eq!(p("anisotropy_rotation"), Value::Float(0.75));
+    let a = crate::material::analysed(def).unwrap_or_else(|d| panic!("{d:?}"));
+    assert!(a.features().contains(&crate::material::analysis::Feature::Anisotropy), "{:?}", a.features());
+    // The texture is named, not dropped.
+    let textured = text.replace("\"anisotropyStrength\": 0.6", "\"anisotropyStrength\": 0.6, \"anisotropyTexture\": {\"index\": 0}");
+    let (m, _) = import(&textured, Some(0));
+    assert!(m.warnings.iter().any(|w| w.message.contains("anisotropyTexture")), "{:?}", m.warnings);
 }

@@ -9,7 +9,7 @@
 #import loupe::brdf::{BrdfSample, PI, slab_cos, slab_pdf, slab_direction, specular_f0, f_schlick_edge, luminance_of}
 #import loupe::ambient::{ambient_light, gradient_irradiance}
 #import loupe::multiscatter::energy_compensation
-#import loupe::iridescence::{thin_film_fresnel, film_slab_cos, f0_to_ior, schlick_f0_of}
+#import loupe::iridescence::{thin_film_fresnel, f0_to_ior, schlick_f0_of}
 #ifdef LIGHT_RECT
 #import loupe::ltc::ltc_rect
 #endif
@@ -30,12 +30,10 @@ struct Closure {
     roughness: f32,
     // F90, the grazing reflectance.
     edge: vec3<f32>,
-    // The film: x its weight, y its thickness (µm), z its IOR; the
-    // base's IOR under it per channel; and what scales its Fresnel
-    // (specular weight and tint, energy compensation).
-    film: vec3<f32>,
-    film_base: vec3<f32>,
-    film_scale: vec3<f32>,
+    // The film's weight, and its Fresnel at the shading point's n·v,
+    // scaled as F0 is (specular weight and tint, energy compensation).
+    film: f32,
+    film_fresnel: vec3<f32>,
 }
 
 struct Surface {
@@ -52,9 +50,8 @@ fn make_closure(base_color: vec3<f32>, metallic: f32, reflectance: vec3<f32>, ro
     c.reflectance = reflectance;
     c.roughness = roughness;
     c.edge = vec3(1.0);
-    c.film = vec3(0.0, 0.5, 1.5);
-    c.film_base = vec3(1.5);
-    c.film_scale = vec3(1.0);
+    c.film = 0.0;
+    c.film_fresnel = vec3(0.0);
     return c;
 }
 
@@ -98,9 +95,9 @@ fn material_2_init(slot: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> S
         let base_color = saturate(material_params[slot + 0u].xyz);
         let metallic = saturate(1.0);
         var c = make_closure(base_color, metallic, specular_f0(base_color, metallic), saturate(0.25));
-        c.film = vec3(saturate(1.0), max(material_params[slot + 1u].x, 0.0), max(material_params[slot + 2u].x, 1.0));
-        c.film_base = mix(vec3(max(1.5, 1.0)), f0_to_ior(base_color), metallic);
-        c.film_scale = mix(saturate(vec3<f32>(1.0, 1.0, 1.0)), vec3(1.0), metallic) * saturate(1.0);
+        c.film = saturate(1.0);
+        let film_base = mix(vec3(max(1.5, 1.0)), f0_to_ior(base_color), metallic);
+        c.film_fresnel = mix(saturate(vec3<f32>(1.0, 1.0, 1.0)), vec3(1.0), metallic) * saturate(1.0) * thin_film_fresnel(n_v, max(material_params[slot + 1u].x, 0.0), max(material_params[slot + 2u].x, 1.0), film_base);
         s.closures[0] = c;
     }
     return s;
@@ -134,7 +131,7 @@ fn material_init_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint)
         for (var k = 0u; k < s.count; k++) {
             // Turquin's factor scales the whole lobe: F0 and F90 alike.
             let e = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness);
-            s.closures[k].film_scale *= e;
+            s.closures[k].film_fresnel *= e;
             s.closures[k].reflectance *= e;
             s.closures[k].edge *= e;
         }
@@ -167,19 +164,14 @@ fn transmittance_to_mfp(color: vec3<f32>, distance: f32) -> vec3<f32> {
 fn closure_albedo(c: Closure, n_v: f32) -> vec3<f32> {
     let fr = f_schlick_edge(c.reflectance, c.edge, n_v);
     var e = fr + (1.0 - c.metallic) * c.base_color * (vec3(1.0) - fr);
-    let film = closure_film(c, n_v);
-    e = mix(e, film + (1.0 - c.metallic) * c.base_color * (vec3(1.0) - film), c.film.x);
+    let film = c.film_fresnel;
+    e = mix(e, film + (1.0 - c.metallic) * c.base_color * (vec3(1.0) - film), c.film);
     return min(e, vec3(1.0));
-}
-
-// The film's Fresnel at cosine x, scaled as the closure's F0 is.
-fn closure_film(c: Closure, x: f32) -> vec3<f32> {
-    return c.film_scale * thin_film_fresnel(x, c.film.y, c.film.z, c.film_base);
 }
 
 // The Schlick F0 matching the film's Fresnel at n·v.
 fn closure_film_f0(c: Closure, n_v: f32) -> vec3<f32> {
-    return schlick_f0_of(closure_film(c, n_v), n_v);
+    return schlick_f0_of(c.film_fresnel, n_v);
 }
 
 fn closure_transmittance(c: Closure) -> vec3<f32> {
@@ -188,21 +180,22 @@ fn closure_transmittance(c: Closure) -> vec3<f32> {
 
 // BSDF × cosine of one closure, without its weight.
 fn closure_cos(c: Closure, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
-    var f = slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, c.edge, c.roughness);
-    f = mix(f, film_slab_cos(n, v, l, c.base_color, c.metallic, c.roughness, c.film.y, c.film.z, c.film_base, c.film_scale), c.film.x);
+    let f0 = mix(c.reflectance, c.film_fresnel, c.film);
+    let f90 = mix(c.edge, c.film_fresnel, c.film);
+    var f = slab_cos(n, v, l, c.base_color, c.metallic, f0, f90, c.roughness);
     return f;
 }
 
 // The pdf of `closure_direction`'s directions.
 fn closure_pdf(c: Closure, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {
-    let f0 = mix(c.reflectance, closure_film_f0(c, max(dot(n, v), 1e-4)), c.film.x);
+    let f0 = mix(c.reflectance, closure_film_f0(c, max(dot(n, v), 1e-4)), c.film);
     var p = slab_pdf(n, v, l, c.base_color, c.metallic, f0, c.roughness);
     return p;
 }
 
 // A direction from one closure; u.x picks the lobe, u.yz place it.
 fn closure_direction(c: Closure, n: vec3<f32>, v: vec3<f32>, u: vec3<f32>) -> vec3<f32> {
-    let f0 = mix(c.reflectance, closure_film_f0(c, max(dot(n, v), 1e-4)), c.film.x);
+    let f0 = mix(c.reflectance, closure_film_f0(c, max(dot(n, v), 1e-4)), c.film);
     var x = u.x;
     var roughness = c.roughness;
     return slab_direction(n, v, vec3(x, u.yz), c.base_color, c.metallic, f0, roughness);
@@ -311,7 +304,7 @@ fn material_ambient(s: Surface, n: vec3<f32>, v: vec3<f32>, top: vec3<f32>, bott
     for (var k = 0u; k < s.count; k++) {
         let c = s.closures[k];
         var a = ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance, c.roughness, dfg);
-        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, closure_film_f0(c, max(dot(n, v), 1e-4)), c.roughness, dfg), c.film.x);
+        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, closure_film_f0(c, max(dot(n, v), 1e-4)), c.roughness, dfg), c.film);
         e += c.weight * a;
     }
     return e;
@@ -326,7 +319,7 @@ fn material_rect(s: Surface, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, corners: 
         let r = ltc_rect(n, v, p, c.roughness, corners, two_sided, ltc_matrix, ltc_amplitude);
         let diffuse = c.base_color * (1.0 - c.metallic) * r.diffuse;
         var lit = diffuse + c.reflectance * r.specular.x + c.edge * r.specular.y;
-        lit = mix(lit, diffuse + closure_film(c, max(dot(n, v), 1e-4)) * (r.specular.x + r.specular.y), c.film.x);
+        lit = mix(lit, diffuse + c.film_fresnel * (r.specular.x + r.specular.y), c.film);
         e += c.weight * lit;
     }
     return e;

@@ -10,7 +10,7 @@
 #import loupe::multiscatter::energy_compensation
 #import loupe::btdf::{dielectric_cos, dielectric_pdf, dielectric_direction, fresnel_dielectric}
 // loupe: implies MATERIAL_TRANSMISSION
-#import loupe::iridescence::{thin_film_fresnel, film_slab_cos, f0_to_ior, schlick_f0_of}
+#import loupe::iridescence::{thin_film_fresnel, f0_to_ior, schlick_f0_of}
 #ifdef LIGHT_RECT
 #import loupe::ltc::ltc_rect
 #endif
@@ -45,12 +45,10 @@ struct Closure {
     eta: f32,
     thin: f32,
     tint: vec3<f32>,
-    // The film: x its weight, y its thickness (µm), z its IOR; the
-    // base's IOR under it per channel; and what scales its Fresnel
-    // (specular weight and tint, energy compensation).
-    film: vec3<f32>,
-    film_base: vec3<f32>,
-    film_scale: vec3<f32>,
+    // The film's weight, and its Fresnel at the shading point's n·v,
+    // scaled as F0 is (specular weight and tint, energy compensation).
+    film: f32,
+    film_fresnel: vec3<f32>,
 }
 
 struct Surface {
@@ -72,9 +70,8 @@ fn make_closure(base_color: vec3<f32>, metallic: f32, reflectance: vec3<f32>, ro
     c.eta = 1.5;
     c.thin = 0.0;
     c.tint = vec3(1.0);
-    c.film = vec3(0.0, 0.5, 1.5);
-    c.film_base = vec3(1.5);
-    c.film_scale = vec3(1.0);
+    c.film = 0.0;
+    c.film_fresnel = vec3(0.0);
     return c;
 }
 
@@ -106,9 +103,9 @@ fn material_0_init(slot: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> S
         c.eta = max(material_params[slot + 6u].x, 1.01);
         c.thin = select(0.0, 1.0, material_params[slot + 10u].x > 0.5);
         c.tint = exp(-1.0 / max(transmittance_to_mfp(material_params[slot + 8u].xyz, material_params[slot + 9u].x), vec3(1e-6)));
-        c.film = vec3(saturate(material_params[slot + 11u].x), max(material_params[slot + 12u].x, 0.0), max(material_params[slot + 13u].x, 1.0));
-        c.film_base = mix(vec3(max(material_params[slot + 6u].x, 1.0)), f0_to_ior(base_color), metallic);
-        c.film_scale = mix(saturate(material_params[slot + 4u].xyz), vec3(1.0), metallic) * saturate(material_params[slot + 3u].x);
+        c.film = saturate(material_params[slot + 11u].x);
+        let film_base = mix(vec3(max(material_params[slot + 6u].x, 1.0)), f0_to_ior(base_color), metallic);
+        c.film_fresnel = mix(saturate(material_params[slot + 4u].xyz), vec3(1.0), metallic) * saturate(material_params[slot + 3u].x) * thin_film_fresnel(n_v, max(material_params[slot + 12u].x, 0.0), max(material_params[slot + 13u].x, 1.0), film_base);
         s.closures[1] = c;
     }
     {
@@ -130,9 +127,9 @@ fn material_0_init(slot: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> S
         c.eta = max(material_params[slot + 6u].x, 1.01);
         c.thin = select(0.0, 1.0, material_params[slot + 10u].x > 0.5);
         c.tint = exp(-1.0 / max(transmittance_to_mfp(material_params[slot + 8u].xyz, material_params[slot + 9u].x), vec3(1e-6)));
-        c.film = vec3(saturate(material_params[slot + 11u].x), max(material_params[slot + 12u].x, 0.0), max(material_params[slot + 13u].x, 1.0));
-        c.film_base = mix(vec3(max(material_params[slot + 6u].x, 1.0)), f0_to_ior(base_color), metallic);
-        c.film_scale = mix(saturate(material_params[slot + 4u].xyz), vec3(1.0), metallic) * saturate(material_params[slot + 3u].x);
+        c.film = saturate(material_params[slot + 11u].x);
+        let film_base = mix(vec3(max(material_params[slot + 6u].x, 1.0)), f0_to_ior(base_color), metallic);
+        c.film_fresnel = mix(saturate(material_params[slot + 4u].xyz), vec3(1.0), metallic) * saturate(material_params[slot + 3u].x) * thin_film_fresnel(n_v, max(material_params[slot + 12u].x, 0.0), max(material_params[slot + 13u].x, 1.0), film_base);
         s.closures[3] = c;
     }
     var e_top1 = vec3(0.0);
@@ -201,7 +198,7 @@ fn material_init_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint)
         for (var k = 0u; k < s.count; k++) {
             // Turquin's factor scales the whole lobe: F0 and F90 alike.
             let e = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness);
-            s.closures[k].film_scale *= e;
+            s.closures[k].film_fresnel *= e;
             s.closures[k].reflectance *= e;
             s.closures[k].edge *= e;
         }
@@ -234,22 +231,17 @@ fn transmittance_to_mfp(color: vec3<f32>, distance: f32) -> vec3<f32> {
 fn closure_albedo(c: Closure, n_v: f32) -> vec3<f32> {
     let fr = f_schlick_edge(c.reflectance, c.edge, n_v);
     var e = fr + (1.0 - c.metallic) * c.base_color * (vec3(1.0) - fr);
-    let film = closure_film(c, n_v);
-    e = mix(e, film + (1.0 - c.metallic) * c.base_color * (vec3(1.0) - film), c.film.x);
+    let film = c.film_fresnel;
+    e = mix(e, film + (1.0 - c.metallic) * c.base_color * (vec3(1.0) - film), c.film);
     // The transmitting share reflects only what its interface does.
     e = mix(e, vec3(fresnel_dielectric(n_v, c.eta)), c.transmission);
     e = e * (1.0 - max3(c.fuzz_color)) + c.fuzz_color;
     return min(e, vec3(1.0));
 }
 
-// The film's Fresnel at cosine x, scaled as the closure's F0 is.
-fn closure_film(c: Closure, x: f32) -> vec3<f32> {
-    return c.film_scale * thin_film_fresnel(x, c.film.y, c.film.z, c.film_base);
-}
-
 // The Schlick F0 matching the film's Fresnel at n·v.
 fn closure_film_f0(c: Closure, n_v: f32) -> vec3<f32> {
-    return schlick_f0_of(closure_film(c, n_v), n_v);
+    return schlick_f0_of(c.film_fresnel, n_v);
 }
 
 fn closure_transmittance(c: Closure) -> vec3<f32> {
@@ -258,8 +250,9 @@ fn closure_transmittance(c: Closure) -> vec3<f32> {
 
 // BSDF × cosine of one closure, without its weight.
 fn closure_cos(c: Closure, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
-    var f = slab_cos(n, v, l, c.base_color, c.metallic, c.reflectance, c.edge, c.roughness);
-    f = mix(f, film_slab_cos(n, v, l, c.base_color, c.metallic, c.roughness, c.film.y, c.film.z, c.film_base, c.film_scale), c.film.x);
+    let f0 = mix(c.reflectance, c.film_fresnel, c.film);
+    let f90 = mix(c.edge, c.film_fresnel, c.film);
+    var f = slab_cos(n, v, l, c.base_color, c.metallic, f0, f90, c.roughness);
     f = mix(f, dielectric_cos(n, v, l, c.eta, c.roughness, c.thin, c.tint), c.transmission);
     f = f * (1.0 - max3(c.fuzz_color)) + c.fuzz_color * fuzz_cos(n, v, l, c.fuzz_roughness);
     return f;
@@ -267,7 +260,7 @@ fn closure_cos(c: Closure, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32
 
 // The pdf of `closure_direction`'s directions.
 fn closure_pdf(c: Closure, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {
-    let f0 = mix(c.reflectance, closure_film_f0(c, max(dot(n, v), 1e-4)), c.film.x);
+    let f0 = mix(c.reflectance, closure_film_f0(c, max(dot(n, v), 1e-4)), c.film);
     var p = slab_pdf(n, v, l, c.base_color, c.metallic, f0, c.roughness);
     p = mix(p, dielectric_pdf(n, v, l, c.eta, c.roughness, c.thin), c.transmission);
     p = mix(p, max(dot(n, l), 0.0) / PI, fuzz_share(c));
@@ -276,7 +269,7 @@ fn closure_pdf(c: Closure, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> f32 {
 
 // A direction from one closure; u.x picks the lobe, u.yz place it.
 fn closure_direction(c: Closure, n: vec3<f32>, v: vec3<f32>, u: vec3<f32>) -> vec3<f32> {
-    let f0 = mix(c.reflectance, closure_film_f0(c, max(dot(n, v), 1e-4)), c.film.x);
+    let f0 = mix(c.reflectance, closure_film_f0(c, max(dot(n, v), 1e-4)), c.film);
     var x = u.x;
     var roughness = c.roughness;
     let q = fuzz_share(c);
@@ -435,7 +428,7 @@ fn material_ambient(s: Surface, n: vec3<f32>, v: vec3<f32>, top: vec3<f32>, bott
     for (var k = 0u; k < s.count; k++) {
         let c = s.closures[k];
         var a = ambient_light(top, bottom, n, v, c.base_color, c.metallic, c.reflectance, c.roughness, dfg);
-        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, closure_film_f0(c, max(dot(n, v), 1e-4)), c.roughness, dfg), c.film.x);
+        a = mix(a, ambient_light(top, bottom, n, v, c.base_color, c.metallic, closure_film_f0(c, max(dot(n, v), 1e-4)), c.roughness, dfg), c.film);
         let through = select(refract(-v, n, 1.0 / c.eta), -v, c.thin > 0.5);
         let behind = (1.0 - fresnel_dielectric(dot(n, v), c.eta)) * c.tint * gradient_radiance(top, bottom, through);
         a = mix(a, ambient_light(top, bottom, n, v, vec3(0.0), 0.0, c.reflectance, c.roughness, dfg) + behind, c.transmission);
@@ -454,7 +447,7 @@ fn material_rect(s: Surface, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, corners: 
         let r = ltc_rect(n, v, p, c.roughness, corners, two_sided, ltc_matrix, ltc_amplitude);
         let diffuse = c.base_color * (1.0 - c.metallic) * r.diffuse;
         var lit = diffuse + c.reflectance * r.specular.x + c.edge * r.specular.y;
-        lit = mix(lit, diffuse + closure_film(c, max(dot(n, v), 1e-4)) * (r.specular.x + r.specular.y), c.film.x);
+        lit = mix(lit, diffuse + c.film_fresnel * (r.specular.x + r.specular.y), c.film);
         lit -= c.transmission * diffuse;
         lit = lit * (1.0 - max3(c.fuzz_color)) + c.fuzz_color * r.diffuse;
         e += c.weight * lit;
