@@ -3,8 +3,8 @@
 deterministically (no randomness, no dependencies): a unit box whose four
 sides are varnished wood (a base colour texture of planks, a tangent-space
 normal map of their grooves, KHR_materials_clearcoat) and whose top and
-bottom are felt (KHR_materials_sheen, and KHR_materials_anisotropy, which
-loupe cannot represent yet, so loading it warns by name). Writes
+bottom are felt (KHR_materials_sheen, and KHR_materials_anisotropy, read
+as the felt's specular anisotropy). Writes
 `crate.gltf`, `crate.bin`, `crate_wood.png` and `crate_wood_normal.png`
 beside this script: `python3 scenes/meshes/crate/make_crate.py`."""
 
