@@ -52,7 +52,8 @@ fn materials_are_served_with_their_reports_and_previews_and_a_broken_file_keeps_
             "rust",
             "thin glass",
             "solid glass",
-            "anodized metal"
+            "anodized metal",
+            "brushed metal"
         ]
     );
     for (i, m) in first["materials"].as_array().unwrap().iter().enumerate() {
