@@ -233,9 +233,9 @@ fn lobes_direction(frame: mat3x3<f32>, v: vec3<f32>, u: vec3<f32>, p: f32, a: ve
 //
 // The slab's lobes with the specular stretched along `t`, a direction on
 // the surface (made perpendicular to n here, so a closure's own normal
-// can tilt away from the tangent it was given). Only materials that use
-// anisotropy call these; an isotropic closure keeps the functions above,
-// to the bit.
+// can tilt away from the tangent it was given). Only modules with an
+// anisotropic material call these, for every closure (at anisotropy 0 the
+// isotropic lobe); a module without one keeps the functions above.
 
 // OpenPBR's mapping (specification 1.0, "Specular reflection"): alpha
 // along t, α_t = r² √(2 / (1 + (1 − a)²)), and across it, α_b = (1 − a) α_t,
