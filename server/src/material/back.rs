@@ -166,6 +166,7 @@ pub fn wgsl(definitions: &[Definition], bindings: Bindings) -> String {
         w.push_str(TANGENT);
     }
     w.push_str(&common(features));
+    super::pack::write(&mut w, definitions, features);
     w
 }
 
@@ -178,6 +179,7 @@ fn header(w: &mut String, definitions: &[Definition], f: Features, max: usize, b
     let _ = writeln!(w, "// Features: core{}.", names.iter().map(|n| format!(", {n}")).collect::<String>());
     w.push_str("#define_import_path loupe::material\n\n");
     w.push_str("#import loupe::brdf::{BrdfSample, PI, slab_cos, slab_pdf, slab_direction, specular_f0, f_schlick_edge, luminance_of}\n");
+    w.push_str("#import loupe::pack::{pack_unorm3, unpack_unorm3, pack_sqrt3, unpack_sqrt3, unorm_encode, unorm_decode, pack_octahedral, unpack_octahedral, pack_rgb9e5, unpack_rgb9e5, pack_dither}\n");
     let radiance = if f.transmission { ", gradient_radiance" } else { "" };
     let _ = writeln!(w, "#import loupe::ambient::{{ambient_light, gradient_irradiance{radiance}}}");
     if f.fuzz {
@@ -536,7 +538,15 @@ fn value(v: Value) -> String {
 
 fn dispatch(w: &mut String, count: usize, f: Features) {
     w.push_str(POINT);
-    w.push_str("// The surface of `instance` at a point with normal `n`, seen from `v`.\nfn material_init_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> Surface {\n");
+    // `material_surface_at` stops before the energy compensation: the
+    // G-buffer packs that surface and the unpacking compensates at the
+    // lighting's n·v (`pack.rs`), so F90 stays the grey the core word holds.
+    w.push_str("// The surface of `instance` at a point with normal `n`, seen from `v`.\nfn material_init_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> Surface {\n    var s = material_surface_at(instance, n, v, p);\n");
+    if f.compensated {
+        w.push_str("    if material_instances[instance].z != 0u {\n        s = material_compensate(s, max(dot(n, v), 1e-4));\n    }\n");
+    }
+    w.push_str("    return s;\n}\n\n");
+    w.push_str("// `material_init_at` before the energy compensation.\nfn material_surface_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> Surface {\n");
     w.push_str("    let header = material_instances[instance];\n    var s: Surface;\n    switch header.x {\n");
     for i in 1..count {
         let _ = writeln!(w, "        case {i}u: {{ s = material_{i}_init(header.y, n, v, p); }}");
@@ -544,32 +554,32 @@ fn dispatch(w: &mut String, count: usize, f: Features) {
     // A scene without materials (media alone) still links: no closures.
     let fallback = if count == 0 { "" } else { "s = material_0_init(header.y, n, v, p);" };
     let _ = writeln!(w, "        default: {{ {fallback} }}\n    }}");
+    w.push_str("    return s;\n}\n\n");
     if f.compensated {
         // Once, after the operators, for every closure: one copy of the
         // fit in the module, not one per slab (with one per slab,
         // lavapipe's pipeline compiles took four times as long).
-        w.push_str("    if header.z != 0u {\n        let n_v = max(dot(n, v), 1e-4);\n        for (var k = 0u; k < s.count; k++) {\n            // Turquin's factor scales the whole lobe: F0 and F90 alike.\n");
+        w.push_str("// Multiple-scattering compensation of every closure's lobes at n·v.\nfn material_compensate(surface: Surface, n_v: f32) -> Surface {\n    var s = surface;\n    for (var k = 0u; k < s.count; k++) {\n        // Turquin's factor scales the whole lobe: F0 and F90 alike.\n");
         let factor = "energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness)";
         if f.anisotropy {
             // The isotropic table misjudges a stretched lobe's loss (it
             // returned 1.02 of the light at n·v 0.1 for the library's
             // white brushed metal): such a lobe is left uncompensated.
-            let _ = writeln!(w, "            let e = select({factor}, vec3(1.0), s.closures[k].anisotropy > 0.0);");
+            let _ = writeln!(w, "        let e = select({factor}, vec3(1.0), s.closures[k].anisotropy > 0.0);");
         } else {
-            let _ = writeln!(w, "            let e = {factor};");
+            let _ = writeln!(w, "        let e = {factor};");
         }
         if f.haze {
             // The haze lobe loses what GGX loses at its own roughness:
             // the first lobe's factor on it would leave a white hazy
             // metal 9 % dark head-on and 4 % over 1 at grazing views.
-            w.push_str("            s.closures[k].haze_compensation = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].haze.y) / e;\n");
+            w.push_str("        s.closures[k].haze_compensation = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].haze.y) / e;\n");
         }
         if f.thin_film {
-            w.push_str("            s.closures[k].film_fresnel *= e;\n");
+            w.push_str("        s.closures[k].film_fresnel *= e;\n");
         }
-        w.push_str("            s.closures[k].reflectance *= e;\n            s.closures[k].edge *= e;\n        }\n    }\n");
+        w.push_str("        s.closures[k].reflectance *= e;\n        s.closures[k].edge *= e;\n    }\n    return s;\n}\n\n");
     }
-    w.push_str("    return s;\n}\n\n");
     w.push_str("// `material_init_at` where no UV is known: textures read their corner texel.\nfn material_init(instance: u32, n: vec3<f32>, v: vec3<f32>) -> Surface {\n    return material_init_at(instance, n, v, material_point(vec2(0.0), vec4(0.0)));\n}\n\n");
 }
 

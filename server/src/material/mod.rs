@@ -12,6 +12,7 @@ mod build;
 pub mod front;
 pub mod gltf;
 pub mod operators;
+pub mod pack;
 pub mod report;
 pub mod texture;
 pub mod tree;
