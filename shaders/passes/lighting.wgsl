@@ -6,7 +6,7 @@
 #import loupe::view::{view, world_position}
 #import loupe::lights::{Light, lights, incident, light_type, rect_area, rect_cosine, LIGHT_RECT}
 #import loupe::environment::environment_radiance
-#import loupe::material::{Surface, MaterialPoint, material_point, material_init_at, material_eval, material_ambient, material_emission}
+#import loupe::material::{Surface, MATERIAL_WORDS, material_word_count, material_unpack, material_eval, material_ambient, material_emission}
 #ifdef SHADOWS
 #import loupe::shadows::shadow
 #endif
@@ -42,11 +42,11 @@ fn rect_sampled(light: Light, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, s: Surfa
 }
 #endif
 
-@group(0) @binding(2) var gbuffer_normal: texture_2d<f32>;
-@group(0) @binding(3) var gbuffer_uv: texture_2d<f32>;
-@group(0) @binding(4) var gbuffer_material: texture_2d<f32>;
 @group(0) @binding(5) var depth: texture_depth_2d;
 @group(0) @binding(6) var dfg: texture_2d<f32>;
+// The G-buffer's material buffer (`geometry/gbuffer.wgsl`): with depth,
+// all the lighting reads of the surface.
+@group(0) @binding(14) var<storage, read> material_words: array<u32>;
 
 @vertex
 fn vs_fullscreen(@builtin(vertex_index) vertex_index: u32) -> FullscreenOut {
@@ -66,61 +66,34 @@ fn visibility(light: Light, p: vec3<f32>, n: vec3<f32>, l: vec3<f32>, distance: 
     return v;
 }
 
-#ifdef MATERIAL_POINT
-// Where the material is evaluated: the G-buffer's UV with its derivatives
-// across the 2×2 quad (for the textures' mip level) and a tangent from the
-// derivatives of position and UV (the G-buffer stores none). Derivatives
-// must be taken in uniform control flow: this runs before any branch. They
-// are zero (the finest level, a flat normal map) where a neighbour in the
-// quad is another instance, the background, or across a depth jump.
-fn material_point_at(pixel: vec2<i32>, position: vec2<f32>, z: f32, n: vec3<f32>, instance: f32) -> MaterialPoint {
-    let uv = textureLoad(gbuffer_uv, pixel, 0).xy;
-    let p = world_position(position, z);
-    let distance = length(p - view.position.xyz);
-    let duv = mat2x2(dpdx(uv), dpdy(uv));
-    let dp = mat2x3(dpdx(p), dpdy(p));
-    let other = abs(dpdx(instance)) + abs(dpdy(instance)) + abs(dpdx(f32(z >= 1.0))) + abs(dpdy(f32(z >= 1.0)));
-    let jump = max(abs(dpdx(distance)), abs(dpdy(distance))) > 0.05 * distance;
-    if other > 0.0 || jump {
-        return MaterialPoint(uv, vec2(0.0), vec2(0.0), vec4(0.0));
+// The words of the pixel: its header, then only as many more as the
+// header says it has.
+fn load_words(pixel: vec2<i32>) -> array<u32, MATERIAL_WORDS> {
+    let width = u32(view.params.x);
+    let plane = width * u32(view.params.y);
+    let i = u32(pixel.y) * width + u32(pixel.x);
+    var words: array<u32, MATERIAL_WORDS>;
+    words[0] = material_words[i];
+    let count = min(material_word_count(words[0]), MATERIAL_WORDS);
+    for (var k = 1u; k < count; k++) {
+        words[k] = material_words[k * plane + i];
     }
-    // The cotangent frame: the direction of growing u in the surface.
-    let dp_y = cross(dp[1], n);
-    let dp_x = cross(n, dp[0]);
-    // Its scale is 1/det of the quad's UV Jacobian, whose sign flips where
-    // the screen's axes (y down) wind against the normal: the gradients of
-    // u and v, not their negations.
-    let facing = select(-1.0, 1.0, dot(cross(dp[0], dp[1]), n) >= 0.0);
-    let t = (dp_y * duv[0].x + dp_x * duv[1].x) * facing;
-    let b = (dp_y * duv[0].y + dp_x * duv[1].y) * facing;
-    // Handedness as the vertices carry it (mesh/mod.rs): the bitangent
-    // cross(n, t) · w points up the image, against growing v.
-    let sign = select(1.0, -1.0, dot(cross(n, t), b) > 0.0);
-    let tangent = select(vec4(0.0), vec4(normalize(t), sign), dot(t, t) > 0.0);
-    return MaterialPoint(uv, duv[0], duv[1], tangent);
+    return words;
 }
-#endif
 
 @fragment
 fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
     let pixel = vec2<i32>(in.position.xy);
     let z = textureLoad(depth, pixel, 0);
-#ifdef MATERIAL_POINT
-    let point = material_point_at(pixel, in.position.xy, z, normalize(textureLoad(gbuffer_normal, pixel, 0).xyz), textureLoad(gbuffer_material, pixel, 0).z);
-#else
-    // No material reads it (the generated module implies MATERIAL_POINT
-    // when one does).
-    let point = material_point(vec2(0.0), vec4(0.0));
-#endif
     if z >= 1.0 {
         let p = world_position(in.position.xy, 1.0);
         return vec4(environment_radiance(normalize(p - view.position.xyz)), 1.0);
     }
-    let n = normalize(textureLoad(gbuffer_normal, pixel, 0).xyz);
-    let instance = u32(textureLoad(gbuffer_material, pixel, 0).z);
     let p = world_position(in.position.xy, z);
     let v = normalize(view.position.xyz - p);
-    let s = material_init_at(instance, n, v, point);
+    let unpacked = material_unpack(load_words(pixel), v);
+    let s = unpacked.surface;
+    let n = unpacked.normal;
 
     var color = material_ambient(s, n, v, view.environment_top.rgb, view.environment_bottom.rgb, dfg) + material_emission(s);
     for (var i = 0u; i < view.counts.x; i++) {

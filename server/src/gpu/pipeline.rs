@@ -209,6 +209,12 @@ pub const fn storage_rw(name: &'static str, binding: u32) -> Binding {
     buffer(name, binding, COMPUTE, wgpu::BufferBindingType::Storage { read_only: false }, 0)
 }
 
+/// A read-write storage buffer a fragment shader writes (the G-buffer's
+/// material words).
+pub const fn storage_rw_fragment(name: &'static str, binding: u32) -> Binding {
+    buffer(name, binding, FRAG, wgpu::BufferBindingType::Storage { read_only: false }, 0)
+}
+
 /// A 2D texture a compute pass writes with `textureStore`.
 pub const fn storage_texture(name: &'static str, binding: u32, format: wgpu::TextureFormat) -> Binding {
     Binding {

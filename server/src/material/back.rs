@@ -29,12 +29,6 @@ pub const DISPLAY: &str = "generated/material.wgsl";
 /// module with that code implies for its importers
 /// (`shader::compose::IMPLIES`).
 pub const TRANSMISSION_DEF: &str = "MATERIAL_TRANSMISSION";
-/// The def under which the lighting pass works out the surface point's UV
-/// derivatives and tangent (`MaterialPoint`), implied by a module whose
-/// materials read them. Without it the pass skips that work: on lavapipe
-/// it cost the old showcase's lighting 17 %, though nothing read it.
-pub const POINT_DEF: &str = "MATERIAL_POINT";
-
 /// Where the module's two buffers, and its textures and their sampler, are
 /// bound.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -105,12 +99,6 @@ impl Features {
             f.edge |= d.energy_compensation;
         }
         f
-    }
-
-    /// Whether a material reads the shading point's UV and tangent
-    /// (`POINT_DEF`): a texture, or an anisotropic lobe's direction.
-    pub fn reads_point(self) -> bool {
-        self.textures || self.anisotropy
     }
 
     /// The names of the features on, for reports and the module's header.
@@ -197,9 +185,6 @@ fn header(w: &mut String, definitions: &[Definition], f: Features, max: usize, b
     }
     if f.thin_film {
         w.push_str("#import loupe::iridescence::{thin_film_fresnel, f0_to_ior, schlick_f0_of}\n");
-    }
-    if f.reads_point() {
-        let _ = writeln!(w, "{}{POINT_DEF}", crate::shader::compose::IMPLIES);
     }
     w.push_str("#ifdef LIGHT_RECT\n#import loupe::ltc::ltc_rect\n#endif\n\n");
     let _ = writeln!(w, "// A float parameter in .x, a colour or vector in .xyz; each instance's block starts at its slot.");

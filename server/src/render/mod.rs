@@ -36,6 +36,9 @@ pub struct FrameOptions {
     /// The most bytes one buffer may bind on the device (the session's);
     /// `None`: unknown, nothing is culled for its size.
     pub max_buffer: Option<u64>,
+    /// The most words a pixel of the scene's materials takes in the
+    /// material buffer (`material::pack::program_words`, the session's).
+    pub material_words: u32,
 }
 
 /// Assembles the frame from the scene and the network its `[denoiser]`
@@ -62,7 +65,7 @@ pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOpti
         g.cull("test_pattern", "the scene has content to render");
         let shadows = shadows::shadows(&mut g, scene);
         let depth = depth_prepass::depth_prepass(&mut g, scene);
-        let gb = gbuffer::gbuffer(&mut g, scene, depth);
+        let gb = gbuffer::gbuffer(&mut g, scene, depth, options.material_words);
         let ltc = ltc_tables::ltc_tables(&mut g, scene);
         let lit = lighting::lighting(&mut g, scene, &gb, depth, shadows, ltc);
         let grid = volume_shadows::volume_shadows(&mut g, scene);

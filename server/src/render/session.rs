@@ -150,7 +150,11 @@ impl Session {
             SceneGpu::new(&gpu.device, &gpu.queue, &loaded.scene, &loaded.meshes, &loaded.materials, loaded.denoiser.as_ref(), None);
         material_module(&mut lib, shader_root, &loaded.materials);
         let limits = gpu.device.limits();
-        let options = FrameOptions { max_buffer: Some(crate::gpu::largest_binding(&limits)), ..FrameOptions::default() };
+        let options = FrameOptions {
+            max_buffer: Some(crate::gpu::largest_binding(&limits)),
+            material_words: material::pack::program_words(&loaded.materials.definitions),
+            ..FrameOptions::default()
+        };
         Session {
             graph: super::build_graph(&loaded.scene, loaded.denoiser.as_deref(), options),
             options,
@@ -177,7 +181,7 @@ impl Session {
     /// Builds frames with `options` from now on (the device's limits stay
     /// the session's).
     pub fn with_options(mut self, options: FrameOptions) -> Self {
-        self.options = FrameOptions { max_buffer: self.options.max_buffer, ..options };
+        self.options = FrameOptions { max_buffer: self.options.max_buffer, material_words: self.options.material_words, ..options };
         self.graph = super::build_graph(&self.scene, self.network.as_deref(), self.options);
         self
     }
@@ -261,6 +265,7 @@ impl Session {
             }
         }
         self.materials = loaded.materials.clone();
+        self.options.material_words = material::pack::program_words(&loaded.materials.definitions);
         self.graph = super::build_graph(&self.scene, self.network.as_deref(), self.options);
         // History describes the old scene: accumulation starts over.
         self.reset_history();

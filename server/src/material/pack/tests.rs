@@ -193,7 +193,7 @@ fn rgb9e5(errors: &mut Vec<String>, case: usize, name: &str, got: [f32; 4], want
 
 /// An 8-bit sqrt-encoded channel, dithered: one step of √c.
 fn sqrt8(errors: &mut Vec<String>, case: usize, name: &str, got: f32, want: f32) {
-    let root = want.max(0.0).min(1.0).sqrt();
+    let root = want.clamp(0.0, 1.0).sqrt();
     check(errors, case, name, got, want.clamp(0.0, 1.0), f64::from(2.0 * root + 1.0 / 255.0) / 255.0);
 }
 

@@ -1,10 +1,11 @@
 //! Surface attributes per pixel (layout in `geometry/gbuffer.wgsl`).
 
 use super::{MATERIAL_INSTANCES, MATERIAL_PARAMS, MATERIAL_SAMPLER, MATERIAL_TEXTURES, VIEW, material_bindings};
-use crate::gpu::pipeline::{ALL, Depth, Group, HDR, PipelineSpec, Stages, storage};
+use crate::gpu::pipeline::{ALL, Depth, Group, HDR, PipelineSpec, Stages, storage, storage_rw_fragment};
 use crate::render::context::DepthTarget;
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::render::resource::{Access, Meaning, Handle, PipelineKey, TextureDesc};
+use crate::material::pack;
+use crate::render::resource::{Access, Element, Handle, Meaning, PipelineKey, TensorLayout, TextureDesc};
 use crate::scene::Scene;
 
 /// The `uv` target's format: f32, so a texture's texel is exact at any UV
@@ -12,17 +13,25 @@ use crate::scene::Scene;
 /// be lost).
 pub const UV: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
-/// What the G-buffer spends per pixel, on every material alike: normal,
-/// albedo and material at `HDR` (8 bytes each) and `uv` at `UV` (8); the
-/// compile report's `gbuffer_bytes_per_pixel`. A test checks it against
-/// the formats.
+/// What the inspection targets spend per pixel, on every material alike:
+/// normal, albedo and material at `HDR` (8 bytes each) and `uv` at `UV`
+/// (8), for the inspector and the debug views; the lighting reads the
+/// material buffer instead (`material::pack::words` per material). A test
+/// checks it against the formats.
 pub const BYTES_PER_PIXEL: u32 = 32;
+
+/// Where the material buffer is bound in the G-buffer's group 0 (and the
+/// lighting's, read-only): after the material module's bindings.
+pub const WORDS_BINDING: u32 = 14;
 
 pub static GBUFFER: PipelineSpec = PipelineSpec {
     name: "geometry.gbuffer",
     shader: "geometry/gbuffer.wgsl",
     stages: Stages::Mesh { vertex: "vs_main", fragment: Some("fs_main"), targets: &[HDR, HDR, HDR, UV], depth: Depth::Equal },
-    groups: &[Group::always(0, &[VIEW, storage("objects", 1, ALL), MATERIAL_PARAMS, MATERIAL_INSTANCES, MATERIAL_TEXTURES, MATERIAL_SAMPLER])],
+    groups: &[Group::always(
+        0,
+        &[VIEW, storage("objects", 1, ALL), MATERIAL_PARAMS, MATERIAL_INSTANCES, MATERIAL_TEXTURES, MATERIAL_SAMPLER, storage_rw_fragment("material_words", WORDS_BINDING)],
+    )],
     defs: &[],
 };
 pub const SPECS: &[&PipelineSpec] = &[&GBUFFER];
@@ -32,9 +41,19 @@ pub struct GBuffer {
     pub albedo: Handle,
     pub material: Handle,
     pub uv: Handle,
+    /// The material buffer: per pixel its material after `init`, packed
+    /// (`material::pack`), word k of pixel i at `k * width * height + i`.
+    pub words: Handle,
 }
 
-pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle) -> GBuffer {
+/// The material buffer's words per pixel: the budget, or more where a
+/// material of the scene needs more (until the simplification makes every
+/// material fit the budget).
+pub fn words_per_pixel(material_words: u32) -> u32 {
+    pack::BUDGET_WORDS.max(material_words)
+}
+
+pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle, material_words: u32) -> GBuffer {
     let d = TextureDesc::d2(HDR, scene.width, scene.height);
     let mut p = g.pass("gbuffer", PassKind::Raster);
     let key = p.pipeline(PipelineKey::new(&GBUFFER, &[]));
@@ -44,13 +63,27 @@ pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle) -> GBuffer {
         albedo: p.create("albedo", Meaning::Color, d.clone(), Access::ColorTarget),
         material: p.create("material", Meaning::Data, d, Access::ColorTarget),
         uv: p.create("uv", Meaning::Data, TextureDesc::d2(UV, scene.width, scene.height), Access::ColorTarget),
+        words: p.create(
+            "material_words",
+            Meaning::Data,
+            TensorLayout::new(&[("word", words_per_pixel(material_words)), ("y", scene.height), ("x", scene.width)], Element::U32),
+            Access::StorageWrite,
+        ),
     };
+    let words = gb.words;
     let targets = [gb.normal, gb.albedo, gb.material, gb.uv];
     p.execute(move |ctx| {
         let s = ctx.scene;
         let [params, instances, textures, sampler] = material_bindings(s);
-        let bindings =
-            [("view", s.view.as_entire_binding()), ("objects", s.objects.as_entire_binding()), params, instances, textures, sampler];
+        let bindings = [
+            ("view", s.view.as_entire_binding()),
+            ("objects", s.objects.as_entire_binding()),
+            params,
+            instances,
+            textures,
+            sampler,
+            ("material_words", ctx.bind(words)),
+        ];
         ctx.draw_objects(&key, &bindings, &targets, Some(DepthTarget { texture: depth, layer: 0, clear: false }));
     });
     gb

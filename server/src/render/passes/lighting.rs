@@ -3,9 +3,9 @@
 //! environment's light (its irradiance and split-sum specular, with the
 //! GGX table of `render/dfg.rs`); the environment behind the geometry.
 
-use super::gbuffer::GBuffer;
-use super::{LIGHTS, MATERIAL_INSTANCES, MATERIAL_PARAMS, MATERIAL_SAMPLER, MATERIAL_TEXTURES, MEDIA, SHADOW_GROUP, SHADOWS, TWO_TRIANGLES, VIEW, fullscreen_key, material_bindings};
-use crate::gpu::pipeline::{Group, HDR, PipelineSpec, Stages, depth_texture, texture};
+use super::gbuffer::{GBuffer, WORDS_BINDING};
+use super::{LIGHTS, MEDIA, SHADOW_GROUP, SHADOWS, TWO_TRIANGLES, VIEW, fullscreen_key};
+use crate::gpu::pipeline::{FRAG, Group, HDR, PipelineSpec, Stages, depth_texture, storage, texture};
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Meaning, Handle, TextureDesc};
 use crate::scene::Scene;
@@ -23,7 +23,9 @@ pub static DEFERRED: PipelineSpec = PipelineSpec {
     shader: "passes/lighting.wgsl",
     stages: Stages::Fullscreen { fragment: "fs_main", targets: &[HDR] },
     groups: &[
-        Group::always(0, &[VIEW, LIGHTS, texture("gbuffer_normal", 2), texture("gbuffer_uv", 3), texture("gbuffer_material", 4), depth_texture("depth", 5), texture("dfg", 6), MATERIAL_PARAMS, MATERIAL_INSTANCES, MATERIAL_TEXTURES, MATERIAL_SAMPLER]),
+        // Depth and the material buffer: the G-buffer's other targets are
+        // for the inspector and the debug views.
+        Group::always(0, &[VIEW, LIGHTS, depth_texture("depth", 5), texture("dfg", 6), storage("material_words", WORDS_BINDING, FRAG)]),
         SHADOW_GROUP,
         Group::when(2, LIGHT_RECT, &[texture("ltc_matrix", 0), texture("ltc_amplitude", 1)]),
         Group::when(3, MEDIA_SHADOWS, MEDIA),
@@ -38,12 +40,11 @@ pub fn lighting(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle
     let sampled = scene.has_rect_lights() && scene.quality.rect_lights == RectLights::Sampled;
     let defs = [(SHADOWS, shadows.is_some()), (LIGHT_RECT, ltc.is_some()), (RECT_SAMPLED, sampled), (MEDIA_SHADOWS, media)];
     let key = p.pipeline(fullscreen_key(&DEFERRED, scene, &defs));
-    let inputs = [("gbuffer_normal", gb.normal), ("gbuffer_uv", gb.uv), ("gbuffer_material", gb.material), ("depth", depth)];
-    for (_, h) in inputs {
-        p.sample(h);
-    }
+    p.sample(depth);
+    p.access(gb.words, Access::StorageRead);
     let shadow_maps = shadows.map(|h| p.sample(h));
     let ltc = ltc.map(|t| t.map(|h| p.sample(h)));
+    let gb_words = gb.words;
     let color = p.create("color", Meaning::Color, TextureDesc::d2(HDR, scene.width, scene.height), Access::ColorTarget);
     p.execute(move |ctx| {
         let s = ctx.scene;
@@ -53,8 +54,7 @@ pub fn lighting(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle
             ("media", s.media.as_entire_binding()),
             ("dfg", wgpu::BindingResource::TextureView(&s.dfg)),
         ];
-        b.extend(inputs.map(|(name, h)| (name, ctx.bind(h))));
-        b.extend(material_bindings(s));
+        b.extend([("depth", ctx.bind(depth)), ("material_words", ctx.bind(gb_words))]);
         if let Some(h) = shadow_maps {
             b.extend([("shadow_maps", ctx.bind(h)), ("shadow_views", s.shadow_views.as_entire_binding())]);
         }
