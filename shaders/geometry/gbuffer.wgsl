@@ -5,7 +5,7 @@
 // textures sampled here, with this pass's derivatives and the vertex
 // tangent; the view-dependent parts at this pixel's view direction),
 // quantised by `material_pack` into the smallest storage class that holds
-// it: simple 12 B, single 8 B + 16 B and its features' words, complex the
+// it: simple 16 B, single 8 B + 16 B and its features' words, complex the
 // same per closure (docs/materials.md "Storage classes"). Word k of pixel i
 // sits at k * width * height + i, so a pixel with few words touches few
 // cache lines. Pixels without geometry write nothing.
@@ -25,6 +25,11 @@
 #import loupe::material::{MaterialPoint, material_surface_at, material_pack_at, material_base_color, material_metallic, material_roughness}
 
 @group(0) @binding(14) var<storage, read_write> material_words: array<u32>;
+// The depth pre-pass's, attached read-only: a shader that writes storage
+// runs for fragments the depth test then discards (no early test is
+// guaranteed), so the words are written only where this fragment is the
+// one the test keeps.
+@group(0) @binding(15) var depth: texture_depth_2d;
 
 struct Varyings {
     @builtin(position) position: vec4<f32>,
@@ -63,7 +68,8 @@ fn fs_main(in: Varyings, @builtin(front_facing) front: bool) -> GBuffer {
     let width = u32(view.params.x);
     let plane = width * u32(view.params.y);
     let packed = material_pack_at(id, s, n, false, pixel);
-    for (var k = 0u; k < packed.count; k++) {
+    let visible = in.position.z <= textureLoad(depth, pixel, 0);
+    for (var k = 0u; k < select(0u, packed.count, visible); k++) {
         material_words[k * plane + pixel.y * width + pixel.x] = packed.words[k];
     }
     let metallic = material_metallic(s);

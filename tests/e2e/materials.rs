@@ -98,9 +98,12 @@ fn a_material_edit_reaches_the_frame_and_a_broken_one_keeps_the_last_good_until_
 /// by the last build before it (`tests/golden/images/`, 96×54, one sample
 /// per pixel). The path tracer reads the same f32 values and runs the same
 /// arithmetic: within 1e-4. The raster's G-buffer used to hold the
-/// shorthand's values as f16; the lighting pass now reads them at f32, so
-/// its lit colour may move by the rounding of those values: at most 2⁻⁹ of
-/// the value (two half-float steps of the f16 target), plus 1e-4.
+/// shorthand's values and the normal as f16; the material buffer holds the
+/// values as f16 still (the simple storage class) and the normal
+/// octahedrally (16 + 16 bits, within 1e-4 rad, where f16 components were
+/// off by up to about 2.4e-4), so the lit colour moves by the two normals'
+/// difference: at most 2⁻⁸ of the value plus 1e-4 (measured: 0.25 % at
+/// the old showcase's metal highlight, 0.2 % on the minimal scene).
 #[test]
 fn the_bundled_scenes_render_what_they_rendered_before_materials() {
     let p = Project::copy_of_repo("materials-unchanged");
@@ -110,7 +113,7 @@ fn the_bundled_scenes_render_what_they_rendered_before_materials() {
     p.write("scenes/showcase_shorthand.toml", std::fs::read(golden.join("showcase_shorthand.toml")).expect("the old showcase"));
     for (scene, file) in [("minimal", "minimal"), ("showcase", "showcase_shorthand")] {
         for (renderer, outputs, relative) in
-            [("raster", &["lighting.color", "volumes.color"][..], 2f32.powi(-9)), ("path", &["path_trace.color"][..], 0.0)]
+            [("raster", &["lighting.color", "volumes.color"][..], 2f32.powi(-8)), ("path", &["path_trace.color"][..], 0.0)]
         {
             let out = format!("out-{scene}-{renderer}");
             let scene_file = format!("scenes/{file}.toml");

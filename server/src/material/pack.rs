@@ -29,8 +29,10 @@ pub const SINGLE: u32 = 1;
 pub const COMPLEX: u32 = 2;
 /// The words the header and the normal take in every class.
 pub const HEADER_WORDS: u32 = 2;
-/// A simple pixel's words: header, normal, base colour and roughness.
-pub const SIMPLE_WORDS: u32 = 3;
+/// A simple pixel's words: header (with metallic), normal, base colour
+/// and roughness as f16, the precision of the G-buffer before it was
+/// packed, so the scene file's shorthand keeps its image.
+pub const SIMPLE_WORDS: u32 = 4;
 /// A closure's core: weight, base colour, F0, roughness/metallic/F90.
 pub const CORE_WORDS: u32 = 4;
 
@@ -207,10 +209,11 @@ pub fn write(w: &mut String, definitions: &[Definition], f: Features) {
     unpack(w, f);
 }
 
-/// Whether a closure fits the simple class: weight 1, grey F0, every
+/// Whether a closure fits the simple class: weight 1, the shorthand's F0
+/// of its base colour and metalness (unpacking recomputes it), every
 /// optional field neutral.
 fn simple(w: &mut String, f: Features) {
-    w.push_str("fn closure_is_simple(c: Closure) -> bool {\n    var simple = all(c.weight == vec3(1.0)) && c.reflectance.r == c.reflectance.g && c.reflectance.g == c.reflectance.b;\n");
+    w.push_str("fn closure_is_simple(c: Closure) -> bool {\n    var simple = all(c.weight == vec3(1.0)) && all(abs(c.reflectance - specular_f0(c.base_color, c.metallic)) <= vec3(1e-6));\n");
     let tests = [
         (f.edge, "all(c.edge == vec3(1.0))"),
         (f.haze, "c.haze.x == 0.0"),
@@ -242,8 +245,9 @@ fn material_pack(s: Surface, n: vec3<f32>, definition: u32, compensated: bool, s
     p.words[1] = pack_octahedral(n, 16u);
     let first = s.closures[0];
     if s.count == 1u && closure_is_simple(first) {{
-        p.words[0] = MATERIAL_SIMPLE | (1u << 2u) | flags | (unorm_encode(first.metallic, 8u, 0.0) << 8u) | (unorm_encode(sqrt(first.reflectance.g), 8u, 0.0) << 16u);
-        p.words[2] = pack_sqrt3(first.base_color, 8u, dither) | (unorm_encode(first.roughness, 8u, 0.0) << 24u);
+        p.words[0] = MATERIAL_SIMPLE | (1u << 2u) | flags | (unorm_encode(first.metallic, 12u, 0.0) << 8u);
+        p.words[2] = pack2x16float(first.base_color.rg);
+        p.words[3] = pack2x16float(vec2(first.base_color.b, first.roughness));
         p.count = {SIMPLE_WORDS}u;
         return p;
     }}
@@ -277,8 +281,10 @@ fn material_unpack(words: array<u32, MATERIAL_WORDS>, v: vec3<f32>) -> UnpackedM
     let n = unpack_octahedral(words[1], 16u);
     if (header & 3u) == MATERIAL_SIMPLE {{
         s.count = 1u;
-        let grey = unorm_decode(header, 16u, 8u);
-        s.closures[0] = make_closure(unpack_sqrt3(words[2], 8u), unorm_decode(header, 8u, 8u), vec3(grey * grey), unorm_decode(words[2], 24u, 8u));
+        let b_roughness = unpack2x16float(words[3]);
+        let base = vec3(unpack2x16float(words[2]), b_roughness.x);
+        let metallic = unorm_decode(header, 8u, 12u);
+        s.closures[0] = make_closure(base, metallic, specular_f0(base, metallic), b_roughness.y);
     }} else {{
         s.count = (header >> 2u) & 7u;
         var w = {HEADER_WORDS}u;

@@ -328,10 +328,10 @@ impl<'a> PassContext<'a> {
         let depth_view = depth.map(|d| self.layer(d.texture, d.layer));
         let depth = depth.zip(depth_view.as_ref()).map(|(d, view)| wgpu::RenderPassDepthStencilAttachment {
             view,
-            depth_ops: Some(wgpu::Operations {
-                load: if d.clear { wgpu::LoadOp::Clear(DEPTH_CLEAR) } else { wgpu::LoadOp::Load },
-                store: wgpu::StoreOp::Store,
-            }),
+            // Tested against only: read-only, so the pass may also read it
+            // (the G-buffer does, to write its storage words from the
+            // visible fragment alone).
+            depth_ops: d.clear.then_some(wgpu::Operations { load: wgpu::LoadOp::Clear(DEPTH_CLEAR), store: wgpu::StoreOp::Store }),
             stencil_ops: None,
         });
         let scene = self.scene;

@@ -128,10 +128,16 @@ fn case(r: &mut Lcg, unit: &mut dyn FnMut(&mut Lcg) -> f32, big: &mut dyn FnMut(
     ]
 }
 
-/// The same closure made simple: weight 1, grey F0, no optional field.
+/// The same closure made simple: weight 1, the shorthand's F0 (base
+/// colour and metallic in range, as `init` leaves them), no optional field.
 fn simple(mut c: Case) -> Case {
-    c[0] = [1.0, 1.0, 1.0, c[0][3]];
-    c[2] = [c[2][0], c[2][0], c[2][0], 0.0];
+    let m = c[0][3].clamp(0.0, 1.0);
+    c[0] = [1.0, 1.0, 1.0, m];
+    for i in 0..3 {
+        c[1][i] = c[1][i].clamp(0.0, 1.0);
+    }
+    c[1][3] = c[1][3].clamp(0.0, 1.0);
+    c[2] = [0, 1, 2].map(|i| 0.04 + (c[1][i] - 0.04) * m).into_iter().chain([0.0]).collect::<Vec<_>>().try_into().unwrap();
     c[3] = [1.0, 1.0, 1.0, c[3][3]];
     c[4] = [0.0, 0.0, 0.0, c[4][3]];
     c[5] = [0.0, 0.0, 0.0, 0.0];
@@ -191,6 +197,12 @@ fn rgb9e5(errors: &mut Vec<String>, case: usize, name: &str, got: [f32; 4], want
     }
 }
 
+/// An f16 channel: half a step, 2⁻¹¹ of the value (2⁻²⁵ below f16's
+/// normal range).
+fn half(errors: &mut Vec<String>, case: usize, name: &str, got: f32, want: f32) {
+    check(errors, case, name, got, want, f64::from(want.abs()) * 2f64.powi(-11) + 2f64.powi(-25));
+}
+
 /// An 8-bit sqrt-encoded channel, dithered: one step of √c.
 fn sqrt8(errors: &mut Vec<String>, case: usize, name: &str, got: f32, want: f32) {
     let root = want.clamp(0.0, 1.0).sqrt();
@@ -226,15 +238,16 @@ fn every_field_round_trips_within_its_bound() {
         check(&mut errors, k, "closures", o[11][0], closures, 0.0);
         check(&mut errors, k, "geometry normal (rad)", angle(o[10], i[10]) as f32, 0.0, 1e-4);
         if definition == 1 {
-            // Simple: 8-bit fields in 3 words.
+            // Simple: f16 base colour and roughness, 12-bit metallic, F0
+            // recomputed from them.
             check(&mut errors, k, "class", class as f32, 0.0, 0.0);
             check(&mut errors, k, "words", written as f32, SIMPLE_WORDS as f32, 0.0);
             for c in 0..3 {
-                sqrt8(&mut errors, k, "base colour", o[1][c], i[1][c]);
-                check(&mut errors, k, "grey F0", o[2][c].sqrt(), i[2][0].clamp(0.0, 1.0).sqrt(), 1.0 / 510.0);
+                half(&mut errors, k, "base colour", o[1][c], i[1][c]);
+                check(&mut errors, k, "F0", o[2][c], i[2][c], f64::from(i[2][c]) * 2f64.powi(-11) + 1.0 / 8190.0);
             }
-            check(&mut errors, k, "roughness", o[1][3], i[1][3].clamp(0.0, 1.0), 1.0 / 510.0);
-            check(&mut errors, k, "metallic", o[0][3], i[0][3].clamp(0.0, 1.0), 1.0 / 510.0);
+            half(&mut errors, k, "roughness", o[1][3], i[1][3]);
+            check(&mut errors, k, "metallic", o[0][3], i[0][3], 1.0 / 8190.0);
             continue;
         }
         check(&mut errors, k, "class", class as f32, closures, 0.0);

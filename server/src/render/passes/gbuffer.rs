@@ -1,7 +1,7 @@
 //! Surface attributes per pixel (layout in `geometry/gbuffer.wgsl`).
 
 use super::{MATERIAL_INSTANCES, MATERIAL_PARAMS, MATERIAL_SAMPLER, MATERIAL_TEXTURES, VIEW, material_bindings};
-use crate::gpu::pipeline::{ALL, Depth, Group, HDR, PipelineSpec, Stages, storage, storage_rw_fragment};
+use crate::gpu::pipeline::{ALL, Depth, Group, HDR, PipelineSpec, Stages, depth_texture, storage, storage_rw_fragment};
 use crate::render::context::DepthTarget;
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::material::pack;
@@ -30,7 +30,7 @@ pub static GBUFFER: PipelineSpec = PipelineSpec {
     stages: Stages::Mesh { vertex: "vs_main", fragment: Some("fs_main"), targets: &[HDR, HDR, HDR, UV], depth: Depth::Equal },
     groups: &[Group::always(
         0,
-        &[VIEW, storage("objects", 1, ALL), MATERIAL_PARAMS, MATERIAL_INSTANCES, MATERIAL_TEXTURES, MATERIAL_SAMPLER, storage_rw_fragment("material_words", WORDS_BINDING)],
+        &[VIEW, storage("objects", 1, ALL), MATERIAL_PARAMS, MATERIAL_INSTANCES, MATERIAL_TEXTURES, MATERIAL_SAMPLER, storage_rw_fragment("material_words", WORDS_BINDING), depth_texture("depth", WORDS_BINDING + 1)],
     )],
     defs: &[],
 };
@@ -58,6 +58,7 @@ pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle, material_word
     let mut p = g.pass("gbuffer", PassKind::Raster);
     let key = p.pipeline(PipelineKey::new(&GBUFFER, &[]));
     p.access(depth, Access::DepthTest);
+    p.sample(depth);
     let gb = GBuffer {
         normal: p.create("normal", Meaning::Normal, d.clone(), Access::ColorTarget),
         albedo: p.create("albedo", Meaning::Color, d.clone(), Access::ColorTarget),
@@ -83,6 +84,7 @@ pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle, material_word
             textures,
             sampler,
             ("material_words", ctx.bind(words)),
+            ("depth", ctx.bind(depth)),
         ];
         ctx.draw_objects(&key, &bindings, &targets, Some(DepthTarget { texture: depth, layer: 0, clear: false }));
     });

@@ -341,7 +341,7 @@ fn closure_mask(definition: u32, k: u32) -> u32 {
 // The words a pixel takes, from its header alone.
 fn material_word_count(header: u32) -> u32 {
     if (header & 3u) == MATERIAL_SIMPLE {
-        return 3u;
+        return 4u;
     }
     var w = 2u;
     for (var k = 0u; k < ((header >> 2u) & 7u); k++) {
@@ -358,7 +358,7 @@ fn closure_extra_words(mask: u32) -> u32 {
 }
 
 fn closure_is_simple(c: Closure) -> bool {
-    var simple = all(c.weight == vec3(1.0)) && c.reflectance.r == c.reflectance.g && c.reflectance.g == c.reflectance.b;
+    var simple = all(c.weight == vec3(1.0)) && all(abs(c.reflectance - specular_f0(c.base_color, c.metallic)) <= vec3(1e-6));
     simple = simple && all(c.edge == vec3(1.0));
     simple = simple && all(c.fuzz_color == vec3(0.0));
     return simple;
@@ -375,9 +375,10 @@ fn material_pack(s: Surface, n: vec3<f32>, definition: u32, compensated: bool, s
     p.words[1] = pack_octahedral(n, 16u);
     let first = s.closures[0];
     if s.count == 1u && closure_is_simple(first) {
-        p.words[0] = MATERIAL_SIMPLE | (1u << 2u) | flags | (unorm_encode(first.metallic, 8u, 0.0) << 8u) | (unorm_encode(sqrt(first.reflectance.g), 8u, 0.0) << 16u);
-        p.words[2] = pack_sqrt3(first.base_color, 8u, dither) | (unorm_encode(first.roughness, 8u, 0.0) << 24u);
-        p.count = 3u;
+        p.words[0] = MATERIAL_SIMPLE | (1u << 2u) | flags | (unorm_encode(first.metallic, 12u, 0.0) << 8u);
+        p.words[2] = pack2x16float(first.base_color.rg);
+        p.words[3] = pack2x16float(vec2(first.base_color.b, first.roughness));
+        p.count = 4u;
         return p;
     }
     p.words[0] = select(MATERIAL_COMPLEX, MATERIAL_SINGLE, s.count == 1u) | (s.count << 2u) | flags | (definition << 8u);
@@ -411,8 +412,10 @@ fn material_unpack(words: array<u32, MATERIAL_WORDS>, v: vec3<f32>) -> UnpackedM
     let n = unpack_octahedral(words[1], 16u);
     if (header & 3u) == MATERIAL_SIMPLE {
         s.count = 1u;
-        let grey = unorm_decode(header, 16u, 8u);
-        s.closures[0] = make_closure(unpack_sqrt3(words[2], 8u), unorm_decode(header, 8u, 8u), vec3(grey * grey), unorm_decode(words[2], 24u, 8u));
+        let b_roughness = unpack2x16float(words[3]);
+        let base = vec3(unpack2x16float(words[2]), b_roughness.x);
+        let metallic = unorm_decode(header, 8u, 12u);
+        s.closures[0] = make_closure(base, metallic, specular_f0(base, metallic), b_roughness.y);
     } else {
         s.count = (header >> 2u) & 7u;
         var w = 2u;
