@@ -252,6 +252,23 @@ fn the_starter_library_generates_its_golden_wgsl() {
     }
 }
 
+/// The car paint (a coat over a mix) simplified to the smallest budget:
+/// one slab, its flag set (`tests/golden/materials/generated/car_paint_24.wgsl`).
+#[test]
+fn a_simplified_library_material_generates_its_golden_wgsl() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let loaded = super::front::load(&root.join("scenes/materials/car_paint.mat")).unwrap_or_else(|d| panic!("{d:?}"));
+    let s = super::simplify::simplify(&super::analysed(&loaded.definitions[0]).unwrap().def, super::layout::MIN_BYTES);
+    let text = back::module(std::slice::from_ref(&s.def), Bindings::RENDERER, back::IMPORT_PATH, &[s.simplified()]);
+    let expected = root.join("tests/golden/materials/generated/car_paint_24.wgsl");
+    if std::env::var_os("LOUPE_BLESS").is_some() {
+        std::fs::write(&expected, &text).unwrap();
+        return;
+    }
+    let want = std::fs::read_to_string(&expected).unwrap_or_else(|e| panic!("{}: {e} (LOUPE_BLESS=1 writes it)", expected.display()));
+    assert!(want == text, "the simplified car paint's WGSL changed; LOUPE_BLESS=1 cargo test -p loupe --lib material:: rewrites it");
+}
+
 /// `mean_free_path: transmittance_to_mfp(C, d)` keeps what a transmission
 /// colour of C^(1/d) per unit did: through a layer's top (absorption) and
 /// through a thin wall (transmission), the same evaluation either way.
