@@ -439,9 +439,13 @@ impl Exprs<'_> {
         let lobe =
             top.get(Field::SpecularWeight).is_none_or(|e| !matches!(self.def.expr(e).kind, ExprKind::Const(Value::Float(w)) if w <= 0.0));
         if clear && dielectric && lobe && base.get(Field::HazeWeight).is_none() {
+            // ((η − 1) / (η + 1))² × specular weight, written out: the
+            // back end's `ior_to_f0` is a colour in WGSL.
             let f0 = |e: &mut Self, s: &Slab| {
                 let ior = e.field(s, Field::SpecularIor);
-                let f0 = e.call(Builtin::IorToF0, &[ior], Type::Float);
+                let (up, down) = (e.bin(BinOp::Sub, ior, one), e.bin(BinOp::Add, ior, one));
+                let r = e.bin(BinOp::Div, up, down);
+                let f0 = e.bin(BinOp::Mul, r, r);
                 let w = e.field(s, Field::SpecularWeight);
                 e.bin(BinOp::Mul, f0, w)
             };
