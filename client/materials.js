@@ -76,7 +76,10 @@ export class MaterialsPanel {
     // values change.
     const key = (r) => JSON.stringify(r?.materials[this.selected] ? [r.materials[this.selected].params.map((p) => p.path), r.definitions[r.materials[this.selected].definition]?.nodes] : null);
     if (key(before) !== key(report)) this.show();
-    else this.values();
+    else {
+      this.values();
+      this.refreshReport();
+    }
     // Any change to a material (its file, an override) changes the report.
     if (JSON.stringify(before) !== JSON.stringify(report)) this.preview.show(this.selected);
     this.lookUp();
@@ -104,6 +107,14 @@ export class MaterialsPanel {
     this.details.replaceChildren(...reportRows(def));
     this.params.replaceChildren(...m.params.flatMap((p) => this.rows(p)));
     this.values();
+  }
+
+  /** The selected material's report rows alone: what a changed budget
+   *  (`quality.material_bytes`) changes without touching the tree. */
+  refreshReport() {
+    const m = this.report?.materials[this.selected];
+    const def = m && this.report.definitions[m.definition];
+    if (def) this.details.replaceChildren(...reportRows(def));
   }
 
   /** A parameter's rows: one slider, or one per colour channel; or one
