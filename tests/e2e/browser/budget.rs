@@ -35,7 +35,9 @@ async fn the_materials_panel_shows_what_the_budget_did_and_follows_it() {
     let mut ws = s.ws();
     ws.event("hello", LIMIT, |_| true);
     ws.send(json!({ "type": "set_override", "path": "quality.material_bytes", "value": 80 }));
-    s.wait_for("the server's budget 80", LIMIT, || (s.get_json("/api/materials")["definitions"][0]["budget"]["budget"] == 80).then_some(()));
+    s.wait_for("the server's budget 80", LIMIT, || {
+        (s.get_json("/api/materials")["definitions"][0]["budget"]["budget"] == 80).then_some(())
+    });
     until(&c, &s, "the whole car paint", &format!("{} === '56 → 56 B/px of 80 (complex → complex)'", row("budget"))).await;
     assert_eq!(until(&c, &s, "not simplified", &row("simplified")).await, "no (fits)");
     assert_eq!(until(&c, &s, "its three closures", &row("closures_kept")).await, "3");
