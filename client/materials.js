@@ -76,7 +76,10 @@ export class MaterialsPanel {
     // values change.
     const key = (r) => JSON.stringify(r?.materials[this.selected] ? [r.materials[this.selected].params.map((p) => p.path), r.definitions[r.materials[this.selected].definition]?.nodes] : null);
     if (key(before) !== key(report)) this.show();
-    else this.values();
+    else {
+      this.values();
+      this.refreshReport();
+    }
     // Any change to a material (its file, an override) changes the report.
     if (JSON.stringify(before) !== JSON.stringify(report)) this.preview.show(this.selected);
     this.lookUp();
@@ -104,6 +107,14 @@ export class MaterialsPanel {
     this.details.replaceChildren(...reportRows(def));
     this.params.replaceChildren(...m.params.flatMap((p) => this.rows(p)));
     this.values();
+  }
+
+  /** The selected material's report rows alone: what a changed budget
+   *  (`quality.material_bytes`) changes without touching the tree. */
+  refreshReport() {
+    const m = this.report?.materials[this.selected];
+    const def = m && this.report.definitions[m.definition];
+    if (def) this.details.replaceChildren(...reportRows(def));
   }
 
   /** A parameter's rows: one slider, or one per colour channel; or one
@@ -211,6 +222,19 @@ function node(byId, id) {
   return el('details', { open: true, 'data-node': n.id, 'data-kind': n.kind }, summary, ...fields, ...n.children.map((c) => node(byId, c)));
 }
 
+/** What `quality.material_bytes` did to the material: bytes and storage
+ *  class before → after, the rules applied (each at the node of the full
+ *  tree above that it collapsed or trimmed), the closures the raster keeps. */
+function budgetRows(b, row) {
+  if (!b) return [];
+  const rules = b.rules.map((r) => `${r.rule} #${r.node} → ${r.bytes} B`).join(', ');
+  return [
+    ...row('budget', 'budget', `${b.bytes_before} → ${b.bytes_after} B/px of ${b.budget} (${b.class_before} → ${b.class_after})`),
+    ...row('simplified', 'simplified', b.simplified ? `yes: ${rules}` : 'no (fits)'),
+    ...row('closures_kept', 'closures kept', `${b.closures_kept}`),
+  ];
+}
+
 function reportRows(def) {
   const row = (key, label, value) => [el('dt', {}, label), el('dd', { 'data-key': key }, value)];
   const energy = def.energy_conserving ? 'yes' : `no: ${def.energy_reasons.join('; ')}`;
@@ -219,6 +243,7 @@ function reportRows(def) {
     ...row('features', 'features', def.features.join(', ') || 'none'),
     ...row('energy', 'energy-conserving', energy),
     ...row('gbuffer', 'G-buffer', `${def.gbuffer_bytes_per_pixel} B/px`),
+    ...budgetRows(def.budget, row),
     ...row('wgsl', 'WGSL', def.wgsl_bytes === null ? '—' : `${def.wgsl_bytes} bytes`),
     ...row('compile', 'compile', def.compile_ms === null ? '—' : `${def.compile_ms.toFixed(2)} ms`),
   ];

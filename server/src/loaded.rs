@@ -71,6 +71,7 @@ pub fn load_keeping(path: &Path, overrides: &Overrides, keep: Option<&Keep<'_>>)
     let scene::Read { mut scene, mut meshes, mut files } = scene::load_keeping(path, overrides, &kept_mesh)?;
     let (mut materials, mut reports) = materials(path, &scene, &mut files)?;
     let mut warnings = gltf_objects::split(dir, &mut scene, &mut meshes, &mut materials, &mut reports)?;
+    simplify(&mut materials, &mut reports, &scene);
     let kept_layers = keep.and_then(|k| {
         let sources = |p: &Program| p.textures.iter().map(|t| (t.path.clone(), t.space)).collect::<Vec<_>>();
         let paths: Vec<PathBuf> = materials.textures.iter().map(|t| t.path.clone()).collect();
@@ -125,7 +126,8 @@ fn network(dir: &Path, d: &Denoiser, files: &mut Vec<PathBuf>) -> Result<Network
 /// relative to the working directory; a failure panics.
 #[cfg(any(test, feature = "testing"))]
 pub fn materials_of(scene: &Scene) -> Arc<Program> {
-    let mut program = materials(Path::new("scene.toml"), scene, &mut Vec::new()).unwrap_or_else(|d| panic!("{d}")).0;
+    let (mut program, mut reports) = materials(Path::new("scene.toml"), scene, &mut Vec::new()).unwrap_or_else(|d| panic!("{d}"));
+    simplify(&mut program, &mut reports, scene);
     read_textures(&mut program, &mut Vec::new(), None).unwrap_or_else(|d| panic!("{d}"));
     Arc::new(program)
 }
@@ -252,6 +254,15 @@ fn read_textures(
         .collect();
     program.layers = layers;
     Ok(warnings)
+}
+
+/// Brings the program to the scene's `quality.material_bytes` and puts
+/// what that did in each definition's report.
+fn simplify(program: &mut Program, reports: &mut [Report], scene: &Scene) {
+    program.simplify(scene.quality.material_bytes, scene.quality.path_simplified_materials);
+    for (report, s) in reports.iter_mut().zip(&program.simplified) {
+        report.budget = Some(crate::material::report::Budget::of(s));
+    }
 }
 
 /// An analysed definition and its report, whose WGSL size is that of the

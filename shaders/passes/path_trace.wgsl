@@ -17,7 +17,7 @@
 #import loupe::view::{view, world_position}
 #import loupe::lights::{Light, lights, incident, light_type, rect_area, rect_cosine, LIGHT_RECT}
 #import loupe::brdf::{basis, cosine_direction, PI}
-#import loupe::material::{Surface, material_init_at, material_point, material_eval, material_pdf, material_sample, material_emission, material_base_color}
+#import loupe::material_path::{Surface, material_init_at, material_point, material_eval, material_pdf, material_sample, material_emission, material_base_color}
 #import loupe::environment::environment_radiance
 #import loupe::random::{random_key, random_f32}
 #import loupe::bvh::{trace, occluded, triangles, NO_HIT}
@@ -25,7 +25,7 @@
 #import loupe::media::{media, media_span, coefficients}
 #endif
 #ifdef MATERIAL_TRANSMISSION
-#import loupe::material::{material_inside, material_medium}
+#import loupe::material_path::{material_inside, material_medium}
 #endif
 
 struct Shading {

@@ -121,7 +121,8 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
         .chain(materials.iter().flat_map(|(_, d)| d.iter()));
     // Only a tree that imports the module gets it: someone else's WGSL is
     // checked as it is.
-    if lib.files().any(|f| f.imports.iter().any(|(m, _)| m == crate::material::back::IMPORT_PATH)) {
+    let material_paths = [crate::material::back::IMPORT_PATH, crate::material::back::PATH_IMPORT_PATH];
+    if lib.files().any(|f| f.imports.iter().any(|(m, _)| material_paths.contains(&m.as_str()))) {
         crate::render::session::material_module(&mut lib, &opts.shader_root, &project_materials(definitions));
     }
     let specs_by_file = specs_by_display(&lib, &shader_root);
@@ -309,6 +310,9 @@ fn project_materials<'a>(definitions: impl Iterator<Item = &'a Definition>) -> P
             program.definitions.push(d.clone());
         }
     }
+    // The raster's module holds them simplified at the default budget, so
+    // the gate sees the simplification's code too.
+    program.simplify(crate::scene::settings::Quality::default().material_bytes, false);
     program
 }
 

@@ -11,9 +11,11 @@ pub mod back;
 mod build;
 pub mod front;
 pub mod gltf;
+pub mod layout;
 pub mod operators;
 pub mod pack;
 pub mod report;
+pub mod simplify;
 pub mod texture;
 pub mod tree;
 
@@ -27,7 +29,16 @@ use tree::{Definition, Expr, ExprId, ExprKind, Field, Node, NodeId, NodeKind, Pa
 /// object's material index is its instance).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Program {
+    /// The full definitions: the path tracer's truth.
     pub definitions: Vec<Definition>,
+    /// Each of `definitions` brought to `quality.material_bytes`, index for
+    /// index (the definition itself where it fits): what the raster
+    /// compiles. Empty until `simplify` runs; the raster then compiles
+    /// `definitions`.
+    pub simplified: Vec<simplify::Simplified>,
+    /// `quality.path_simplified_materials`: the path tracer compiles the
+    /// simplified definitions too, to see what the budget costs.
+    pub path_simplified: bool,
     pub instances: Vec<Instance>,
     /// The images the definitions' defaults and the instances name, each
     /// once (`Value::Texture` indexes it).
@@ -49,9 +60,35 @@ pub struct Instance {
 }
 
 impl Program {
-    /// The WGSL module every material pass imports.
+    /// Brings every definition to `budget` bytes per pixel.
+    pub fn simplify(&mut self, budget: u32, path_simplified: bool) {
+        self.simplified = self.definitions.iter().map(|d| simplify::simplify(d, budget)).collect();
+        self.path_simplified = path_simplified;
+    }
+
+    /// The raster's module (`back::IMPORT_PATH`): the simplified definitions.
     pub fn wgsl(&self) -> String {
-        back::wgsl(&self.definitions, back::Bindings::RENDERER)
+        self.module(true, back::IMPORT_PATH)
+    }
+
+    /// The path tracer's module (`back::PATH_IMPORT_PATH`): the full
+    /// definitions, or the simplified ones when `path_simplified`.
+    pub fn path_wgsl(&self) -> String {
+        self.module(self.path_simplified, back::PATH_IMPORT_PATH)
+    }
+
+    fn module(&self, simplified: bool, import_path: &str) -> String {
+        let (definitions, flags): (Vec<Definition>, Vec<bool>) = if simplified && !self.simplified.is_empty() {
+            self.simplified.iter().map(|s| (s.def.clone(), s.simplified())).unzip()
+        } else {
+            (self.definitions.clone(), vec![false; self.definitions.len()])
+        };
+        back::module(&definitions, back::Bindings::RENDERER, import_path, &flags)
+    }
+
+    /// Whether `other` generates the same two modules.
+    pub fn same_code(&self, other: &Program) -> bool {
+        self.definitions == other.definitions && self.simplified == other.simplified && self.path_simplified == other.path_simplified
     }
 
     /// The two buffers the module reads: the parameters (one `vec4` each,

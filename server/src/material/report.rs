@@ -8,6 +8,8 @@
 use serde::Serialize;
 
 use super::analysis::{Analysis, Breach, Feature, children};
+use super::layout::{StorageClass, leaves};
+use super::simplify::{Rule, Simplified};
 use super::tree::{BinOp, Definition, ExprId, ExprKind, NodeKind, Value};
 use crate::diag::Location;
 
@@ -31,10 +33,48 @@ pub struct Report {
     /// until the renderer's figure is filled in (the daemon does, from
     /// `render::passes::gbuffer::BYTES_PER_PIXEL`).
     pub gbuffer_bytes_per_pixel: Option<u32>,
+    /// The material brought to `quality.material_bytes`; `None` until the
+    /// loader has simplified the program.
+    pub budget: Option<Budget>,
     /// The generated WGSL's size; `None` until the back end has run.
     pub wgsl_bytes: Option<usize>,
     /// Parse to WGSL, in milliseconds; `None` until the back end has run.
     pub compile_ms: Option<f64>,
+}
+
+/// What the budget did to a material (`simplify`): the adaptive
+/// G-buffer's bytes per pixel and storage class before and after, the
+/// rules applied, each with the node of the tree above it changed, and the
+/// closures the raster keeps.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Budget {
+    /// `quality.material_bytes`.
+    pub budget: u32,
+    pub bytes_before: u32,
+    pub bytes_after: u32,
+    pub class_before: StorageClass,
+    pub class_after: StorageClass,
+    /// Whether the raster renders a simplified tree ("simplified here").
+    pub simplified: bool,
+    pub rules: Vec<Rule>,
+    /// The closures the raster's tree makes (the full tree's: `closures`
+    /// counted once per path that reaches them).
+    pub closures_kept: u32,
+}
+
+impl Budget {
+    pub fn of(s: &Simplified) -> Budget {
+        Budget {
+            budget: s.budget,
+            bytes_before: s.bytes_before,
+            bytes_after: s.bytes_after,
+            class_before: s.class_before,
+            class_after: s.class_after,
+            simplified: s.simplified(),
+            rules: s.rules.clone(),
+            closures_kept: leaves(&s.def, s.def.root).len() as u32,
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -96,6 +136,7 @@ impl Report {
             energy_conserving: analysis.energy_conserving(),
             energy_reasons: analysis.breaches.iter().map(breach_text).collect(),
             gbuffer_bytes_per_pixel: None,
+            budget: None,
             wgsl_bytes: None,
             compile_ms: None,
         }
@@ -219,7 +260,9 @@ mod tests {
         let rough = b.param("coat_roughness", Type::Float, Value::Float(0.03), Some((0.0, 1.0)));
         let coat = b.slab(&[(Field::BaseColor, black), (Field::SpecularRoughness, rough)]);
         let root = b.layer(coat, base);
-        let mut report = Report::new(&analyse(&b.finish(root)));
+        let analysis = analyse(&b.finish(root));
+        let mut report = Report::new(&analysis);
+        report.budget = Some(Budget::of(&super::super::simplify::simplify(&analysis.def, 28)));
         report.gbuffer_bytes_per_pixel = Some(36);
         report.wgsl_bytes = Some(4096);
         let expected = json!({
@@ -250,6 +293,16 @@ mod tests {
             "energy_conserving": true,
             "energy_reasons": [],
             "gbuffer_bytes_per_pixel": 36,
+            // The mix first (deepest), then the coat into a haze lobe.
+            "budget": {
+                "budget": 28, "bytes_before": 56, "bytes_after": 28,
+                "class_before": "complex", "class_after": "single", "simplified": true,
+                "rules": [
+                    { "rule": "mix", "node": 2, "location": at(7), "bytes": 40 },
+                    { "rule": "layer", "node": 4, "location": at(14), "bytes": 28 },
+                ],
+                "closures_kept": 1,
+            },
             "wgsl_bytes": 4096,
             "compile_ms": null,
         });
@@ -294,6 +347,7 @@ mod tests {
                 "add at test.mat:7:1",
             ],
             "gbuffer_bytes_per_pixel": 24,
+            "budget": null,
             "wgsl_bytes": null,
             "compile_ms": null,
         });

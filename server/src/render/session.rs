@@ -257,10 +257,11 @@ impl Session {
         self.meshes = loaded.meshes.clone();
         self.network = loaded.denoiser.clone();
         let mut changed = BTreeSet::new();
-        if self.materials.definitions != loaded.materials.definitions {
+        if !self.materials.same_code(&loaded.materials) {
             let mut lib = (*self.lib).clone();
-            if material_module(&mut lib, &self.shader_root, &loaded.materials) {
-                changed.insert(material::back::DISPLAY.to_owned());
+            let modules = material_module(&mut lib, &self.shader_root, &loaded.materials);
+            if !modules.is_empty() {
+                changed.extend(modules);
                 self.lib = Arc::new(lib);
             }
         }
@@ -567,17 +568,21 @@ fn output_summary(graph: &Graph, h: super::resource::Handle, camera: &Camera) ->
     }
 }
 
-/// Puts `program`'s `loupe::material` module into `lib` (generated, never
-/// on disk; it sits among the shaders as `material::back::DISPLAY`).
-/// Returns whether the library's text of it changed.
-pub fn material_module(lib: &mut Library, shader_root: &Path, program: &Program) -> bool {
-    let text = program.wgsl();
-    if lib.get(material::back::DISPLAY).is_some_and(|f| *f.text == *text) {
-        return false;
+/// Puts `program`'s two material modules into `lib` (generated, never on
+/// disk; they sit among the shaders as `material::back::DISPLAY`, the
+/// raster's `loupe::material`, and `PATH_DISPLAY`, the path tracer's
+/// `loupe::material_path`). Returns the displays whose text changed: only
+/// the pipelines importing those rebuild.
+pub fn material_module(lib: &mut Library, shader_root: &Path, program: &Program) -> Vec<String> {
+    let mut changed = Vec::new();
+    for (display, text) in [(material::back::DISPLAY, program.wgsl()), (material::back::PATH_DISPLAY, program.path_wgsl())] {
+        if lib.get(display).is_some_and(|f| *f.text == *text) {
+            continue;
+        }
+        lib.upsert(SourceFile::from_text(display.to_owned(), shader_root.join(display), text.into()));
+        changed.push(display.to_owned());
     }
-    let display = material::back::DISPLAY.to_owned();
-    lib.upsert(SourceFile::from_text(display, shader_root.join(material::back::DISPLAY), text.into()));
-    true
+    changed
 }
 
 #[cfg(test)]

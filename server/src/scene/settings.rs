@@ -471,6 +471,20 @@ settings! {
         /// `.mat` files only, never to the scene file's shorthand materials
         /// (today's scenes keep their look); off, it applies nowhere.
         energy_compensation: bool = true, Toggle, "Energy compensation (multiple scattering)", affects ["lighting", "path_trace"];
+        /// Bytes per pixel a material's closures may take in the adaptive
+        /// G-buffer (`material::layout`). A material that needs more is
+        /// simplified to fit (`material::simplify`): the raster renders the
+        /// simplified tree, the path tracer the full one. 80 is Substrate's
+        /// desktop default, and every library material but `openpbr`
+        /// (108) fits it; 24 is one closure without features, the least any
+        /// material can be made to take.
+        material_bytes: u32 = 80, Int { min: 24, max: 256, step: 4 }, "Material budget (bytes per pixel)",
+            affects ["gbuffer", "lighting", "path_trace"];
+        /// The path tracer renders the materials simplified to
+        /// `material_bytes` too, instead of the full ones (the reference
+        /// the budget's error is measured against).
+        path_simplified_materials: bool = false, Toggle, "Path tracer: simplified materials", affects ["path_trace"],
+            shown_when path_traced;
         /// Ray-march steps per pixel through the media.
         volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volume_march", "volumes"], shown_when raster_media;
         /// Steps of the march toward each light (self-shadowing), from each

@@ -182,6 +182,7 @@ fn defaults_are_the_documented_ones() {
     );
     assert_eq!((q.renderer, q.path_spp, q.path_bounces), (Renderer::Raster, 256, 4));
     assert_eq!((q.shadow_filter, q.rect_lights, q.denoise), (1, crate::scene::settings::RectLights::Ltc, true));
+    assert_eq!((q.material_bytes, q.path_simplified_materials), (80, false));
 }
 
 #[test]
@@ -203,7 +204,7 @@ fn out_of_range_settings_are_located_at_the_value() {
             assert_eq!(at(&e), line_col(&text, &format!("{key} = "), key.len() + 3), "{}", s.path);
         }
     }
-    assert_eq!(numeric, 11, "every numeric setting was tried");
+    assert_eq!(numeric, 12, "every numeric setting was tried");
     let e = err("[post]\nexposure_ev = 30.0\n");
     assert_eq!(e.message, "post.exposure_ev: must be between -24 and 24, not 30");
     assert_eq!(at(&e), (2, 15));

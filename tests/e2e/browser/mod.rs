@@ -11,6 +11,7 @@ use std::time::{Duration, Instant};
 use fantoccini::{Client, ClientBuilder, Locator};
 use loupe_tests::{Project, Server, reload, repo};
 
+mod budget;
 mod console;
 mod difference;
 mod layout;

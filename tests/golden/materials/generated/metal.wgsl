@@ -22,6 +22,10 @@
 
 const MATERIAL_CLOSURES: u32 = 1u;
 
+const MATERIAL_0_SIMPLIFIED: bool = false;
+const MATERIAL_1_SIMPLIFIED: bool = false;
+const MATERIAL_2_SIMPLIFIED: bool = false;
+
 // A leaf slab at a shading point, weighted by the operators above it.
 struct Closure {
     weight: vec3<f32>,

@@ -1,0 +1,45 @@
+//! The Materials panel's budget rows (client/materials.js `budgetRows`)
+//! on a one-material scene at 64×36: the car paint (56 B per pixel)
+//! simplified to `quality.material_bytes = 24`, then whole again when an
+//! override raises the budget to 80.
+
+use serde_json::json;
+
+use super::{LIMIT, Project, Server, browser, until};
+
+const SCENE: &str = "scenes/budget.toml";
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_materials_panel_shows_what_the_budget_did_and_follows_it() {
+    let p = Project::copy_of_repo("browser-budget");
+    p.write(
+        SCENE,
+        "[output]\nwidth = 64\nheight = 36\n\n[quality]\nmaterial_bytes = 24\n\n[camera]\nposition = [0.0, 1.0, 3.2]\ntarget = [0.0, 0.0, 0.0]\n\n\
+         [[materials]]\nname = \"car paint\"\nfile = \"materials/car_paint.mat\"\n\n\
+         [[objects]]\nmesh = \"meshes/torus_knot.gltf\"\nmaterial = \"car paint\"\n\n\
+         [[lights]]\ntype = \"point\"\nposition = [1.5, 2.5, 2.0]\nintensity = 12.0\n",
+    );
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", SCENE]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "the material listed", "document.querySelectorAll('#materials-list [data-index]').length === 1").await;
+    c.execute("document.querySelector('#materials-list [data-index=\"0\"]').click(); return true;", vec![]).await.unwrap();
+    let row = |key: &str| format!("document.querySelector('#material-report [data-key=\"{key}\"]')?.textContent");
+    // The mix (node 3) first, the deepest, then the coat's layer (node 4)
+    // into a haze lobe, which the smallest budget drops too.
+    until(&c, &s, "the simplified car paint", &format!("{} === '56 → 24 B/px of 24 (complex → single)'", row("budget"))).await;
+    let rules = until(&c, &s, "its rules", &row("simplified")).await;
+    assert_eq!(rules, "yes: mix #3 → 40 B, layer #4 → 28 B, drop haze #4 → 24 B");
+    assert_eq!(until(&c, &s, "the closures kept", &row("closures_kept")).await, "1");
+
+    let mut ws = s.ws();
+    ws.event("hello", LIMIT, |_| true);
+    ws.send(json!({ "type": "set_override", "path": "quality.material_bytes", "value": 80 }));
+    s.wait_for("the server's budget 80", LIMIT, || {
+        (s.get_json("/api/materials")["definitions"][0]["budget"]["budget"] == 80).then_some(())
+    });
+    until(&c, &s, "the whole car paint", &format!("{} === '56 → 56 B/px of 80 (complex → complex)'", row("budget"))).await;
+    assert_eq!(until(&c, &s, "not simplified", &row("simplified")).await, "no (fits)");
+    assert_eq!(until(&c, &s, "its three closures", &row("closures_kept")).await, "3");
+    c.close().await.unwrap();
+}
