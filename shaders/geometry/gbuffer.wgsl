@@ -67,7 +67,7 @@ fn fs_main(in: Varyings, @builtin(front_facing) front: bool) -> GBuffer {
     let pixel = vec2<u32>(in.position.xy);
     let width = u32(view.params.x);
     let plane = width * u32(view.params.y);
-    let packed = material_pack_at(id, s, n, false, pixel);
+    let packed = material_pack_at(id, s, n, pixel);
     let visible = in.position.z <= textureLoad(depth, pixel, 0);
     for (var k = 0u; k < select(0u, packed.count, visible); k++) {
         material_words[k * plane + pixel.y * width + pixel.x] = packed.words[k];

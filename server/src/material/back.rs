@@ -148,8 +148,8 @@ pub fn wgsl(definitions: &[Definition], bindings: Bindings) -> String {
 }
 
 /// `wgsl` under `import_path`, with `simplified[i]` the "simplified here"
-/// flag of definition `i` (`MATERIAL_{i}_SIMPLIFIED`, for the packer's
-/// header bit).
+/// flag of definition `i` (`material_simplified`, for the packer's header
+/// bit).
 pub fn module(definitions: &[Definition], bindings: Bindings, import_path: &str, simplified: &[bool]) -> String {
     let features = Features::of(definitions);
     let max = definitions.iter().map(|d| closures(d, d.root)).max().unwrap_or(1).max(1);
@@ -174,10 +174,17 @@ pub fn module(definitions: &[Definition], bindings: Bindings, import_path: &str,
 
 /// Per definition, whether the simplification changed it.
 fn simplified_flags(w: &mut String, simplified: &[bool]) {
-    for (i, s) in simplified.iter().enumerate() {
-        let _ = writeln!(w, "const MATERIAL_{i}_SIMPLIFIED: bool = {s};");
+    let cases: Vec<String> = simplified.iter().enumerate().filter(|(_, s)| **s).map(|(i, _)| format!("{i}u")).collect();
+    w.push_str("// Whether the simplification to the budget changed definition `d`.\nfn material_simplified(d: u32) -> bool {\n");
+    if cases.is_empty() {
+        w.push_str("    return false;\n}\n\n");
+    } else {
+        let _ = write!(
+            w,
+            "    switch d {{\n        case {}: {{\n            return true;\n        }}\n        default: {{\n            return false;\n        }}\n    }}\n}}\n\n",
+            cases.join(", ")
+        );
     }
-    w.push('\n');
 }
 
 fn header(w: &mut String, definitions: &[Definition], f: Features, max: usize, b: Bindings, import_path: &str) {

@@ -10,7 +10,7 @@
 //!
 //! | class   | value | what                                                        | words |
 //! |---------|-------|-------------------------------------------------------------|-------|
-//! | simple  | 0     | one closure of weight 1, no optional feature, grey F0        | 3 (12 B) |
+//! | simple  | 0     | one closure of weight 1, no optional feature, the shorthand's F0 | 4 (16 B) |
 //! | single  | 1     | one closure, anything else                                   | 2 + its closure's words |
 //! | complex | 2     | two or more closures                                         | 2 + the sum of its closures' words |
 //!
@@ -19,11 +19,14 @@
 //! closures with their feature words.
 //!
 //! The two words every class starts with (`HEADER_WORDS`): the header
-//! (class, closure count, "simplified here", and a simple pixel's metallic
-//! and grey F0) and the octahedral shading normal. A simple pixel adds one
-//! payload word (√-encoded base colour 8:8:8 and roughness 8). Every closure
-//! of a single or complex pixel takes a four-word core (weight rgb9e5, base
-//! colour and F0 10:10:10 each, roughness and metallic 16 bits each) and
+//! (class, closure count, "simplified here", and a simple pixel's
+//! metallic) and the octahedral shading normal. A simple pixel adds two
+//! payload words: base colour and roughness as f16, the precision the
+//! G-buffer had before it was packed, so the scene file's shorthand keeps
+//! its image; its F0 is the shorthand's, `mix(0.04, base colour,
+//! metalness)`, recomputed when unpacked. Every closure of a single or
+//! complex pixel takes a four-word core (weight rgb9e5, base colour and F0
+//! 10:10:10 each, roughness 12, metallic 10 and a grey F90 10) and
 //! then one word per feature it may use, worst case (the packer writes only
 //! the non-neutral ones):
 //!
@@ -40,8 +43,9 @@
 //! | `ThinFilm`                          | 1     | weight 8, film Fresnel 8:8:8 |
 //! | `Diffuse`, `Specular`, `Metal`      | 0     | in the core |
 //!
-//! So `bytes = 4 × (2 + Σ closures (4 + feature words))`, or 12 for a
-//! simple material. A slab the tree reaches along two paths (a `let` used
+//! So `bytes = 4 × (2 + Σ closures (4 + feature words))`, or 16 for a
+//! simple material. `material::pack` writes these words; its tests hold
+//! it to this count. A slab the tree reaches along two paths (a `let` used
 //! twice) is two closures, as the generated `init` makes two.
 
 use std::collections::BTreeSet;
@@ -49,16 +53,17 @@ use std::collections::BTreeSet;
 use serde::Serialize;
 
 use super::analysis::{Analysis, Feature};
-use super::tree::{Builtin, Definition, ExprId, ExprKind, Field, NodeId, NodeKind, Slab, Value};
+use super::tree::{Definition, ExprKind, Field, NodeId, NodeKind, Slab};
 
 /// The header word and the normal word, in every class.
 pub const HEADER_WORDS: u32 = 2;
 /// A closure's core: weight, base colour, F0, roughness and metallic.
 pub const CORE_WORDS: u32 = 4;
-/// A simple pixel: header, normal, payload.
-pub const SIMPLE_BYTES: u32 = 12;
+/// A simple pixel: header, normal, two payload words.
+pub const SIMPLE_WORDS: u32 = 4;
+pub const SIMPLE_BYTES: u32 = 4 * SIMPLE_WORDS;
 /// The least a material can be made to take: one closure without
-/// optional features (a single one; simple when its F0 is grey).
+/// optional features (a single one; simple when its F0 is the shorthand's).
 pub const MIN_BYTES: u32 = 4 * (HEADER_WORDS + CORE_WORDS);
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
@@ -108,7 +113,9 @@ pub fn class(analysis: &Analysis) -> StorageClass {
 }
 
 /// The root is one slab (no operator weighs it), with no optional feature
-/// and no normal of its own, whose F0 is grey for every instance.
+/// and no normal of its own, whose F0 is the shorthand's for every
+/// instance: no specular tint, weight or IOR of its own other than their
+/// defaults (1.5 is the shorthand's 0.04).
 fn simple(analysis: &Analysis) -> bool {
     let def = &analysis.def;
     let NodeKind::Slab(s) = &def.node(def.root).kind else { return false };
@@ -117,26 +124,13 @@ fn simple(analysis: &Analysis) -> bool {
     if !features.iter().all(|f| core.contains(f)) || s.get(Field::Normal).is_some() {
         return false;
     }
-    // F0 = lerp(dielectric F0 × specular colour, base colour, metalness)
-    // × specular weight: grey when each side that can be nonzero is.
-    let dielectric = features.contains(&Feature::Specular);
-    let metal = features.contains(&Feature::Metal);
-    (!dielectric || grey(def, s, Field::SpecularColor)) && (!metal || grey(def, s, Field::BaseColor))
+    [Field::SpecularColor, Field::SpecularWeight, Field::SpecularIor].iter().all(|&f| default_or_unset(def, s, f))
 }
 
-/// Whether a colour field is r = g = b for every instance: unset (every
-/// colour default is grey), a grey constant or `grey(x)`.
-fn grey(def: &Definition, s: &Slab, field: Field) -> bool {
-    let Some(e) = s.get(field) else { return true };
-    grey_expr(def, e)
-}
-
-fn grey_expr(def: &Definition, e: ExprId) -> bool {
-    match &def.expr(e).kind {
-        ExprKind::Const(Value::Vec3([r, g, b])) => r == g && g == b,
-        ExprKind::Const(Value::Float(_)) | ExprKind::Call(Builtin::Grey, _) => true,
-        _ => false,
-    }
+/// Whether field `f` of slab `s` is unset or a constant equal to its
+/// default.
+fn default_or_unset(def: &Definition, s: &Slab, f: Field) -> bool {
+    s.get(f).is_none_or(|e| matches!(def.expr(e).kind, ExprKind::Const(v) if v == f.default()))
 }
 
 /// The slabs under `root`, once per path that reaches them: the closures
@@ -168,12 +162,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_grey_plastic_is_simple_and_a_tinted_one_single() {
+    fn a_plastic_is_simple_and_a_tinted_one_single() {
         let mut b = Build::new("m");
         let red = b.rgb([0.8, 0.1, 0.1]);
         let s = b.slab(&[(Field::BaseColor, red)]);
         let a = analyse(&b.finish(s));
-        assert_eq!((class(&a), bytes(&a)), (StorageClass::Simple, 12), "a coloured diffuse keeps a grey F0");
+        assert_eq!((class(&a), bytes(&a)), (StorageClass::Simple, 16), "a coloured diffuse keeps the shorthand's F0");
 
         let mut b = Build::new("m");
         let tint = b.rgb([1.0, 0.5, 0.5]);
@@ -183,20 +177,24 @@ mod tests {
     }
 
     #[test]
-    fn a_metal_is_simple_only_when_its_colour_is_grey() {
+    fn a_metal_is_simple_and_a_parameter_ior_or_weight_is_not() {
         let mut b = Build::new("m");
-        let one = b.float(1.0);
-        let x = b.param("x", Type::Float, Value::Float(0.5), Some((0.0, 1.0)));
-        let grey = b.call(Builtin::Grey, &[x]);
-        let s = b.slab(&[(Field::BaseMetalness, one), (Field::BaseColor, grey)]);
-        assert_eq!(class(&analyse(&b.finish(s))), StorageClass::Simple);
-
-        let mut b = Build::new("m");
-        let c = b.param("c", Type::Color, Value::Vec3([0.5; 3]), Some((0.0, 1.0)));
-        let m = b.param("m", Type::Float, Value::Float(0.0), Some((0.0, 1.0)));
+        let c = b.param("c", Type::Color, Value::Vec3([0.9, 0.6, 0.2]), Some((0.0, 1.0)));
+        let m = b.param("m", Type::Float, Value::Float(1.0), Some((0.0, 1.0)));
         let s = b.slab(&[(Field::BaseMetalness, m), (Field::BaseColor, c)]);
-        let a = analyse(&b.finish(s));
-        assert_eq!((class(&a), bytes(&a)), (StorageClass::Single, 24), "a parameter colour may be a metal's F0");
+        assert_eq!(class(&analyse(&b.finish(s))), StorageClass::Simple, "a metal's F0 is its colour, as the shorthand's");
+
+        for field in [Field::SpecularIor, Field::SpecularWeight] {
+            let mut b = Build::new("m");
+            let x = b.param("x", Type::Float, field.default(), None);
+            let s = b.slab(&[(field, x)]);
+            let a = analyse(&b.finish(s));
+            assert_eq!((class(&a), bytes(&a)), (StorageClass::Single, 24), "{field:?} as a parameter may move F0 off the shorthand's");
+        }
+        let mut b = Build::new("m");
+        let ior = b.float(1.5);
+        let s = b.slab(&[(Field::SpecularIor, ior)]);
+        assert_eq!(class(&analyse(&b.finish(s))), StorageClass::Simple, "IOR 1.5 is the shorthand's 0.04");
     }
 
     #[test]

@@ -78,12 +78,23 @@ impl Program {
     }
 
     fn module(&self, simplified: bool, import_path: &str) -> String {
-        let (definitions, flags): (Vec<Definition>, Vec<bool>) = if simplified && !self.simplified.is_empty() {
+        let (definitions, flags) = self.compiled(simplified);
+        back::module(&definitions, back::Bindings::RENDERER, import_path, &flags)
+    }
+
+    /// The definitions a module compiles, and which were simplified.
+    fn compiled(&self, simplified: bool) -> (Vec<Definition>, Vec<bool>) {
+        if simplified && !self.simplified.is_empty() {
             self.simplified.iter().map(|s| (s.def.clone(), s.simplified())).unzip()
         } else {
             (self.definitions.clone(), vec![false; self.definitions.len()])
-        };
-        back::module(&definitions, back::Bindings::RENDERER, import_path, &flags)
+        }
+    }
+
+    /// The material buffer's words per pixel: the most a pixel of the
+    /// raster's (simplified) definitions takes, within the budget.
+    pub fn raster_words(&self) -> u32 {
+        pack::program_words(&self.compiled(true).0)
     }
 
     /// Whether `other` generates the same two modules.

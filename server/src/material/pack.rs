@@ -21,25 +21,13 @@ use std::fmt::Write;
 
 use super::analysis::{self, Feature};
 use super::back::Features;
+use super::layout::{CORE_WORDS, HEADER_WORDS, SIMPLE_WORDS, StorageClass};
 use super::tree::{Definition, Field, NodeId, NodeKind};
 
-/// Header (word 0) bits: the storage class in bits 0–1.
-pub const SIMPLE: u32 = 0;
-pub const SINGLE: u32 = 1;
-pub const COMPLEX: u32 = 2;
-/// The words the header and the normal take in every class.
-pub const HEADER_WORDS: u32 = 2;
-/// A simple pixel's words: header (with metallic), normal, base colour
-/// and roughness as f16, the precision of the G-buffer before it was
-/// packed, so the scene file's shorthand keeps its image.
-pub const SIMPLE_WORDS: u32 = 4;
-/// A closure's core: weight, base colour, F0, roughness/metallic/F90.
-pub const CORE_WORDS: u32 = 4;
-
-/// The material buffer's words per pixel until `quality.material_bytes`
-/// exists (80 B, Substrate's desktop default): the G-buffer allocates the
-/// larger of this and the program's `words`.
-pub const BUDGET_WORDS: u32 = 20;
+/// Header (word 0) bits 0–1: the storage class (`layout` counts the words).
+const SIMPLE: u32 = StorageClass::Simple as u32;
+const SINGLE: u32 = StorageClass::Single as u32;
+const COMPLEX: u32 = StorageClass::Complex as u32;
 
 /// A closure's optional words: (mask bit, words, WGSL to pack, WGSL to
 /// unpack). `w` is the word index, `c` the closure, `p.words` the output.
@@ -310,7 +298,7 @@ fn material_unpack(words: array<u32, MATERIAL_WORDS>, v: vec3<f32>) -> UnpackedM
     }
     w.push_str("    return UnpackedMaterial(s, n);\n}\n\n");
     // The G-buffer's entry: the instance's definition and compensation.
-    w.push_str("// `material_pack` for a pixel of `instance`.\nfn material_pack_at(instance: u32, s: Surface, n: vec3<f32>, simplified: bool, pixel: vec2<u32>) -> PackedMaterial {\n    let header = material_instances[instance];\n    return material_pack(s, n, header.x, header.z != 0u, simplified, pixel);\n}\n\n");
+    w.push_str("// `material_pack` for a pixel of `instance`.\nfn material_pack_at(instance: u32, s: Surface, n: vec3<f32>, pixel: vec2<u32>) -> PackedMaterial {\n    let header = material_instances[instance];\n    return material_pack(s, n, header.x, header.z != 0u, material_simplified(header.x), pixel);\n}\n\n");
 }
 
 #[cfg(test)]

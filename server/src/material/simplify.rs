@@ -525,24 +525,45 @@ mod tests {
         let got: Vec<(String, u32, u32)> =
             library().iter().map(|d| (d.name.clone(), bytes_of(d), simplify(d, layout::MIN_BYTES).bytes_after)).collect();
         let want: Vec<(String, u32, u32)> = [
-            ("brushed_metal", 28, 24),
-            ("car_paint", 56, 24),
-            ("fabric", 28, 12),
-            ("thin_glass", 32, 12),
-            ("solid_glass", 32, 12),
-            ("hazy_metal", 28, 24),
-            ("rough_metal", 24, 24),
-            ("polished_metal", 28, 24),
-            ("anodized_metal", 28, 24),
+            ("brushed_metal", 28, 16),
+            ("car_paint", 56, 16),
+            ("fabric", 28, 24),
+            ("thin_glass", 32, 24),
+            ("solid_glass", 32, 24),
+            ("hazy_metal", 28, 16),
+            ("rough_metal", 16, 16),
+            ("polished_metal", 28, 16),
+            ("anodized_metal", 28, 16),
             ("openpbr", 108, 24),
-            ("plastic", 12, 12),
-            ("rust", 48, 24),
-            ("skin", 40, 12),
+            ("plastic", 24, 24),
+            ("rust", 48, 16),
+            ("skin", 40, 24),
         ]
         .iter()
         .map(|&(n, b, a)| (n.to_owned(), b, a))
         .collect();
         assert_eq!(got, want);
+    }
+
+    /// The byte model and the packer count the same words: a simple
+    /// material's pixels take `SIMPLE_BYTES` (the packer's static count is
+    /// the single class's, which its pixels take when a value leaves the
+    /// shorthand), every other material's exactly what `pack::words` lets
+    /// a pixel write. Full and simplified to the smallest budget.
+    #[test]
+    fn the_byte_model_counts_the_words_the_packer_writes() {
+        for full in library() {
+            for d in [full.clone(), simplify(&full, layout::MIN_BYTES).def] {
+                let a = analyse(&d);
+                let packed = 4 * super::super::pack::words(&a.def);
+                match layout::class(&a) {
+                    StorageClass::Simple => {
+                        assert!(layout::bytes(&a) == layout::SIMPLE_BYTES && packed >= layout::SIMPLE_BYTES, "{}", d.name)
+                    }
+                    _ => assert_eq!(layout::bytes(&a), packed, "{}", d.name),
+                }
+            }
+        }
     }
 
     #[test]
@@ -565,7 +586,7 @@ mod tests {
         };
         assert_eq!(value(Field::BaseColor), Value::Vec3([0.75, 0.0, 0.25]));
         assert_eq!(value(Field::BaseMetalness), Value::Float(0.25), "an unset side takes the default, 0");
-        assert_eq!((s.bytes_before, s.bytes_after), (40, 24));
+        assert_eq!((s.bytes_before, s.bytes_after), (40, 16), "one metal-ish slab: the shorthand's F0, simple");
     }
 
     #[test]

@@ -37,7 +37,8 @@ pub struct FrameOptions {
     /// `None`: unknown, nothing is culled for its size.
     pub max_buffer: Option<u64>,
     /// The most words a pixel of the scene's materials takes in the
-    /// material buffer (`material::pack::program_words`, the session's).
+    /// material buffer, simplified to the budget
+    /// (`material::Program::raster_words`, the session's).
     pub material_words: u32,
 }
 

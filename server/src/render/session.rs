@@ -152,7 +152,7 @@ impl Session {
         let limits = gpu.device.limits();
         let options = FrameOptions {
             max_buffer: Some(crate::gpu::largest_binding(&limits)),
-            material_words: material::pack::program_words(&loaded.materials.definitions),
+            material_words: loaded.materials.raster_words(),
             ..FrameOptions::default()
         };
         Session {
@@ -266,7 +266,7 @@ impl Session {
             }
         }
         self.materials = loaded.materials.clone();
-        self.options.material_words = material::pack::program_words(&loaded.materials.definitions);
+        self.options.material_words = loaded.materials.raster_words();
         self.graph = super::build_graph(&self.scene, self.network.as_deref(), self.options);
         // History describes the old scene: accumulation starts over.
         self.reset_history();

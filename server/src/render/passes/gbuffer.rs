@@ -4,7 +4,6 @@ use super::{MATERIAL_INSTANCES, MATERIAL_PARAMS, MATERIAL_SAMPLER, MATERIAL_TEXT
 use crate::gpu::pipeline::{ALL, Depth, Group, HDR, PipelineSpec, Stages, depth_texture, storage, storage_rw_fragment};
 use crate::render::context::DepthTarget;
 use crate::render::graph::{GraphBuilder, PassKind};
-use crate::material::pack;
 use crate::render::resource::{Access, Element, Handle, Meaning, PipelineKey, TensorLayout, TextureDesc};
 use crate::scene::Scene;
 
@@ -46,13 +45,6 @@ pub struct GBuffer {
     pub words: Handle,
 }
 
-/// The material buffer's words per pixel: the budget, or more where a
-/// material of the scene needs more (until the simplification makes every
-/// material fit the budget).
-pub fn words_per_pixel(material_words: u32) -> u32 {
-    pack::BUDGET_WORDS.max(material_words)
-}
-
 pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle, material_words: u32) -> GBuffer {
     let d = TextureDesc::d2(HDR, scene.width, scene.height);
     let mut p = g.pass("gbuffer", PassKind::Raster);
@@ -67,7 +59,7 @@ pub fn gbuffer(g: &mut GraphBuilder, scene: &Scene, depth: Handle, material_word
         words: p.create(
             "material_words",
             Meaning::Data,
-            TensorLayout::new(&[("word", words_per_pixel(material_words)), ("y", scene.height), ("x", scene.width)], Element::U32),
+            TensorLayout::new(&[("word", material_words), ("y", scene.height), ("x", scene.width)], Element::U32),
             Access::StorageWrite,
         ),
     };

@@ -5,6 +5,7 @@
 #define_import_path loupe::material
 
 #import loupe::brdf::{BrdfSample, PI, slab_cos, slab_pdf, slab_direction, specular_f0, f_schlick_edge, luminance_of}
+#import loupe::pack::{pack_unorm3, unpack_unorm3, pack_sqrt3, unpack_sqrt3, unorm_encode, unorm_decode, pack_octahedral, unpack_octahedral, pack_rgb9e5, unpack_rgb9e5, pack_dither}
 #import loupe::ambient::{ambient_light, gradient_irradiance}
 #import loupe::multiscatter::energy_compensation
 #ifdef LIGHT_RECT
@@ -18,7 +19,17 @@
 
 const MATERIAL_CLOSURES: u32 = 1u;
 
-const MATERIAL_0_SIMPLIFIED: bool = true;
+// Whether the simplification to the budget changed definition `d`.
+fn material_simplified(d: u32) -> bool {
+    switch d {
+        case 0u: {
+            return true;
+        }
+        default: {
+            return false;
+        }
+    }
+}
 
 // A leaf slab at a shading point, weighted by the operators above it.
 struct Closure {
@@ -78,19 +89,31 @@ fn material_point(uv: vec2<f32>, tangent: vec4<f32>) -> MaterialPoint {
 
 // The surface of `instance` at a point with normal `n`, seen from `v`.
 fn material_init_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> Surface {
+    var s = material_surface_at(instance, n, v, p);
+    if material_instances[instance].z != 0u {
+        s = material_compensate(s, max(dot(n, v), 1e-4));
+    }
+    return s;
+}
+
+// `material_init_at` before the energy compensation.
+fn material_surface_at(instance: u32, n: vec3<f32>, v: vec3<f32>, p: MaterialPoint) -> Surface {
     let header = material_instances[instance];
     var s: Surface;
     switch header.x {
         default: { s = material_0_init(header.y, n, v, p); }
     }
-    if header.z != 0u {
-        let n_v = max(dot(n, v), 1e-4);
-        for (var k = 0u; k < s.count; k++) {
-            // Turquin's factor scales the whole lobe: F0 and F90 alike.
-            let e = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness);
-            s.closures[k].reflectance *= e;
-            s.closures[k].edge *= e;
-        }
+    return s;
+}
+
+// Multiple-scattering compensation of every closure's lobes at n·v.
+fn material_compensate(surface: Surface, n_v: f32) -> Surface {
+    var s = surface;
+    for (var k = 0u; k < s.count; k++) {
+        // Turquin's factor scales the whole lobe: F0 and F90 alike.
+        let e = energy_compensation(s.closures[k].reflectance, n_v, s.closures[k].roughness);
+        s.closures[k].reflectance *= e;
+        s.closures[k].edge *= e;
     }
     return s;
 }
@@ -268,3 +291,127 @@ fn material_rect(s: Surface, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, corners: 
     return e;
 }
 #endif
+// The material buffer's words (server/src/material/pack.rs): the most a
+// pixel of these materials takes.
+const MATERIAL_WORDS: u32 = 6u;
+const MATERIAL_SIMPLE: u32 = 0u;
+const MATERIAL_SINGLE: u32 = 1u;
+const MATERIAL_COMPLEX: u32 = 2u;
+
+struct PackedMaterial {
+    words: array<u32, MATERIAL_WORDS>,
+    count: u32,
+}
+
+struct UnpackedMaterial {
+    surface: Surface,
+    normal: vec3<f32>,
+}
+
+// Which optional words closure k of a definition has.
+fn closure_mask(definition: u32, k: u32) -> u32 {
+    switch definition * 8u + k {
+        default: { return 0u; }
+    }
+}
+
+// The words a pixel takes, from its header alone.
+fn material_word_count(header: u32) -> u32 {
+    if (header & 3u) == MATERIAL_SIMPLE {
+        return 4u;
+    }
+    var w = 2u;
+    for (var k = 0u; k < ((header >> 2u) & 7u); k++) {
+        w += 4u + closure_extra_words(closure_mask(header >> 8u, k));
+    }
+    return w;
+}
+
+fn closure_extra_words(mask: u32) -> u32 {
+    var w = 0u;
+    w += select(0u, 1u, (mask & 1u) != 0u);
+    return w;
+}
+
+fn closure_is_simple(c: Closure) -> bool {
+    var simple = all(c.weight == vec3(1.0)) && all(abs(c.reflectance - specular_f0(c.base_color, c.metallic)) <= vec3(1e-6));
+    simple = simple && all(c.edge == vec3(1.0));
+    return simple;
+}
+
+// A pixel's surface `s` (before the compensation; `compensated`: the
+// instance's) with shading normal `n` as words: header, normal, then the
+// simple payload or each closure's core and optional words. `pixel` seeds
+// the 8-bit colours' dither.
+fn material_pack(s: Surface, n: vec3<f32>, definition: u32, compensated: bool, simplified: bool, pixel: vec2<u32>) -> PackedMaterial {
+    var p: PackedMaterial;
+    let dither = pack_dither(pixel);
+    let flags = (u32(simplified) << 5u) | (u32(compensated) << 6u);
+    p.words[1] = pack_octahedral(n, 16u);
+    let first = s.closures[0];
+    if s.count == 1u && closure_is_simple(first) {
+        p.words[0] = MATERIAL_SIMPLE | (1u << 2u) | flags | (unorm_encode(first.metallic, 12u, 0.0) << 8u);
+        p.words[2] = pack2x16float(first.base_color.rg);
+        p.words[3] = pack2x16float(vec2(first.base_color.b, first.roughness));
+        p.count = 4u;
+        return p;
+    }
+    p.words[0] = select(MATERIAL_COMPLEX, MATERIAL_SINGLE, s.count == 1u) | (s.count << 2u) | flags | (definition << 8u);
+    var w = 2u;
+    for (var k = 0u; k < s.count; k++) {
+        let c = s.closures[k];
+        let mask = closure_mask(definition, k);
+        p.words[w] = pack_rgb9e5(c.weight);
+        p.words[w + 1u] = pack_unorm3(c.base_color, 10u, 0.0);
+        p.words[w + 2u] = pack_unorm3(c.reflectance, 10u, 0.0);
+        p.words[w + 3u] = unorm_encode(c.roughness, 12u, 0.0) | (unorm_encode(c.metallic, 10u, 0.0) << 12u) | (unorm_encode(c.edge.g, 10u, 0.0) << 22u);
+        w += 4u;
+        if (mask & 1u) != 0u {
+            p.words[w] = pack_unorm3(c.edge, 10u, 0.0);
+            w += 1u;
+        }
+    }
+    p.count = w;
+    return p;
+}
+
+// The surface and shading normal `material_pack` stored, seen from v
+// (the compensation's n·v).
+fn material_unpack(words: array<u32, MATERIAL_WORDS>, v: vec3<f32>) -> UnpackedMaterial {
+    var s: Surface;
+    let header = words[0];
+    let n = unpack_octahedral(words[1], 16u);
+    if (header & 3u) == MATERIAL_SIMPLE {
+        s.count = 1u;
+        let b_roughness = unpack2x16float(words[3]);
+        let base = vec3(unpack2x16float(words[2]), b_roughness.x);
+        let metallic = unorm_decode(header, 8u, 12u);
+        s.closures[0] = make_closure(base, metallic, specular_f0(base, metallic), b_roughness.y);
+    } else {
+        s.count = (header >> 2u) & 7u;
+        var w = 2u;
+        for (var k = 0u; k < s.count; k++) {
+            let mask = closure_mask(header >> 8u, k);
+            var c = make_closure(unpack_unorm3(words[w + 1u], 10u), unorm_decode(words[w + 3u], 12u, 10u), unpack_unorm3(words[w + 2u], 10u), unorm_decode(words[w + 3u], 0u, 12u));
+            c.weight = unpack_rgb9e5(words[w]);
+        c.edge = vec3(unorm_decode(words[w + 3u], 22u, 10u));
+            w += 4u;
+            if (mask & 1u) != 0u {
+                c.edge = unpack_unorm3(words[w], 10u);
+                w += 1u;
+            }
+            s.closures[k] = c;
+        }
+    }
+    if (header & (1u << 6u)) != 0u {
+        s = material_compensate(s, max(dot(n, v), 1e-4));
+    }
+    return UnpackedMaterial(s, n);
+}
+
+// `material_pack` for a pixel of `instance`.
+fn material_pack_at(instance: u32, s: Surface, n: vec3<f32>, pixel: vec2<u32>) -> PackedMaterial {
+    let header = material_instances[instance];
+    return material_pack(s, n, header.x, header.z != 0u, material_simplified(header.x), pixel);
+}
+

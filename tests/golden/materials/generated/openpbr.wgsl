@@ -23,7 +23,10 @@
 
 const MATERIAL_CLOSURES: u32 = 4u;
 
-const MATERIAL_0_SIMPLIFIED: bool = false;
+// Whether the simplification to the budget changed definition `d`.
+fn material_simplified(d: u32) -> bool {
+    return false;
+}
 
 // A leaf slab at a shading point, weighted by the operators above it.
 struct Closure {
@@ -638,8 +641,8 @@ fn material_unpack(words: array<u32, MATERIAL_WORDS>, v: vec3<f32>) -> UnpackedM
 }
 
 // `material_pack` for a pixel of `instance`.
-fn material_pack_at(instance: u32, s: Surface, n: vec3<f32>, simplified: bool, pixel: vec2<u32>) -> PackedMaterial {
+fn material_pack_at(instance: u32, s: Surface, n: vec3<f32>, pixel: vec2<u32>) -> PackedMaterial {
     let header = material_instances[instance];
-    return material_pack(s, n, header.x, header.z != 0u, simplified, pixel);
+    return material_pack(s, n, header.x, header.z != 0u, material_simplified(header.x), pixel);
 }
 

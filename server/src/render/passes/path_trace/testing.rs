@@ -94,7 +94,7 @@ pub fn without_guard(s: &mut Session) {
 /// the raster computes at the same point, with no noise to tolerate.
 pub const SAME_SAMPLES: [(&str, &str, &str); 2] = [
     ("passes/path_trace.wgsl", "let jitter = vec2(rand(), rand());", "let jitter = vec2(0.5);"),
-    ("passes/lighting.wgsl", "return MaterialPoint(uv, duv[0], duv[1], tangent);", "return MaterialPoint(uv, vec2(0.0), vec2(0.0), tangent);"),
+    ("geometry/gbuffer.wgsl", "MaterialPoint(in.uv, dpdx(in.uv), dpdy(in.uv), in.tangent)", "MaterialPoint(in.uv, vec2(0.0), vec2(0.0), in.tangent)"),
 ];
 
 /// Replaces `from` by `to` in `lib`'s file `display`.
