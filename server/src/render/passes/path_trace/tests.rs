@@ -368,30 +368,22 @@ fn library_materials() -> Vec<(String, String)> {
 
 /// Materials whose raster and path-traced images differ by more than the
 /// test's bounds (mean 1 %, pixel channel 2 %, relative, floored at 0.01;
-/// the others measured at most 0.51 % mean, polished metal's, and 1.0 %
-/// per pixel, car paint's coat highlight through the G-buffer's f16 normal): (file::
-/// material, mean bound, pixel bound), measured on lavapipe.
-/// - thin and solid glass: the path tracer darker on average, evenly over
-///   the sphere, by an amount that follows the sphere's cell and the
-///   grid's framing, not the material: 1.29 % at the last cell of the top
-///   row in a three-row grid (solid glass, then thin glass once brushed
-///   metal moved every sphere on), 3.6 % and 3.0 % (cells 4 and 5 of a
-///   four-row grid) since the anodized metal made it four rows. Not yet
-///   explained; only glass shows it.
-/// - rust: its normal map's steepest texels, where the raster's rebuilt
-///   tangent frame and f16 normal tilt the polished steel's lobe
-///   differently: 9.6 % on one pixel channel, the mean within 0.35 %.
-/// - brushed metal: the mean within 0.06 %, but one dark pixel at the
-///   sphere's limb 3.37 × off (path 0.039, raster 0.0011): there the
-///   raster's tangent, rebuilt from screen derivatives, and the path
-///   tracer's vertex tangent point differently, and the stretched lobe
-///   follows the tangent. Not yet resolved.
-const LIBRARY_KNOWN: [(&str, f64, f64); 4] = [
-    ("glass::solid_glass", 0.04, 0.04),
-    ("glass::thin_glass", 0.04, 0.04),
-    ("rust::rust", 0.01, 0.15),
-    ("brushed_metal::brushed_metal", 0.01, 3.5),
-];
+/// the others measured at most 0.62 % mean, polished metal's, and 0.94 %
+/// per pixel, car paint's coat highlight): (file::material, mean bound,
+/// pixel bound), measured on lavapipe.
+/// - fabric: its fuzz colour is stored in 8 bits per channel, √-encoded
+///   and dithered (the material buffer's fuzz word): 2.8 % on one dark
+///   pixel channel at the sheen's rim, the mean within 0.2 %.
+///
+/// Before the G-buffer stored the material after `init` (octahedral
+/// normal, vertex tangent, the view from the fragment's own position),
+/// glass was 3.6 % off on average, brushed metal 3.4× at a limb pixel (the
+/// lighting's tangent rebuilt from screen derivatives) and rust 9.6 % on a
+/// normal-mapped pixel; all three are now within the default bounds (glass
+/// 0.18 %). Which of the lighting's old inputs moved glass (its f16 normal
+/// or the view rebuilt from depth, both sharp at roughness 0.02) was not
+/// isolated.
+const LIBRARY_KNOWN: [(&str, f64, f64); 1] = [("fabric::fabric", 0.01, 0.04)];
 
 /// Raster against path tracer per library material at 0 bounces, both
 /// sampling the same points the same way (`SAME_SAMPLES`), so one
