@@ -242,7 +242,7 @@ function reportRows(def) {
     ...row('closures', 'closures', `${def.closures.length} (${def.closures.map((c) => `#${c}`).join(', ')})`),
     ...row('features', 'features', def.features.join(', ') || 'none'),
     ...row('energy', 'energy-conserving', energy),
-    ...row('gbuffer', 'G-buffer', `${def.gbuffer_bytes_per_pixel} B/px`),
+    ...row('gbuffer', 'G-buffer', def.gbuffer_bytes_per_pixel === null ? '—' : `${def.gbuffer_bytes_per_pixel} B/px (material words and inspection targets)`),
     ...budgetRows(def.budget, row),
     ...row('wgsl', 'WGSL', def.wgsl_bytes === null ? '—' : `${def.wgsl_bytes} bytes`),
     ...row('compile', 'compile', def.compile_ms === null ? '—' : `${def.compile_ms.toFixed(2)} ms`),

@@ -97,6 +97,27 @@ pub fn load_keeping(path: &Path, overrides: &Overrides, keep: Option<&Keep<'_>>)
     Ok(Loaded { scene, meshes, materials: Arc::new(materials), reports: Arc::new(reports), denoiser, files, warnings })
 }
 
+impl Loaded {
+    /// This load under `scene` (the same files, other settings): the
+    /// materials brought to its budget and its energy compensation again,
+    /// the parts of a load its settings decide.
+    pub fn with_scene(&self, scene: Scene) -> Loaded {
+        let mut materials = (*self.materials).clone();
+        let mut reports = (*self.reports).clone();
+        for i in &mut materials.instances {
+            i.compensated = compensated(&scene, &materials.definitions[i.definition as usize]);
+        }
+        simplify(&mut materials, &mut reports, &scene);
+        Loaded { scene, materials: Arc::new(materials), reports: Arc::new(reports), ..self.clone() }
+    }
+}
+
+/// Whether an instance of `d` compensates its GGX lobes for multiple
+/// scattering under `scene`'s settings.
+fn compensated(scene: &Scene, d: &Definition) -> bool {
+    scene.quality.energy_compensation && d.energy_compensation
+}
+
 /// The network of `[denoiser]`: without `weights`, the bundled one for its
 /// mode that takes the colour, albedo and normal the path tracer writes.
 /// Else the file's: a missing file is an error at `weights`; a malformed
@@ -206,8 +227,7 @@ fn materials(path: &Path, scene: &Scene, files: &mut Vec<PathBuf>) -> Result<(Pr
                         i
                     }
                 };
-                let compensated = scene.quality.energy_compensation && program.definitions[definition as usize].energy_compensation;
-                Instance { definition, values, compensated }
+                Instance { definition, values, compensated: compensated(scene, &program.definitions[definition as usize]) }
             }
         };
         program.instances.push(instance);

@@ -84,7 +84,7 @@ fn materials_are_served_with_their_reports_and_previews_and_a_broken_file_keeps_
     let root = &paint["nodes"][paint["root"].as_u64().unwrap() as usize];
     assert_eq!((root["kind"].as_str(), root["depth"].as_u64()), (Some("layer"), Some(0)), "{paint}");
     assert!(paint["closures"].as_array().unwrap().len() >= 2, "{paint}");
-    assert_eq!(paint["gbuffer_bytes_per_pixel"], 32);
+    assert_eq!(paint["gbuffer_bytes_per_pixel"], 56 + 32, "its words (it fits the default 80 B) and the inspection targets");
     assert!(paint["wgsl_bytes"].as_u64() > Some(1000) && paint["compile_ms"].as_f64() > Some(0.0), "{paint}");
     assert_eq!(definition(&first, "plastic")["features"], serde_json::json!(["diffuse", "specular"]));
 

@@ -20,6 +20,7 @@ mod thin_film;
 mod transmission;
 
 use loupe::gpu::testing;
+use loupe::scene::settings::{self, Value};
 
 /// A bound: `value` must be a number no larger than `bound` (NaN fails).
 fn at_most(what: &str, value: f64, bound: f64) -> Result<(), String> {
@@ -282,6 +283,30 @@ fn every_pass_at_every_quality_extreme_is_finite() {
         }
     }
     eprintln!("{} scenes, {rendered} variants, {} failures", all.len(), failures.len());
+    all_pass(&failures);
+}
+
+/// The material buffer at the edges of the fields' ranges
+/// (`scenes::EXTREME_MAT`): every capture finite, raster and path traced,
+/// at the budget's extremes (the smallest simplifies the material to one
+/// slab) and with the path tracer on the simplified material.
+#[test]
+fn extreme_materials_pack_and_light_finite() {
+    use loupe::render::passes::path_trace::testing as path;
+    let loaded = scenes::extreme();
+    let mut s = path::session(&loaded);
+    let mut failures = Vec::new();
+    let variants = [
+        ("quality.material_bytes", Value::Int(256)),
+        ("quality.material_bytes", Value::Int(24)),
+        ("quality.renderer", Value::Text("path".into())),
+        ("quality.path_simplified_materials", Value::Bool(true)),
+    ];
+    let mut scene = loaded.scene.clone();
+    for (path, value) in variants {
+        settings::find(path).expect("a table setting").set(&mut scene, &value).expect("a valid value");
+        failures.extend(scenes::scan(&mut s, &loaded, &scene).into_iter().map(|b| format!("{path} = {value}: {b}")));
+    }
     all_pass(&failures);
 }
 

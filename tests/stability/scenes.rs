@@ -106,7 +106,7 @@ fn scanned(s: &Session) -> BTreeSet<String> {
 /// Renders two frames of `scene` with `scanned` outputs captured; returns
 /// what the NaN scan found, one line per bad output.
 pub fn scan(s: &mut Session, loaded: &Loaded, scene: &Scene) -> Vec<String> {
-    s.set_scene(&Loaded { scene: scene.clone(), ..loaded.clone() });
+    s.set_scene(&loaded.with_scene(scene.clone()));
     let diagnostics = s.install_missing();
     if !diagnostics.is_empty() {
         return diagnostics.iter().map(ToString::to_string).collect();
@@ -148,3 +148,39 @@ pub const BRIGHT: &str = "[output]\nwidth = 64\nheight = 36\n\
     [[objects]]\nshape = \"plane\"\nmaterial = \"mirror\"\nscale = 4.0\n\
     [[objects]]\nshape = \"sphere\"\nmaterial = \"white\"\nposition = [0.8, 0.5, 0.0]\nscale = 0.5\n\
     [[lights]]\ntype = \"point\"\nposition = [0.0, 1.0, -1.0]\nintensity = 10000000.0\n";
+
+/// Materials at the edges of their fields' ranges, for the material
+/// buffer's quantisers: an `add` whose weights pass 1, a white mirror
+/// metal emitting 1e6 (past rgb9e5's 65408), a black fuzz-only slab, a
+/// fully anisotropic, transmitting, thin-film slab of thickness 0, and a
+/// slab with a normal of its own pointing away. Every feature has words, so
+/// every quantiser runs.
+pub const EXTREME_MAT: &str = "
+param away: vec3 = rgb(0, 0, -1)
+material extreme = add(
+    slab { base_color: rgb(1, 1, 1), base_metalness: 1, specular_roughness: 0, emission_luminance: 1000000, emission_color: rgb(1, 0, 0) },
+    add(
+        slab { base_color: rgb(0, 0, 0), specular_roughness: 1, fuzz_weight: 1, fuzz_color: rgb(1, 1, 1), fuzz_roughness: 0, haze_weight: 1, haze_roughness: 0 },
+        slab { specular_roughness_anisotropy: 1, specular_rotation: 0.25, specular_roughness: 0, thin_film_weight: 1, thin_film_thickness: 0,
+               transmission_weight: 1, specular_edge_color: rgb(0, 0, 0), normal: away }))
+";
+
+/// A sphere and a plane wearing `EXTREME_MAT`, lit by a point light.
+pub const EXTREME: &str = "[output]\nwidth = 64\nheight = 36\n\
+    [camera]\nposition = [0.0, 1.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\n\
+    [[materials]]\nname = \"extreme\"\nfile = \"extreme.mat\"\n\
+    [[objects]]\nshape = \"plane\"\nmaterial = \"extreme\"\nscale = 4.0\n\
+    [[objects]]\nshape = \"sphere\"\nmaterial = \"extreme\"\nposition = [0.0, 0.5, 0.0]\nscale = 0.5\n\
+    [[lights]]\ntype = \"point\"\nposition = [0.0, 2.0, 1.0]\nintensity = 10.0\n";
+
+/// `EXTREME` loaded from a folder of its own (the scene names its `.mat`
+/// by path).
+pub fn extreme() -> Loaded {
+    let dir = std::env::temp_dir().join(format!("loupe-stability-extreme-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("extreme.mat"), EXTREME_MAT).unwrap();
+    std::fs::write(dir.join("extreme.toml"), EXTREME).unwrap();
+    let loaded = loupe::loaded::load(&dir.join("extreme.toml")).unwrap_or_else(|d| panic!("{d}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    loaded
+}

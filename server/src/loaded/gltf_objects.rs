@@ -62,7 +62,7 @@ pub(super) fn split(
                 super::index_textures(program, &mut def, &imported.textures);
                 let analysed = crate::material::analysed(&def).map_err(|ds| super::first_of(ds, at))?;
                 let (def, report) = super::compiled(analysed, start, parse_ms);
-                let compensated = scene.quality.energy_compensation && def.energy_compensation;
+                let compensated = super::compensated(scene, &def);
                 let values = def.params.iter().map(|p| p.default).collect();
                 program.definitions.push(def);
                 reports.push(report);

@@ -29,9 +29,11 @@ pub struct Report {
     /// Why not, one sentence per cause with its location; empty when it
     /// conserves energy.
     pub energy_reasons: Vec<String>,
-    /// Today every material costs the G-buffer's whole layout; `None`
-    /// until the renderer's figure is filled in (the daemon does, from
-    /// `render::passes::gbuffer::BYTES_PER_PIXEL`).
+    /// What the G-buffer pass writes per pixel of this material: its words
+    /// in the material buffer (`budget.bytes_after`) and the inspection
+    /// targets every material shares
+    /// (`render::passes::gbuffer::BYTES_PER_PIXEL`); `None` until the
+    /// daemon fills it in.
     pub gbuffer_bytes_per_pixel: Option<u32>,
     /// The material brought to `quality.material_bytes`; `None` until the
     /// loader has simplified the program.

@@ -31,9 +31,14 @@ pub fn report(scene: &str, loaded: &Loaded) -> MaterialsReport {
         entry(program, i, name, file, material, None)
     });
     let materials = entries.chain(gltf).collect();
-    // Every definition costs the G-buffer's whole layout today.
-    let bytes = Some(crate::render::passes::gbuffer::BYTES_PER_PIXEL);
-    let definitions = loaded.reports.iter().map(|r| Report { gbuffer_bytes_per_pixel: bytes, ..r.clone() }).collect();
+    // Its words in the material buffer, and the inspection targets every
+    // material shares.
+    let inspection = crate::render::passes::gbuffer::BYTES_PER_PIXEL;
+    let definitions = loaded
+        .reports
+        .iter()
+        .map(|r| Report { gbuffer_bytes_per_pixel: r.budget.as_ref().map(|b| b.bytes_after + inspection), ..r.clone() })
+        .collect();
     MaterialsReport { scene: scene.to_owned(), materials, definitions }
 }
 
