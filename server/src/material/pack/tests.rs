@@ -133,11 +133,9 @@ fn case(r: &mut Lcg, unit: &mut dyn FnMut(&mut Lcg) -> f32, big: &mut dyn FnMut(
 fn simple(mut c: Case) -> Case {
     let m = c[0][3].clamp(0.0, 1.0);
     c[0] = [1.0, 1.0, 1.0, m];
-    for i in 0..3 {
-        c[1][i] = c[1][i].clamp(0.0, 1.0);
-    }
-    c[1][3] = c[1][3].clamp(0.0, 1.0);
-    c[2] = [0, 1, 2].map(|i| 0.04 + (c[1][i] - 0.04) * m).into_iter().chain([0.0]).collect::<Vec<_>>().try_into().unwrap();
+    c[1] = c[1].map(|x| x.clamp(0.0, 1.0));
+    let f0 = |x: f32| 0.04 + (x - 0.04) * m;
+    c[2] = [f0(c[1][0]), f0(c[1][1]), f0(c[1][2]), 0.0];
     c[3] = [1.0, 1.0, 1.0, c[3][3]];
     c[4] = [0.0, 0.0, 0.0, c[4][3]];
     c[5] = [0.0, 0.0, 0.0, 0.0];
