@@ -24,7 +24,7 @@ use super::session::Session;
 use crate::diag::Diagnostic;
 use crate::gpu::Gpu;
 use crate::loaded::Loaded;
-use crate::material::{Program, layout, simplify};
+use crate::material::{Program, simplify};
 use crate::scene::{Camera, DebugView, Geometry, LightKind, Object, Renderer, Scene};
 use crate::shader::Library;
 
@@ -39,8 +39,8 @@ pub struct Preview {
     pub png: Vec<u8>,
     /// Samples per pixel (1 for the raster).
     pub samples: u32,
-    /// The adaptive G-buffer's bytes per pixel (`layout::bytes`) of the
-    /// definition the sphere wore.
+    /// The adaptive G-buffer's bytes per pixel of the definition the
+    /// sphere wore, as the compile report's `budget` counts them.
     pub material_bytes: u32,
 }
 
@@ -143,8 +143,9 @@ impl Previewer {
         };
         let program = program(scene_program, budget);
         let instance = if simplified { count + material } else { material };
-        let material_bytes = crate::material::analysed(&program.definitions[program.instances[instance].definition as usize])
-            .map_or(0, |a| layout::bytes(&a));
+        // As the compile report counts them.
+        let fitted = simplify::simplify(&scene_program.definitions[scene_program.instances[material].definition as usize], budget);
+        let material_bytes = if simplified { fitted.bytes_after } else { fitted.bytes_before };
         let mut lib = source.lib.clone();
         super::session::material_module(&mut lib, &self.shader_root, &program);
         let loaded = Loaded {
@@ -227,6 +228,7 @@ fn changed_files(old: &Library, new: &Library) -> BTreeSet<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::layout;
     use crate::shader::library;
 
     const MAT: &str = "param tint: color = rgb(0.1, 0.6, 0.1)\nmaterial paint = slab { base_color: tint }\n";
