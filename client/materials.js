@@ -81,7 +81,7 @@ export class MaterialsPanel {
       this.refreshReport();
     }
     // Any change to a material (its file, an override) changes the report.
-    if (JSON.stringify(before) !== JSON.stringify(report)) this.preview.show(this.selected);
+    if (JSON.stringify(before) !== JSON.stringify(report)) this.preview.show(this.selected, this.budget());
     this.lookUp();
   }
 
@@ -90,7 +90,14 @@ export class MaterialsPanel {
     for (const b of this.list.querySelectorAll('[data-index]')) b.setAttribute('aria-selected', String(Number(b.dataset.index) === index));
     this.show();
     // A material chosen (a click, a pinned pixel) turns previews on.
+    this.preview.budgetReport = this.budget();
     this.preview.start(index);
+  }
+
+  /** The selected material's definition's report `budget` (null: none). */
+  budget() {
+    const m = this.report?.materials[this.selected];
+    return (m && this.report.definitions[m.definition]?.budget) ?? null;
   }
 
   show() {

@@ -2,6 +2,7 @@
 //! harness (`loupe_tests`), a module per subcommand.
 
 mod browser;
+mod budget_preview;
 mod check;
 mod denoise;
 mod golden;

@@ -4,6 +4,14 @@
 //! compiles the scene's own generated material module, so what it shows is
 //! what the frame's lighting pass and path tracer run.
 //!
+//! Which definitions the sphere wears is the preview's [`Materials`]: as
+//! the scene renders them, the full ones, or the ones simplified to a
+//! budget (`quality.material_bytes`), so the browser can put the full
+//! material beside the budget's, raster and path traced. The full and
+//! simplified definitions of one budget are compiled into one module
+//! ([`program`]): switching between them, or between materials, rebuilds
+//! no pipeline; a new budget does.
+//!
 //! The scene's point and rect lights are left out: they sit where the
 //! scene put them, not around the sphere. Auto exposure is off (one frame
 //! cannot adapt); the scene's exposure compensation stays as the exposure.
@@ -16,6 +24,7 @@ use super::session::Session;
 use crate::diag::Diagnostic;
 use crate::gpu::Gpu;
 use crate::loaded::Loaded;
+use crate::material::{Program, simplify};
 use crate::scene::{Camera, DebugView, Geometry, LightKind, Object, Renderer, Scene};
 use crate::shader::Library;
 
@@ -30,6 +39,22 @@ pub struct Preview {
     pub png: Vec<u8>,
     /// Samples per pixel (1 for the raster).
     pub samples: u32,
+    /// The adaptive G-buffer's bytes per pixel of the definition the
+    /// sphere wore, as the compile report's `budget` counts them.
+    pub material_bytes: u32,
+}
+
+/// Which definitions a preview's sphere wears.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Materials {
+    /// As the scene renders them: the raster the definitions simplified to
+    /// the scene's `quality.material_bytes`, the path tracer the full ones
+    /// (simplified too under `quality.path_simplified_materials`).
+    AsScene,
+    /// The full definitions, in both renderers.
+    Full,
+    /// The definitions simplified to this many bytes per pixel, in both.
+    Budget(u32),
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -96,32 +121,53 @@ impl Previewer {
         Previewer { shader_root: shader_root.to_owned(), session: None }
     }
 
-    /// Renders instance `material` of `source`'s scene, waiting for it.
-    pub fn render(&mut self, source: Source<'_>, material: usize, renderer: Renderer) -> Result<Preview, PreviewError> {
-        let count = source.loaded.materials.instances.len();
+    /// Renders instance `material` of `source`'s scene wearing `materials`,
+    /// waiting for it.
+    pub fn render(
+        &mut self,
+        source: Source<'_>,
+        material: usize,
+        renderer: Renderer,
+        materials: Materials,
+    ) -> Result<Preview, PreviewError> {
+        let scene_program = &source.loaded.materials;
+        let count = scene_program.instances.len();
         if material >= count {
             return Err(PreviewError::NoSuchMaterial { index: material, count });
         }
+        let quality = &source.loaded.scene.quality;
+        let (budget, simplified) = match materials {
+            Materials::AsScene => (quality.material_bytes, renderer == Renderer::Raster || quality.path_simplified_materials),
+            Materials::Full => (quality.material_bytes, false),
+            Materials::Budget(bytes) => (bytes, true),
+        };
+        let program = program(scene_program, budget);
+        let instance = if simplified { count + material } else { material };
+        // As the compile report counts them.
+        let fitted = simplify::simplify(&scene_program.definitions[scene_program.instances[material].definition as usize], budget);
+        let material_bytes = if simplified { fitted.bytes_after } else { fitted.bytes_before };
+        let mut lib = source.lib.clone();
+        super::session::material_module(&mut lib, &self.shader_root, &program);
         let loaded = Loaded {
-            scene: scene(&source.loaded.scene, material, renderer),
+            scene: scene(&source.loaded.scene, instance, renderer),
             meshes: BTreeMap::new(),
             denoiser: None,
-            materials: source.loaded.materials.clone(),
+            materials: Arc::new(program),
             reports: Arc::default(),
             files: Vec::new(),
             warnings: Vec::new(),
         };
         let session = match &mut self.session {
             Some((device, session)) if *device == source.device => {
-                let mut changed = changed_files(session.library(), source.lib);
-                session.apply_sources(source.lib.clone());
+                let mut changed = changed_files(session.library(), &lib);
+                session.apply_sources(lib);
                 changed.extend(session.set_scene(&loaded));
                 let stale = session.built_from(&changed);
                 session.install_now(stale);
                 session
             }
             slot => {
-                let session = Session::new(source.gpu.clone(), &self.shader_root, source.lib.clone(), &loaded);
+                let session = Session::new(source.gpu.clone(), &self.shader_root, lib, &loaded);
                 &mut slot.insert((source.device, session)).1
             }
         };
@@ -142,8 +188,32 @@ impl Previewer {
                 png = c.to_png();
             }
         }
-        Ok(Preview { png, samples })
+        Ok(Preview { png, samples, material_bytes })
     }
+}
+
+/// The preview's program for `budget`: the scene's full definitions and
+/// instances, then one instance per scene instance (instance `count + i`
+/// for instance `i`) wearing its definition simplified to `budget`, a new
+/// definition only where simplification changed it. Both renderers
+/// compile every definition as it stands (nothing left to simplify), so
+/// one module serves the full and the budget previews of every material.
+pub fn program(scene: &Program, budget: u32) -> Program {
+    let mut out = Program { simplified: Vec::new(), path_simplified: false, ..scene.clone() };
+    let mut at_budget = Vec::with_capacity(scene.definitions.len());
+    for (k, d) in scene.definitions.iter().enumerate() {
+        let s = simplify::simplify(d, budget);
+        at_budget.push(if s.simplified() {
+            out.definitions.push(s.def);
+            (out.definitions.len() - 1) as u32
+        } else {
+            k as u32
+        });
+    }
+    let copies: Vec<_> =
+        scene.instances.iter().map(|i| crate::material::Instance { definition: at_budget[i.definition as usize], ..i.clone() }).collect();
+    out.instances.extend(copies);
+    out
 }
 
 /// The files whose text differs between two versions of the sources.
@@ -158,6 +228,7 @@ fn changed_files(old: &Library, new: &Library) -> BTreeSet<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::layout;
     use crate::shader::library;
 
     const MAT: &str = "param tint: color = rgb(0.1, 0.6, 0.1)\nmaterial paint = slab { base_color: tint }\n";
@@ -192,6 +263,34 @@ mod tests {
         assert_eq!((p.quality.renderer, p.quality.path_spp, p.width, p.height), (Renderer::Path, PATH_SPP, SIZE, SIZE));
     }
 
+    /// The preview's program holds the full definitions and, after them,
+    /// those the budget simplified (only those): at 40 B the showcase's car
+    /// paint (56 B), rust (48 B) and the glTF crate's wood (44 B) get a
+    /// simplified copy that fits, its other materials wear their own definition either way; at 256 B
+    /// nothing is added. One instance per scene instance and budget.
+    #[test]
+    fn the_preview_program_holds_the_full_and_the_budget_definitions() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/showcase.toml");
+        let loaded = crate::loaded::load(&path).unwrap_or_else(|d| panic!("{d}"));
+        let full = &loaded.materials;
+        let (n, count) = (full.definitions.len(), full.instances.len());
+        let p = program(full, 40);
+        assert_eq!(p.definitions[..n], full.definitions[..]);
+        assert_eq!(p.definitions.len(), n + 3, "the car paint, the rust and the crate's wood");
+        assert!(p.simplified.is_empty() && !p.path_simplified, "both renderers compile the definitions as they stand");
+        assert_eq!(p.instances.len(), 2 * count);
+        for i in 0..count {
+            let (whole, budget) = (&p.instances[i], &p.instances[count + i]);
+            let name = &full.definitions[whole.definition as usize].name;
+            assert_eq!((whole, &budget.values), (&full.instances[i], &whole.values), "{name}");
+            let bytes = layout::bytes(&crate::material::analysed(&p.definitions[budget.definition as usize]).unwrap());
+            assert!(bytes <= 40, "{name}: {bytes} B");
+            let simplified = ["car_paint", "rust"].contains(&name.as_str()) || name.ends_with("::wood");
+            assert_eq!(budget.definition as usize >= n, simplified, "{name}");
+        }
+        assert_eq!(program(full, 256).definitions.len(), n);
+    }
+
     /// An edit to the material file is new generated code: the preview
     /// session rebuilds the pipelines built from it.
     #[test]
@@ -207,7 +306,7 @@ mod tests {
             let mut lib = library::read_tree(&root).unwrap();
             super::super::session::material_module(&mut lib, &root, &loaded.materials);
             let source = Source { gpu: &gpu, device: 0, lib: &lib, loaded };
-            centre(&previewer.render(source, 0, Renderer::Raster).unwrap_or_else(|e| panic!("{e:?}")).png)
+            centre(&previewer.render(source, 0, Renderer::Raster, Materials::AsScene).unwrap_or_else(|e| panic!("{e:?}")).png)
         };
         let [r, g, b] = render(&crate::loaded::load(&scene).unwrap());
         assert!(g > r + 20 && g > b + 20, "green: {:?}", [r, g, b]);

@@ -12,7 +12,7 @@ use tokio::sync::oneshot;
 
 use crate::gpu::Gpu;
 use crate::loaded::Loaded;
-use crate::render::preview::{Preview, PreviewError, Previewer, Source};
+use crate::render::preview::{Materials, Preview, PreviewError, Previewer, Source};
 use crate::scene::Renderer;
 use crate::shader::Library;
 
@@ -23,6 +23,7 @@ pub const PREVIEW_QUEUE: usize = 4;
 pub struct Request {
     pub material: usize,
     pub renderer: Renderer,
+    pub materials: Materials,
     pub reply: oneshot::Sender<Result<Preview, Failed>>,
 }
 
@@ -65,8 +66,9 @@ impl Previews {
             let mut previewer = Previewer::new(&root);
             for Job { request, current } in rx {
                 let source = Source { gpu: &current.gpu, device: current.device, lib: &current.lib, loaded: &current.loaded };
-                let rendered =
-                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| previewer.render(source, request.material, request.renderer)));
+                let rendered = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    previewer.render(source, request.material, request.renderer, request.materials)
+                }));
                 let answer = match rendered {
                     Ok(r) => r.map_err(Failed::from),
                     Err(panic) => {

@@ -15,8 +15,9 @@ pub enum Reference {
     /// The same passes at their most accurate settings (these overrides):
     /// the setting only refines how they approximate what they compute.
     Highest(Overrides),
-    /// The path tracer at this many samples per pixel: the setting changes
-    /// the estimate of the light transport itself.
+    /// The path tracer at this many samples per pixel, with the full
+    /// materials: the setting changes the estimate of the light transport
+    /// itself, or the materials (`quality.material_bytes`).
     PathTraced(u32),
 }
 
@@ -51,6 +52,7 @@ impl Series {
                 ("quality.renderer".to_owned(), Value::Text("path".into())),
                 ("quality.path_spp".to_owned(), Value::Int(i64::from(*spp))),
                 ("quality.denoise".to_owned(), Value::Bool(false)),
+                ("quality.path_simplified_materials".to_owned(), Value::Bool(false)),
             ]),
         }
     }
@@ -65,6 +67,37 @@ impl Series {
 /// Powers of two from `from` to `to` inclusive.
 fn doublings(from: i64, to: i64) -> Vec<Value> {
     std::iter::successors(Some(from), |v| Some(v * 2)).take_while(|v| *v <= to).map(Value::Int).collect()
+}
+
+/// The budgets (`quality.material_bytes`, its range by its step, cheapest
+/// first) at which `materials`' instances compile to different simplified
+/// definitions, each the cheapest budget of its result, up to the first at
+/// which no instance is simplified (the raster's full materials); empty
+/// when no budget of the range simplifies any.
+fn budgets(materials: &Program) -> Vec<Value> {
+    let Some(settings::Kind::Int { min, max, step }) = settings::find("quality.material_bytes").map(|s| s.kind) else {
+        return Vec::new();
+    };
+    let used: std::collections::BTreeSet<usize> = materials.instances.iter().map(|i| i.definition as usize).collect();
+    let definitions: Vec<_> = used.iter().filter_map(|&k| materials.definitions.get(k)).collect();
+    let mut out = Vec::new();
+    let mut last = None;
+    for budget in (min..=max).step_by(step.max(1) as usize) {
+        let simplified: Vec<_> = definitions.iter().map(|d| crate::material::simplify::simplify(d, budget as u32)).collect();
+        let any = simplified.iter().any(|s| s.simplified());
+        if !any && out.is_empty() {
+            return out;
+        }
+        let compiled: Vec<_> = simplified.into_iter().map(|s| s.def).collect();
+        if last.as_ref() != Some(&compiled) {
+            out.push(Value::Int(budget));
+            last = Some(compiled);
+        }
+        if !any {
+            break;
+        }
+    }
+    out
 }
 
 fn text(t: &str) -> Value {
@@ -144,6 +177,13 @@ pub fn series(scene: &Scene, materials: &Program, reference_spp: u32) -> Vec<Ser
                 std::slice::from_ref(&raster),
                 best("quality.energy_compensation", Value::Bool(true)),
             );
+        }
+        // What the budget costs the raster (its G-buffer and lighting)
+        // against the truth, the path tracer with the full materials:
+        // only where some budget simplifies a material of the scene.
+        let budgets = budgets(materials);
+        if !budgets.is_empty() {
+            add("quality.material_bytes", budgets, std::slice::from_ref(&raster), Reference::PathTraced(reference_spp));
         }
         let path = [("quality.renderer", text("path"))];
         if scene.denoiser.is_none() {
@@ -233,5 +273,29 @@ mod tests {
         assert_eq!(s.with["quality.renderer"], text("raster"));
         assert_eq!(s.reference_overrides()["quality.energy_compensation"], Value::Bool(true));
         assert!(settings::find(s.setting).is_some_and(|d| d.affects.contains(&"lighting")), "its time is the lighting pass's");
+    }
+
+    /// The budget is swept where some budget of its range simplifies a
+    /// material of the scene (the showcase's car paint, 56 B, and rust,
+    /// 48 B), cheapest first, each budget a different simplified program,
+    /// the last the first at which nothing is simplified; against the path
+    /// tracer with the full materials, even when the scene renders the
+    /// simplified ones in its path tracer. The shorthand materials of
+    /// `minimal.toml` fit every budget: no series there (the first test).
+    #[test]
+    fn the_budget_is_swept_where_a_budget_simplifies_a_material() {
+        let mut showcase = loaded("showcase.toml");
+        showcase.scene.quality.path_simplified_materials = true;
+        let all = series(&showcase.scene, &showcase.materials, 256);
+        let s = all.iter().find(|s| s.setting == "quality.material_bytes").expect("a series for the budget");
+        let ints: Vec<i64> = s.values.iter().map(|v| if let Value::Int(i) = v { *i } else { panic!("{v}") }).collect();
+        assert!(ints.len() >= 3 && ints[0] == 24 && ints.windows(2).all(|w| w[0] < w[1]), "{ints:?}");
+        assert_eq!(ints.last(), Some(&56), "up to the car paint's full size: {ints:?}");
+        assert_eq!(s.with["quality.renderer"], text("raster"));
+        assert_eq!(s.reference, Reference::PathTraced(256));
+        let reference = s.reference_overrides();
+        assert_eq!(reference["quality.renderer"], text("path"));
+        assert_eq!(reference["quality.path_simplified_materials"], Value::Bool(false), "the full materials: the truth");
+        assert_eq!(s.name, "material_bytes");
     }
 }

@@ -29,7 +29,7 @@ async fn the_materials_panel_shows_what_the_budget_did_and_follows_it() {
     // into a haze lobe, which the smallest budget drops too.
     until(&c, &s, "the simplified car paint", &format!("{} === '56 → 16 B/px of 24 (complex → simple)'", row("budget"))).await;
     let rules = until(&c, &s, "its rules", &row("simplified")).await;
-    assert_eq!(rules, "yes: mix #3 → 40 B, layer #4 → 28 B, drop haze #4 → 24 B");
+    assert_eq!(rules, "yes: mix #3 → 40 B, layer #4 → 28 B, drop haze #4 → 16 B");
     assert_eq!(until(&c, &s, "the closures kept", &row("closures_kept")).await, "1");
 
     let mut ws = s.ws();
