@@ -1,11 +1,13 @@
 //! The Materials panel's budget rows (client/materials.js `budgetRows`)
 //! on a one-material scene at 64×36: the car paint (56 B per pixel)
 //! simplified to `quality.material_bytes = 24`, then whole again when an
-//! override raises the budget to 80.
+//! override raises the budget to 80; the simplification preview (full
+//! against the budget, and their difference) while it is simplified, and
+//! the frame, which changes with the budget.
 
 use serde_json::json;
 
-use super::{LIMIT, Project, Server, browser, until};
+use super::{LIMIT, Project, Server, browser, until, until_within};
 
 const SCENE: &str = "scenes/budget.toml";
 
@@ -32,6 +34,21 @@ async fn the_materials_panel_shows_what_the_budget_did_and_follows_it() {
     assert_eq!(rules, "yes: mix #3 → 40 B, layer #4 → 28 B, drop haze #4 → 16 B");
     assert_eq!(until(&c, &s, "the closures kept", &row("closures_kept")).await, "1");
 
+    // Simplified, so the preview compares by itself: the raster's full car
+    // paint against 24 B differ (the coat's reflection is gone). Its
+    // pipelines compile while the frame's do, on the same two cores.
+    let diff = "document.querySelector('#material-budget [data-variant=\"difference\"][data-of=\"raster\"]')";
+    let max = until_within(
+        &c,
+        &s,
+        "the raster's full-against-budget difference",
+        &format!("{diff}?.dataset.state === 'ready' && {diff}.dataset.key === '0:24' && [Number({diff}.dataset.max)]"),
+        2 * LIMIT,
+    )
+    .await;
+    assert!(max[0].as_f64() > Some(8.0), "full and 24 B differ by at most {max} levels");
+    let frame_at_24 = s.get("/api/captures/tonemap/color.png").1;
+
     let mut ws = s.ws();
     ws.event("hello", LIMIT, |_| true);
     ws.send(json!({ "type": "set_override", "path": "quality.material_bytes", "value": 80 }));
@@ -41,5 +58,9 @@ async fn the_materials_panel_shows_what_the_budget_did_and_follows_it() {
     until(&c, &s, "the whole car paint", &format!("{} === '56 → 56 B/px of 80 (complex → complex)'", row("budget"))).await;
     assert_eq!(until(&c, &s, "not simplified", &row("simplified")).await, "no (fits)");
     assert_eq!(until(&c, &s, "its three closures", &row("closures_kept")).await, "3");
+    // Whole again: the preview no longer compares by itself, and the frame
+    // shows the coat.
+    until(&c, &s, "the comparison off", "!document.querySelector('#material-budget-compare').checked").await;
+    s.wait_for("a frame at 80 B", LIMIT, || (s.get("/api/captures/tonemap/color.png").1 != frame_at_24).then_some(()));
     c.close().await.unwrap();
 }

@@ -73,7 +73,7 @@ async fn the_materials_panel_shows_tree_report_and_live_parameters_and_names_a_p
     let raster = until(&c, &s, "plastic's raster preview", &preview("raster", 0)).await;
     assert!(green(&raster), "{raster}");
     let caption = run(format!("return {}.querySelector('figcaption').textContent;", figure("path"))).await;
-    assert_eq!(caption, "path traced · 16 spp");
+    assert_eq!(caption, "path traced · 16 spp · 24 B/px", "its samples and what the plastic costs the G-buffer");
     let before = generations(&s);
     let frame = shown(&c).await;
     run(format!("const i = {slider}; i.value = '0.9'; i.dispatchEvent(new Event('change')); return true;")).await;
