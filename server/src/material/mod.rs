@@ -14,6 +14,7 @@ pub mod gltf;
 pub mod operators;
 pub mod pack;
 pub mod report;
+pub mod simple;
 pub mod texture;
 pub mod tree;
 

@@ -39,13 +39,30 @@ pub struct FrameOptions {
     /// The most words a pixel of the scene's materials takes in the
     /// material buffer (`material::pack::program_words`, the session's).
     pub material_words: u32,
+    /// The tile classes the scene's materials can make
+    /// (`classify::Classes::of`, the session's): the others' lighting
+    /// passes are culled.
+    pub tile_classes: classify::Classes,
 }
 
 /// Assembles the frame from the scene and the network its `[denoiser]`
 /// names (`loaded::Loaded::denoiser`): only what the scene calls for.
 pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOptions) -> Graph {
     let mut g = GraphBuilder::new();
-    let raster = ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volume_march", "volumes"];
+    let raster = [
+        "shadows",
+        "depth_prepass",
+        "gbuffer",
+        "classify",
+        "ltc_tables",
+        "lighting",
+        "lighting_simple",
+        "lighting_single",
+        "lighting_complex",
+        "volume_shadows",
+        "volume_march",
+        "volumes",
+    ];
     let (hdr, gbuffer) = if scene.is_empty() {
         let empty = "the scene is empty: it shows the test pattern";
         for pass in raster.iter().chain(&["path_trace"]) {
@@ -66,8 +83,9 @@ pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOpti
         let shadows = shadows::shadows(&mut g, scene);
         let depth = depth_prepass::depth_prepass(&mut g, scene);
         let gb = gbuffer::gbuffer(&mut g, scene, depth, options.material_words);
+        let tiles = classify::classify(&mut g, scene, &gb, depth);
         let ltc = ltc_tables::ltc_tables(&mut g, scene);
-        let lit = lighting::lighting(&mut g, scene, &gb, depth, shadows, ltc);
+        let lit = lighting::lighting(&mut g, scene, &gb, depth, tiles, options.tile_classes, shadows, ltc);
         let grid = volume_shadows::volume_shadows(&mut g, scene);
         let marched = volume_march::volume_march(&mut g, scene, depth, shadows, grid);
         (volumes::volumes(&mut g, scene, lit, depth, marched), Some((gb, depth)))

@@ -153,6 +153,7 @@ impl Session {
         let options = FrameOptions {
             max_buffer: Some(crate::gpu::largest_binding(&limits)),
             material_words: material::pack::program_words(&loaded.materials.definitions),
+            tile_classes: super::passes::classify::Classes::of(&loaded.materials.definitions),
             ..FrameOptions::default()
         };
         Session {
@@ -181,7 +182,8 @@ impl Session {
     /// Builds frames with `options` from now on (the device's limits stay
     /// the session's).
     pub fn with_options(mut self, options: FrameOptions) -> Self {
-        self.options = FrameOptions { max_buffer: self.options.max_buffer, material_words: self.options.material_words, ..options };
+        let o = &self.options;
+        self.options = FrameOptions { max_buffer: o.max_buffer, material_words: o.material_words, tile_classes: o.tile_classes, ..options };
         self.graph = super::build_graph(&self.scene, self.network.as_deref(), self.options);
         self
     }
@@ -260,12 +262,13 @@ impl Session {
         if self.materials.definitions != loaded.materials.definitions {
             let mut lib = (*self.lib).clone();
             if material_module(&mut lib, &self.shader_root, &loaded.materials) {
-                changed.insert(material::back::DISPLAY.to_owned());
+                changed.extend([material::back::DISPLAY, material::simple::DISPLAY].map(str::to_owned));
                 self.lib = Arc::new(lib);
             }
         }
         self.materials = loaded.materials.clone();
         self.options.material_words = material::pack::program_words(&loaded.materials.definitions);
+        self.options.tile_classes = super::passes::classify::Classes::of(&loaded.materials.definitions);
         self.graph = super::build_graph(&self.scene, self.network.as_deref(), self.options);
         // History describes the old scene: accumulation starts over.
         self.reset_history();
@@ -571,12 +574,17 @@ fn output_summary(graph: &Graph, h: super::resource::Handle, camera: &Camera) ->
 /// on disk; it sits among the shaders as `material::back::DISPLAY`).
 /// Returns whether the library's text of it changed.
 pub fn material_module(lib: &mut Library, shader_root: &Path, program: &Program) -> bool {
-    let text = program.wgsl();
-    if lib.get(material::back::DISPLAY).is_some_and(|f| *f.text == *text) {
+    // The simple tiles' module (`material::simple`) follows the program.
+    let simple = generated_module(lib, shader_root, material::simple::DISPLAY, material::simple::wgsl(&program.definitions));
+    generated_module(lib, shader_root, material::back::DISPLAY, program.wgsl()) || simple
+}
+
+/// Puts generated module `text` into `lib` at `display`; whether it changed.
+fn generated_module(lib: &mut Library, shader_root: &Path, display: &str, text: String) -> bool {
+    if lib.get(display).is_some_and(|f| *f.text == *text) {
         return false;
     }
-    let display = material::back::DISPLAY.to_owned();
-    lib.upsert(SourceFile::from_text(display, shader_root.join(material::back::DISPLAY), text.into()));
+    lib.upsert(SourceFile::from_text(display.to_owned(), shader_root.join(display), text.into()));
     true
 }
 

@@ -411,8 +411,21 @@ fn auto_exposure(s: &Scene) -> bool {
 }
 
 /// Every pass that makes the HDR image, raster or path traced.
-const RENDERED: [&str; 9] =
-    ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volume_march", "volumes", "path_trace"];
+const RENDERED: [&str; 13] = [
+    "shadows",
+    "depth_prepass",
+    "gbuffer",
+    "classify",
+    "ltc_tables",
+    "lighting",
+    "lighting_simple",
+    "lighting_single",
+    "lighting_complex",
+    "volume_shadows",
+    "volume_march",
+    "volumes",
+    "path_trace",
+];
 
 /// In `affects`: every pass drawn as a fullscreen triangle. The passes are
 /// declared by the renderer, above the scene, so the table names the group
@@ -471,6 +484,10 @@ settings! {
         /// `.mat` files only, never to the scene file's shorthand materials
         /// (today's scenes keep their look); off, it applies nowhere.
         energy_compensation: bool = true, Toggle, "Energy compensation (multiple scattering)", affects ["lighting", "path_trace"];
+        /// Classify 8×8 tiles by the dearest material class among their
+        /// pixels and light each class with its own pipeline over its
+        /// tiles only; off, every tile goes through the complex pipeline.
+        tile_classification: bool = true, Toggle, "Tile classification", affects ["classify", "lighting", "lighting_simple", "lighting_single", "lighting_complex"], shown_when rastered;
         /// Ray-march steps per pixel through the media.
         volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volume_march", "volumes"], shown_when raster_media;
         /// Steps of the march toward each light (self-shadowing), from each

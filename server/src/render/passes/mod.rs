@@ -27,6 +27,7 @@ passes![
     shadows,
     depth_prepass,
     gbuffer,
+    classify,
     ltc_tables,
     lighting,
     volume_shadows,
@@ -75,7 +76,7 @@ pub const VIEW: Binding = uniform("view", 0, ALL, sizes::VIEW);
 pub const LIGHTS: Binding = storage("lights", 1, FRAG.union(COMPUTE));
 /// Shadow maps and their views (`lib/shadows.wgsl`), with SHADOWS on.
 pub const SHADOW_GROUP: Group =
-    Group::when(1, SHADOWS, &[crate::gpu::pipeline::depth_array("shadow_maps", 0), storage("shadow_views", 1, FRAG)]);
+    Group::when(1, SHADOWS, &[crate::gpu::pipeline::depth_array("shadow_maps", 0), storage("shadow_views", 1, FRAG.union(COMPUTE))]);
 /// The participating media (`lib/media.wgsl`), for raster and compute passes.
 /// `loupe::material`'s parameters and instance table (group 0, in every
 /// pass that imports the module; `material::back`'s binding numbers).
