@@ -1,9 +1,9 @@
 // Tile classification (Substrate's): one workgroup per 8×8 tile reads each
-// pixel's depth and material header and gives the tile the dearest class
-// among its pixels (`loupe::tiles`). Outputs: each tile's class and
-// material bytes, each class's tile list with its indirect dispatch
+// pixel's depth and material header and gives the tile the dearest kind
+// among its pixels (`loupe::tiles`). Outputs: each tile's kind and
+// material bytes, each kind's tile list with its indirect dispatch
 // arguments (x = tiles, at most MAX_GROUPS; y = z = 1), and the frame's
-// pixels and tiles per class. The pass clears the counters first.
+// pixels and tiles per kind. The pass clears the counters first.
 #import loupe::material::material_word_count
 #import loupe::tiles::{TILE_EMPTY, TILE_COMPLEX, TILE_CLASSES, STATS_TILES, MAX_GROUPS, tile_count}
 
@@ -36,28 +36,28 @@ fn classify(
     workgroupBarrier();
     let size = textureDimensions(depth);
     if all(id.xy < size) {
-        var class = TILE_EMPTY;
+        var kind = TILE_EMPTY;
         // Pixels without geometry write no words: theirs are stale.
         if textureLoad(depth, vec2<i32>(id.xy), 0) < 1.0 {
             let header = material_words[id.y * size.x + id.x];
-            class = min((header & 3u) + 1u, TILE_COMPLEX);
+            kind = min((header & 3u) + 1u, TILE_COMPLEX);
             atomicAdd(&bytes, material_word_count(header) * 4u);
         }
-        atomicMax(&dearest, class);
-        atomicAdd(&pixels[class], 1u);
+        atomicMax(&dearest, kind);
+        atomicAdd(&pixels[kind], 1u);
     }
     workgroupBarrier();
     if local != 0u {
         return;
     }
-    let class = atomicLoad(&dearest);
+    let kind = atomicLoad(&dearest);
     let tile = group.y * groups.x + group.x;
-    tile_classes[tile] = class;
+    tile_classes[tile] = kind;
     tile_bytes[tile] = atomicLoad(&bytes);
-    let slot = atomicAdd(&stats[STATS_TILES + class], 1u);
-    tile_lists[class * tile_count(size) + slot] = tile;
+    let slot = atomicAdd(&stats[STATS_TILES + kind], 1u);
+    tile_lists[kind * tile_count(size) + slot] = tile;
     if slot < MAX_GROUPS {
-        atomicAdd(&dispatch[class * 3u], 1u);
+        atomicAdd(&dispatch[kind * 3u], 1u);
     }
     for (var c = 0u; c < TILE_CLASSES; c++) {
         atomicAdd(&stats[c], atomicLoad(&pixels[c]));

@@ -102,12 +102,12 @@ fn light(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) group
 #ifdef ALL_TILES
     shade_at(group.xy * TILE_SIZE + local.xy, size);
 #else
-    let class = tile_class.x;
-    let count = tile_stats[STATS_TILES + class];
+    let kind = tile_class.x;
+    let count = tile_stats[STATS_TILES + kind];
     // More tiles than one dispatch's workgroups: each takes every
     // groups.x-th.
     for (var t = group.x; t < count; t += groups.x) {
-        let tile = tile_lists[class * tile_count(size) + t];
+        let tile = tile_lists[kind * tile_count(size) + t];
         shade_at(tile_origin(tile, size) + local.xy, size);
     }
 #endif
