@@ -34,7 +34,7 @@ fn minimal_scene_builds_only_what_it_needs() {
     let (run, report) = render(&p, "scenes/minimal.toml", &[]);
     run.code(0);
     let r = report.expect("report.json written");
-    assert_eq!(names(&r["passes"]), ["shadows", "depth_prepass", "gbuffer", "lighting", "tonemap"], "{r}");
+    assert_eq!(names(&r["passes"]), ["shadows", "depth_prepass", "gbuffer", "classify", "lighting", "lighting_simple", "tonemap"], "{r}");
     assert!(culled_reason(&r, "volumes").contains("no participating media"));
     assert!(culled_reason(&r, "volume_shadows").contains("no participating media"));
     assert!(culled_reason(&r, "volume_march").contains("no participating media"));
