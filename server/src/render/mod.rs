@@ -88,14 +88,14 @@ pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOpti
         let lit = lighting::lighting(&mut g, scene, &gb, depth, tiles, options.tile_classes, shadows, ltc);
         let grid = volume_shadows::volume_shadows(&mut g, scene);
         let marched = volume_march::volume_march(&mut g, scene, depth, shadows, grid);
-        (volumes::volumes(&mut g, scene, lit, depth, marched), Some((gb, depth)))
+        (volumes::volumes(&mut g, scene, lit, depth, marched), Some((gb, depth, tiles)))
     };
     let adapted = auto_exposure::auto_exposure(&mut g, scene, hdr);
     let exposed = exposure::exposure(&mut g, scene, hdr, adapted);
     let ldr = tonemap::tonemap(&mut g, scene, exposed);
     let watch = options.nan_watch.then(|| nan_watch::nan_watch(&mut g, scene, exposed));
     let debug = match &gbuffer {
-        Some((gb, depth)) => debug_view::debug_view(&mut g, scene, gb, *depth),
+        Some((gb, depth, tiles)) => debug_view::debug_view(&mut g, scene, gb, *depth, *tiles),
         None => {
             g.cull("debug_view", "no G-buffer to show: the scene is empty or path traced");
             None

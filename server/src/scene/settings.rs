@@ -241,6 +241,13 @@ choice!(
         /// The G-buffer's UV, its fractional part in red and green.
         Uv = "uv",
         Depth = "depth",
+        /// Each 8×8 tile by its class (tile classification): empty grey,
+        /// simple green, single yellow, complex red.
+        TileClass = "tile_class",
+        /// Per pixel, its closures: 1 green, 2 yellow, 3 or more red.
+        Closures = "closures",
+        /// Per pixel, its material bytes, white at the scene's most.
+        Bytes = "bytes",
     }
 );
 

@@ -180,6 +180,13 @@ pub struct Statistics {
 }
 
 impl Statistics {
+    /// From a frame's captured tensors; `None` when it classified nothing
+    /// (tile classification off, a path-traced or empty scene).
+    pub fn of_frame(tensors: &[crate::render::capture::CapturedTensor]) -> Option<Statistics> {
+        let find = |key: &str| tensors.iter().find(|t| t.key() == key);
+        Some(Statistics::from_tensors(&find(STATS)?.data, &find(BYTES)?.data))
+    }
+
     /// From the captured `classify/stats` and `classify/bytes` tensors (the
     /// bytes summed here, per tile, so no counter can overflow).
     pub fn from_tensors(stats: &[f32], bytes: &[f32]) -> Statistics {

@@ -133,6 +133,34 @@ fn tiles_are_classified_by_their_dearest_pixel_and_the_tiled_lighting_matches_th
     let untiled = image(&r, "lighting/color");
     let worst = tiled.iter().zip(untiled).map(|(a, b)| (a - b).abs() / b.abs().max(1.0)).fold(0.0f32, f32::max);
     assert!(worst <= 1e-6, "tiled against untiled: {worst}");
+
+    // The debug views: each tile's class, each pixel's closures, as the
+    // colours `post/debug_tiles.wgsl` gives them (empty grey, then green,
+    // yellow, red), at a pixel inside each tile.
+    let hue = |rgb: &[f32]| match (rgb[0] > 0.5, rgb[1] > 0.5) {
+        (false, false) => EMPTY,
+        (false, true) => SIMPLE,
+        (true, true) => SINGLE,
+        (true, false) => COMPLEX,
+    };
+    for (view, per_pixel) in [("tile_class", false), ("closures", true)] {
+        let o = Overrides::from([("post.debug_view".to_owned(), Value::Text(view.to_owned()))]);
+        s.set_scene(&load(dir.path(), SCENE, &o));
+        assert_eq!(s.install_missing(), vec![]);
+        let wanted: BTreeSet<String> = ["debug_view/color".to_owned()].into();
+        let pending = s.submit(Some(&wanted), 1.0 / 30.0);
+        let r = s.wait(pending);
+        let shown = image(&r, "debug_view/color");
+        for ty in 0..down as usize {
+            for tx in 0..across as usize {
+                let (x, y) = (tx * 8 + 3, ty * 8 + 3);
+                // A two-closure pixel shows 2 closures (yellow) per pixel.
+                let want = if per_pixel { [EMPTY, SIMPLE, SINGLE, SINGLE][pixel_class(x, y)] } else { want_classes[ty * across as usize + tx] as usize };
+                let i = (y * w + x) * 4;
+                assert_eq!(hue(&shown[i..i + 3]), want, "{view} at ({x}, {y}): {:?}", &shown[i..i + 3]);
+            }
+        }
+    }
 }
 
 #[test]
