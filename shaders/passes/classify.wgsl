@@ -14,6 +14,9 @@
 @group(0) @binding(4) var<storage, read_write> tile_lists: array<u32>;
 @group(0) @binding(5) var<storage, read_write> dispatch: array<atomic<u32>>;
 @group(0) @binding(6) var<storage, read_write> stats: array<atomic<u32>>;
+// Per class, the class whose pass lights it (the next dearer one a class
+// the scene's materials cannot make, `Classes::promotion`).
+@group(0) @binding(7) var<uniform> promotion: vec4<u32>;
 
 var<workgroup> dearest: atomic<u32>;
 var<workgroup> pixels: array<atomic<u32>, 4>;
@@ -50,7 +53,7 @@ fn classify(
     if local != 0u {
         return;
     }
-    let kind = atomicLoad(&dearest);
+    let kind = promotion[atomicLoad(&dearest)];
     let tile = group.y * groups.x + group.x;
     tile_classes[tile] = kind;
     tile_bytes[tile] = atomicLoad(&bytes);

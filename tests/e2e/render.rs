@@ -78,8 +78,12 @@ fn showcase_renders_every_pass() {
             "shadows",
             "depth_prepass",
             "gbuffer",
+            "classify",
             "ltc_tables",
             "lighting",
+            "lighting_simple",
+            "lighting_single",
+            "lighting_complex",
             "volume_shadows",
             "volume_march",
             "volumes",
@@ -92,6 +96,17 @@ fn showcase_renders_every_pass() {
         "{r}"
     );
     assert_eq!(names(&r["culled"]), ["path_trace", "denoise_autoexposure", "denoise_input", "denoise", "test_pattern"]);
+    // Tile classification's counts: every pixel and tile in one class, and
+    // the material bytes of the pixels with geometry.
+    let tiles = &r["tiles"];
+    let sum =
+        |counts: &serde_json::Value| ["empty", "simple", "single", "complex"].iter().map(|c| counts[*c].as_u64().unwrap()).sum::<u64>();
+    let (w, h) = (r["width"].as_u64().unwrap(), r["height"].as_u64().unwrap());
+    assert_eq!(sum(&tiles["pixels"]), w * h, "{tiles}");
+    assert_eq!(sum(&tiles["tiles"]), w.div_ceil(8) * h.div_ceil(8), "{tiles}");
+    assert!(tiles["tiles"]["complex"].as_u64().unwrap() > 0, "the car paint's tiles: {tiles}");
+    let geometry = sum(&tiles["pixels"]) - tiles["pixels"]["empty"].as_u64().unwrap();
+    assert!(tiles["material_bytes_written"].as_u64().unwrap() >= geometry * 16, "{tiles}");
     // Auto exposure: compute passes whose buffers are written as tensors.
     let pass = |name: &str| r["passes"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap().clone();
     assert_eq!(pass("exposure_histogram")["kind"], "compute");

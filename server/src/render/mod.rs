@@ -83,7 +83,7 @@ pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOpti
         let shadows = shadows::shadows(&mut g, scene);
         let depth = depth_prepass::depth_prepass(&mut g, scene);
         let gb = gbuffer::gbuffer(&mut g, scene, depth, options.material_words);
-        let tiles = classify::classify(&mut g, scene, &gb, depth);
+        let tiles = classify::classify(&mut g, scene, &gb, depth, options.tile_classes);
         let ltc = ltc_tables::ltc_tables(&mut g, scene);
         let lit = lighting::lighting(&mut g, scene, &gb, depth, tiles, options.tile_classes, shadows, ltc);
         let grid = volume_shadows::volume_shadows(&mut g, scene);

@@ -261,8 +261,9 @@ impl Session {
         let mut changed = BTreeSet::new();
         if self.materials.definitions != loaded.materials.definitions {
             let mut lib = (*self.lib).clone();
-            if material_module(&mut lib, &self.shader_root, &loaded.materials) {
-                changed.extend([material::back::DISPLAY, material::simple::DISPLAY].map(str::to_owned));
+            let regenerated = material_module(&mut lib, &self.shader_root, &loaded.materials);
+            if !regenerated.is_empty() {
+                changed.extend(regenerated.into_iter().map(str::to_owned));
                 self.lib = Arc::new(lib);
             }
         }
@@ -572,11 +573,13 @@ fn output_summary(graph: &Graph, h: super::resource::Handle, camera: &Camera) ->
 
 /// Puts `program`'s `loupe::material` module into `lib` (generated, never
 /// on disk; it sits among the shaders as `material::back::DISPLAY`).
-/// Returns whether the library's text of it changed.
-pub fn material_module(lib: &mut Library, shader_root: &Path, program: &Program) -> bool {
-    // The simple tiles' module (`material::simple`) follows the program.
-    let simple = generated_module(lib, shader_root, material::simple::DISPLAY, material::simple::wgsl(&program.definitions));
-    generated_module(lib, shader_root, material::back::DISPLAY, program.wgsl()) || simple
+/// With it the simple tiles' `loupe::material_simple` (`material::simple`).
+/// Returns the generated files whose text changed.
+pub fn material_module(lib: &mut Library, shader_root: &Path, program: &Program) -> Vec<&'static str> {
+    [(material::back::DISPLAY, program.wgsl()), (material::simple::DISPLAY, material::simple::wgsl(&program.definitions))]
+        .into_iter()
+        .filter_map(|(display, text)| generated_module(lib, shader_root, display, text).then_some(display))
+        .collect()
 }
 
 /// Puts generated module `text` into `lib` at `display`; whether it changed.

@@ -494,7 +494,7 @@ settings! {
         /// Classify 8×8 tiles by the dearest material class among their
         /// pixels and light each class with its own pipeline over its
         /// tiles only; off, every tile goes through the complex pipeline.
-        tile_classification: bool = true, Toggle, "Tile classification", affects ["classify", "lighting", "lighting_simple", "lighting_single", "lighting_complex"], shown_when rastered;
+        tile_classification: bool = true, Toggle, "Tile classification", affects ["classify", "lighting"], shown_when rastered;
         /// Ray-march steps per pixel through the media.
         volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volume_march", "volumes"], shown_when raster_media;
         /// Steps of the march toward each light (self-shadowing), from each

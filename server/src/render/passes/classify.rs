@@ -12,7 +12,7 @@
 use serde::Serialize;
 
 use super::gbuffer::GBuffer;
-use crate::gpu::pipeline::{COMPUTE, Group, PipelineSpec, Stages, depth_texture, storage, storage_rw};
+use crate::gpu::pipeline::{COMPUTE, Group, PipelineSpec, Stages, depth_texture, sizes, storage, storage_rw, uniform};
 use crate::material::tree::{Definition, Field, NodeKind};
 use crate::render::graph::{GraphBuilder, PassKind};
 use crate::render::resource::{Access, Element, Handle, Meaning, PipelineKey, TensorLayout};
@@ -32,6 +32,7 @@ pub static CLASSIFY: PipelineSpec = PipelineSpec {
             storage_rw("tile_lists", 4),
             storage_rw("dispatch", 5),
             storage_rw("stats", 6),
+            uniform("promotion", 7, COMPUTE, sizes::VEC4),
         ],
     )],
     defs: &[],
@@ -54,9 +55,11 @@ pub const BYTES: &str = "classify/bytes";
 
 /// Which classes the scene's materials can make, known from their
 /// definitions: a material of two or more closures makes complex pixels; a
-/// one-closure material simple ones, and single ones unless its slab sets
-/// only what the simple class stores (base colour, metalness, roughness:
-/// the scene file's shorthand). Empty tiles are always possible.
+/// one-closure material simple ones, and single ones too unless it is the
+/// scene file's shorthand (its closures are simple by construction:
+/// `material::pack`). Empty tiles are always possible. Should a pixel
+/// still be of a class called impossible, the classify pass lights its
+/// tile with the next dearer live class (`promotion`): no tile goes unlit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Classes {
     pub simple: bool,
@@ -77,11 +80,10 @@ impl Classes {
         for d in definitions {
             if crate::material::back::closures(d, d.root) > 1 {
                 c.complex = true;
-                continue;
+            } else {
+                c.simple = true;
+                c.single |= !(d.name == SHORTHAND && !d.energy_compensation && only_simple_fields(d));
             }
-            c.simple = true;
-            let simple_fields = [Field::BaseColor, Field::BaseMetalness, Field::SpecularRoughness];
-            c.single |= d.nodes.iter().any(|n| matches!(&n.kind, NodeKind::Slab(s) if s.fields.iter().any(|(f, _)| !simple_fields.contains(f))));
         }
         c
     }
@@ -95,6 +97,25 @@ impl Classes {
             _ => true,
         }
     }
+
+    /// Per class, the class whose pass lights its tiles: itself when
+    /// possible, else the next dearer possible one, else the dearest.
+    pub fn promotion(self) -> [u32; 4] {
+        let dearest = (0..4).rev().find(|&i| self.possible(i)).unwrap_or(EMPTY);
+        std::array::from_fn(|c| (c..4).find(|&i| self.possible(i)).unwrap_or(dearest) as u32)
+    }
+}
+
+/// The shorthand's definition name (`material::shorthand`).
+const SHORTHAND: &str = "shorthand";
+
+/// Whether every slab of `d` sets only what the simple class stores.
+fn only_simple_fields(d: &Definition) -> bool {
+    let simple = [Field::BaseColor, Field::BaseMetalness, Field::SpecularRoughness];
+    d.nodes.iter().all(|n| match &n.kind {
+        NodeKind::Slab(s) => s.fields.iter().all(|(f, _)| simple.contains(f)),
+        _ => true,
+    })
 }
 
 /// What the classify pass hands the lighting.
@@ -117,7 +138,7 @@ pub fn tiles(width: u32, height: u32) -> (u32, u32) {
 
 /// Classifies the tiles of the G-buffer; `None` (culled with its reason)
 /// with `quality.tile_classification` off.
-pub fn classify(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle) -> Option<Tiles> {
+pub fn classify(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle, possible: Classes) -> Option<Tiles> {
     if !scene.quality.tile_classification {
         g.cull("classify", "quality.tile_classification is off: every tile is lit by the complex pipeline");
         return None;
@@ -137,7 +158,9 @@ pub fn classify(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle
     // The counters start at zero every frame.
     p.access(dispatch, Access::CopyDst);
     p.access(stats, Access::CopyDst);
+    let promotion = possible.promotion();
     p.execute(move |ctx| {
+        let promotion = ctx.uniform(bytemuck::cast_slice(&promotion));
         ctx.encoder.clear_buffer(ctx.buffer(dispatch), 0, None);
         ctx.encoder.clear_buffer(ctx.buffer(stats), 0, None);
         let b = [
@@ -148,6 +171,7 @@ pub fn classify(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle
             ("tile_lists", ctx.bind(lists)),
             ("dispatch", ctx.bind(dispatch)),
             ("stats", ctx.bind(stats)),
+            ("promotion", promotion.as_entire_binding()),
         ];
         ctx.dispatch(&key, &b, [across, down, 1]);
     });
@@ -200,3 +224,17 @@ impl Statistics {
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod promotion_tests {
+    use super::*;
+
+    #[test]
+    fn an_impossible_class_is_lit_by_the_next_dearer_possible_one() {
+        let c = |simple, single, complex| Classes { simple, single, complex }.promotion();
+        assert_eq!(c(true, true, true), [0, 1, 2, 3]);
+        assert_eq!(c(true, false, true), [0, 1, 3, 3]);
+        assert_eq!(c(true, false, false), [0, 1, 1, 1]);
+        assert_eq!(c(false, true, false), [0, 2, 2, 2]);
+    }
+}

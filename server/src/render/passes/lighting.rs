@@ -114,7 +114,7 @@ pub const PASSES: [&str; 4] = ["lighting", "lighting_simple", "lighting_single",
 const CANNOT: [&str; 4] = [
     "",
     "no material of the scene has a single closure",
-    "no material of the scene has one closure with more than base colour, metalness and roughness",
+    "the scene's only one-closure material is the shorthand, whose pixels are all simple",
     "no material of the scene has two or more closures",
 ];
 

@@ -56,9 +56,17 @@ pub fn fullscreen() -> impl Iterator<Item = &'static str> {
 }
 
 /// A setting's `affects` as pass names: its groups (`settings::FULLSCREEN`)
-/// expanded.
+/// expanded, and `lighting` as every tile class's lighting pass
+/// (`lighting::PASSES`): what changes the lighting changes each.
 pub fn affected(affects: &[&'static str]) -> Vec<&'static str> {
-    affects.iter().flat_map(|&a| if a == FULLSCREEN { fullscreen().collect() } else { vec![a] }).collect()
+    affects
+        .iter()
+        .flat_map(|&a| match a {
+            FULLSCREEN => fullscreen().collect(),
+            "lighting" => lighting::PASSES.to_vec(),
+            _ => vec![a],
+        })
+        .collect()
 }
 
 /// The spec named `name`.
