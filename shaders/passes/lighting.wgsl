@@ -3,13 +3,12 @@
 // (LIGHT_RECT) or by sampling their area (RECT_SAMPLED, the reference).
 // The environment lights every surface; pixels without geometry show it.
 // One workgroup lights one 8×8 tile of one class's list (the classify
-// pass's), or with ALL_TILES the tile of its workgroup id (tile
-// classification off). SIMPLE_CLASS compiles against `loupe::material_simple`
+// pass's). SIMPLE_CLASS compiles against `loupe::material_simple`
 // (one closure, no optional feature): the simple tiles' specialisation.
 #import loupe::view::{view, world_position}
 #import loupe::lights::{Light, lights, incident, light_type, rect_area, rect_cosine, LIGHT_RECT}
 #import loupe::environment::environment_radiance
-#import loupe::tiles::{TILE_SIZE, STATS_TILES, tile_count, tile_origin}
+#import loupe::tiles::{STATS_TILES, tile_count, tile_origin}
 #ifdef SIMPLE_CLASS
 #import loupe::material_simple::{Surface, MATERIAL_WORDS, material_word_count, material_unpack, material_eval, material_ambient, material_emission}
 #else
@@ -60,13 +59,11 @@ fn rect_sampled(light: Light, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, s: Surfa
 // all the lighting reads of the surface.
 @group(0) @binding(14) var<storage, read> material_words: array<u32>;
 @group(0) @binding(15) var lit: texture_storage_2d<rgba16float, write>;
-#ifndef ALL_TILES
 // The classify pass's tile lists and statistics (tiles per class), and
 // which class this pass lights (x).
 @group(4) @binding(0) var<storage, read> tile_lists: array<u32>;
 @group(4) @binding(1) var<storage, read> tile_stats: array<u32>;
 @group(4) @binding(2) var<uniform> tile_class: vec4<u32>;
-#endif
 
 // How much of a light reaches `p`: occluders' shadow maps times the media's
 // transmittance toward the light.
@@ -99,9 +96,6 @@ fn load_words(pixel: vec2<i32>) -> array<u32, MATERIAL_WORDS> {
 @compute @workgroup_size(8, 8)
 fn light(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
     let size = textureDimensions(depth);
-#ifdef ALL_TILES
-    shade_at(group.xy * TILE_SIZE + local.xy, size);
-#else
     let kind = tile_class.x;
     let count = tile_stats[STATS_TILES + kind];
     // More tiles than one dispatch's workgroups: each takes every
@@ -110,7 +104,6 @@ fn light(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) group
         let tile = tile_lists[kind * tile_count(size) + t];
         shade_at(tile_origin(tile, size) + local.xy, size);
     }
-#endif
 }
 
 fn shade_at(pixel: vec2<u32>, size: vec2<u32>) {

@@ -127,7 +127,7 @@ pub struct Tiles {
     pub dispatch: Handle,
     /// Pixels per class, then tiles per class.
     pub stats: Handle,
-    /// Per tile, its class.
+    /// Per tile, the class whose pass lights it.
     pub classes: Handle,
 }
 
@@ -136,13 +136,10 @@ pub fn tiles(width: u32, height: u32) -> (u32, u32) {
     (width.div_ceil(TILE), height.div_ceil(TILE))
 }
 
-/// Classifies the tiles of the G-buffer; `None` (culled with its reason)
-/// with `quality.tile_classification` off.
-pub fn classify(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle, possible: Classes) -> Option<Tiles> {
-    if !scene.quality.tile_classification {
-        g.cull("classify", "quality.tile_classification is off: every tile is lit by the complex pipeline");
-        return None;
-    }
+/// Classifies the tiles of the G-buffer. With `quality.tile_classification`
+/// off, every tile goes to the complex list (the pixels keep their own
+/// classes in the counts).
+pub fn classify(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle, possible: Classes) -> Tiles {
     let (across, down) = tiles(scene.width, scene.height);
     let count = across * down;
     let mut p = g.pass("classify", PassKind::Compute);
@@ -158,7 +155,7 @@ pub fn classify(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle
     // The counters start at zero every frame.
     p.access(dispatch, Access::CopyDst);
     p.access(stats, Access::CopyDst);
-    let promotion = possible.promotion();
+    let promotion = if scene.quality.tile_classification { possible.promotion() } else { [COMPLEX as u32; 4] };
     p.execute(move |ctx| {
         let promotion = ctx.uniform(bytemuck::cast_slice(&promotion));
         ctx.encoder.clear_buffer(ctx.buffer(dispatch), 0, None);
@@ -175,7 +172,7 @@ pub fn classify(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle
         ];
         ctx.dispatch(&key, &b, [across, down, 1]);
     });
-    Some(Tiles { lists, dispatch, stats, classes })
+    Tiles { lists, dispatch, stats, classes }
 }
 
 /// Per class (`CLASSES`), a count.

@@ -40,15 +40,8 @@ pub static DEBUG_TILES: PipelineSpec = PipelineSpec {
 pub const SPECS: &[&PipelineSpec] = &[&DEBUG_VIEW, &DEBUG_TILES];
 
 /// The material views: closures, bytes, tile classes (`None`).
-fn material_view(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle, tiles: Option<Tiles>, mode: Option<u32>) -> Option<Handle> {
-    let classes = match (mode, tiles) {
-        (None, None) => {
-            g.cull("debug_view", "post.debug_view is tile_class, but quality.tile_classification is off");
-            return None;
-        }
-        (None, Some(t)) => Some(t.classes),
-        (Some(_), _) => None,
-    };
+fn material_view(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle, tiles: Tiles, mode: Option<u32>) -> Handle {
+    let classes = mode.is_none().then_some(tiles.classes);
     let mut p = g.pass("debug_view", PassKind::Raster);
     let key = p.pipeline(fullscreen_key(&DEBUG_TILES, scene, &[(TILE_CLASS_VIEW, classes.is_some())]));
     p.sample(depth);
@@ -61,14 +54,14 @@ fn material_view(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handl
         b.extend(classes.map(|h| ("tile_classes", ctx.bind(h))));
         ctx.fullscreen(&key, &[color], &b);
     });
-    Some(color)
+    color
 }
 
-pub fn debug_view(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle, tiles: Option<Tiles>) -> Option<Handle> {
+pub fn debug_view(g: &mut GraphBuilder, scene: &Scene, gb: &GBuffer, depth: Handle, tiles: Tiles) -> Option<Handle> {
     let (source, mode) = match scene.post.debug_view {
-        DebugView::TileClass => return material_view(g, scene, gb, depth, tiles, None),
-        DebugView::Closures => return material_view(g, scene, gb, depth, tiles, Some(0)),
-        DebugView::Bytes => return material_view(g, scene, gb, depth, tiles, Some(1)),
+        DebugView::TileClass => return Some(material_view(g, scene, gb, depth, tiles, None)),
+        DebugView::Closures => return Some(material_view(g, scene, gb, depth, tiles, Some(0))),
+        DebugView::Bytes => return Some(material_view(g, scene, gb, depth, tiles, Some(1))),
         DebugView::None => {
             g.cull("debug_view", "post.debug_view is none");
             return None;

@@ -10,8 +10,9 @@
 //! no optional field), `lighting_single` and `lighting_complex` against the
 //! program's `loupe::material`. Each tile is in exactly one list, so each
 //! pixel is written once. A class no material of the scene makes is
-//! culled with its reason. With `quality.tile_classification` off,
-//! `lighting` alone lights every tile through the complex pipeline.
+//! culled with its reason. With `quality.tile_classification` off, the
+//! classify pass lists every tile as complex and `lighting` alone lights
+//! them all through the complex pipeline.
 
 use super::classify::{self, Classes, Tiles};
 use super::gbuffer::{GBuffer, WORDS_BINDING};
@@ -31,8 +32,6 @@ pub const RECT_SAMPLED: &str = "RECT_SAMPLED";
 pub const MEDIA_SHADOWS: &str = "MEDIA_SHADOWS";
 /// Compiled against `loupe::material_simple`: the simple tiles'.
 pub const SIMPLE_CLASS: &str = "SIMPLE_CLASS";
-/// Every tile, by workgroup id (tile classification off).
-pub const ALL_TILES: &str = "ALL_TILES";
 
 /// Where the lit colour is stored.
 const LIT: u32 = 15;
@@ -58,9 +57,9 @@ pub static DEFERRED: PipelineSpec = PipelineSpec {
         SHADOW_GROUP,
         Group::when(2, LIGHT_RECT, &[texture("ltc_matrix", 0), texture("ltc_amplitude", 1)]),
         Group::when(3, MEDIA_SHADOWS, MEDIA),
-        Group::unless(4, ALL_TILES, &[storage("tile_lists", 0, COMPUTE), storage("tile_stats", 1, COMPUTE), uniform("tile_class", 2, COMPUTE, sizes::VEC4)]),
+        Group::always(4, &[storage("tile_lists", 0, COMPUTE), storage("tile_stats", 1, COMPUTE), uniform("tile_class", 2, COMPUTE, sizes::VEC4)]),
     ],
-    defs: &[SHADOWS, LIGHT_RECT, RECT_SAMPLED, MEDIA_SHADOWS, SIMPLE_CLASS, ALL_TILES],
+    defs: &[SHADOWS, LIGHT_RECT, RECT_SAMPLED, MEDIA_SHADOWS, SIMPLE_CLASS],
 };
 /// The empty tiles: the environment only.
 pub static ENVIRONMENT: PipelineSpec = PipelineSpec {
@@ -124,7 +123,7 @@ pub fn lighting(
     scene: &Scene,
     gb: &GBuffer,
     depth: Handle,
-    tiles: Option<Tiles>,
+    tiles: Tiles,
     classes: Classes,
     shadows: Option<Handle>,
     ltc: Option<[Handle; 2]>,
@@ -132,9 +131,9 @@ pub fn lighting(
     let media = !scene.media.is_empty();
     let sampled = scene.has_rect_lights() && scene.quality.rect_lights == RectLights::Sampled;
     let defs = [(SHADOWS, shadows.is_some()), (LIGHT_RECT, ltc.is_some()), (RECT_SAMPLED, sampled), (MEDIA_SHADOWS, media)];
-    let key = |extra: (&'static str, bool)| {
+    let key = |simple: bool| {
         let mut all = defs.to_vec();
-        all.push(extra);
+        all.push((SIMPLE_CLASS, simple));
         PipelineKey::new(&DEFERRED, &all)
     };
     let reads = |p: &mut crate::render::graph::PassBuilder<'_>| {
@@ -148,51 +147,20 @@ pub fn lighting(
         }
     };
     let desc = TextureDesc::d2(HDR, scene.width, scene.height);
-    let Some(tiles) = tiles else {
-        for pass in &PASSES[1..] {
-            g.cull(pass, "quality.tile_classification is off: `lighting` lights every tile through the complex pipeline");
-        }
-        let mut p = g.pass(PASSES[0], PassKind::Compute);
-        let key = p.pipeline(key((ALL_TILES, true)));
-        reads(&mut p);
-        let color = p.create("color", Meaning::Color, desc, Access::StorageWrite);
-        let inputs = Inputs { depth, words: gb.words, shadows, ltc, color };
-        let (across, down) = classify::tiles(scene.width, scene.height);
-        p.execute(move |ctx| {
-            let b = inputs.bind(ctx);
-            ctx.dispatch(&key, &b, [across, down, 1]);
-        });
-        return color;
-    };
-    // The empty tiles: the environment, and the colour every class writes.
-    let mut p = g.pass(PASSES[0], PassKind::Compute);
-    let env = p.pipeline(PipelineKey::new(&ENVIRONMENT, &[]));
-    p.access(tiles.lists, Access::StorageRead);
-    p.access(tiles.stats, Access::StorageRead);
-    p.access(tiles.dispatch, Access::Indirect);
-    let color = p.create("color", Meaning::Color, desc, Access::StorageWrite);
-    p.execute(move |ctx| {
-        let b = [
-            ("view", ctx.scene.view.as_entire_binding()),
-            ("lit", ctx.bind(color)),
-            ("tile_lists", ctx.bind(tiles.lists)),
-            ("tile_stats", ctx.bind(tiles.stats)),
-        ];
-        ctx.dispatch_indirect(&env, &b, tiles.dispatch, 0);
-    });
-    let inputs = Inputs { depth, words: gb.words, shadows, ltc, color };
-    for class in [classify::SIMPLE, classify::SINGLE, classify::COMPLEX] {
-        if !classes.possible(class) {
-            g.cull(PASSES[class], CANNOT[class]);
-            continue;
-        }
-        let mut p = g.pass(PASSES[class], PassKind::Compute);
-        let key = p.pipeline(key((SIMPLE_CLASS, class == classify::SIMPLE)));
+    // The passes over one class's tiles against `key`; the first creates
+    // the colour.
+    let class_pass = |g: &mut GraphBuilder, name: &str, class: usize, key: PipelineKey, color: Option<Handle>| {
+        let mut p = g.pass(name, PassKind::Compute);
+        let key = p.pipeline(key);
         reads(&mut p);
         p.access(tiles.lists, Access::StorageRead);
         p.access(tiles.stats, Access::StorageRead);
         p.access(tiles.dispatch, Access::Indirect);
-        p.access(color, Access::StorageWrite);
+        let color = match color {
+            Some(h) => p.access(h, Access::StorageWrite),
+            None => p.create("color", Meaning::Color, desc.clone(), Access::StorageWrite),
+        };
+        let inputs = Inputs { depth, words: gb.words, shadows, ltc, color };
         p.execute(move |ctx| {
             let which = ctx.uniform(bytemuck::cast_slice(&[class as u32, 0, 0, 0]));
             let mut b = inputs.bind(ctx);
@@ -203,6 +171,36 @@ pub fn lighting(
             ]);
             ctx.dispatch_indirect(&key, &b, tiles.dispatch, class as u64 * 12);
         });
+        color
+    };
+    if !scene.quality.tile_classification {
+        for pass in &PASSES[1..] {
+            g.cull(pass, "quality.tile_classification is off: `lighting` lights every tile through the complex pipeline");
+        }
+        return class_pass(g, PASSES[0], classify::COMPLEX, key(false), None);
+    }
+    // The empty tiles: the environment, and the colour every class writes.
+    let mut p = g.pass(PASSES[0], PassKind::Compute);
+    let env = p.pipeline(PipelineKey::new(&ENVIRONMENT, &[]));
+    p.access(tiles.lists, Access::StorageRead);
+    p.access(tiles.stats, Access::StorageRead);
+    p.access(tiles.dispatch, Access::Indirect);
+    let color = p.create("color", Meaning::Color, desc.clone(), Access::StorageWrite);
+    p.execute(move |ctx| {
+        let b = [
+            ("view", ctx.scene.view.as_entire_binding()),
+            ("lit", ctx.bind(color)),
+            ("tile_lists", ctx.bind(tiles.lists)),
+            ("tile_stats", ctx.bind(tiles.stats)),
+        ];
+        ctx.dispatch_indirect(&env, &b, tiles.dispatch, 0);
+    });
+    for class in [classify::SIMPLE, classify::SINGLE, classify::COMPLEX] {
+        if classes.possible(class) {
+            class_pass(g, PASSES[class], class, key(class == classify::SIMPLE), Some(color));
+        } else {
+            g.cull(PASSES[class], CANNOT[class]);
+        }
     }
     color
 }
