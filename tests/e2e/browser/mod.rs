@@ -17,6 +17,7 @@ mod layout;
 mod materials;
 mod presets;
 mod readouts;
+mod tiles;
 mod timings;
 
 const LIMIT: Duration = Duration::from_secs(60);
