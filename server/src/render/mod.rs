@@ -49,20 +49,8 @@ pub struct FrameOptions {
 /// names (`loaded::Loaded::denoiser`): only what the scene calls for.
 pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOptions) -> Graph {
     let mut g = GraphBuilder::new();
-    let raster = [
-        "shadows",
-        "depth_prepass",
-        "gbuffer",
-        "classify",
-        "ltc_tables",
-        "lighting",
-        "lighting_simple",
-        "lighting_single",
-        "lighting_complex",
-        "volume_shadows",
-        "volume_march",
-        "volumes",
-    ];
+    // Every pass that makes the HDR image but the path tracer.
+    let raster: Vec<&str> = crate::scene::settings::RENDERED.iter().copied().filter(|p| *p != "path_trace").collect();
     let (hdr, gbuffer) = if scene.is_empty() {
         let empty = "the scene is empty: it shows the test pattern";
         for pass in raster.iter().chain(&["path_trace"]) {

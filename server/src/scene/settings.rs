@@ -417,8 +417,9 @@ fn auto_exposure(s: &Scene) -> bool {
     s.post.auto_exposure
 }
 
-/// Every pass that makes the HDR image, raster or path traced.
-const RENDERED: [&str; 13] = [
+/// Every pass that makes the HDR image, raster or path traced (the path
+/// tracer last).
+pub(crate) const RENDERED: [&str; 13] = [
     "shadows",
     "depth_prepass",
     "gbuffer",
