@@ -46,6 +46,7 @@ import { Layout } from './layout.js';
 import { isBrowserNotice } from './browser_notices.js';
 import * as tex from './texture.js';
 import { fpsTitle } from './timings.js';
+import { TileInfo } from './tiles.js';
 import { $, el, errorText, formatMs, coalesce, latestOnly } from './util.js';
 
 /** The protocol version this client speaks (protocol.rs `VERSION`). */
@@ -271,6 +272,9 @@ const passList = new PassList($('passes'), $('passes-total'), (pass, output) => 
   }
 });
 
+// Tile classification's counts under the pass list (tiles.js).
+const tileInfo = new TileInfo($('tiles-info'));
+
 const diagnostics = new DiagnosticsPanel($('diagnostics'), $('diag-count'), (path) => api.source(path));
 
 let conn = null; // created below; the inspector's hooks reach it lazily
@@ -458,6 +462,7 @@ function onEvent(ev) {
       header.frame.textContent = String(ev.frame);
       countFrame();
       passList.updateTimings(ev);
+      tileInfo.update(ev);
       if (ev.reload !== null && ev.reload !== undefined && state.reload?.id === ev.reload) {
         state.reload.frame = ev.frame;
         header.reload.title += `\nvisible in frame ${ev.frame}`;

@@ -211,6 +211,8 @@ pub enum ServerEvent {
         unattributed_ms: f64,
         reload: Option<u64>,
         reloads: Vec<u64>,
+        /// Tile classification's counts (`null`: nothing classified).
+        tiles: Option<crate::render::passes::classify::Statistics>,
     },
     Passes {
         passes: Vec<PassInfo>,

@@ -2,11 +2,18 @@
 // the media's shadows on surfaces, and rect lights integrated with LTC
 // (LIGHT_RECT) or by sampling their area (RECT_SAMPLED, the reference).
 // The environment lights every surface; pixels without geometry show it.
-#import loupe::fullscreen::{FullscreenOut, fullscreen}
+// One workgroup lights one 8×8 tile of one class's list (the classify
+// pass's). SIMPLE_CLASS compiles against `loupe::material_simple`
+// (one closure, no optional feature): the simple tiles' specialisation.
 #import loupe::view::{view, world_position}
 #import loupe::lights::{Light, lights, incident, light_type, rect_area, rect_cosine, LIGHT_RECT}
 #import loupe::environment::environment_radiance
+#import loupe::tiles::{STATS_TILES, tile_count, tile_origin}
+#ifdef SIMPLE_CLASS
+#import loupe::material_simple::{Surface, MATERIAL_WORDS, material_word_count, material_unpack, material_eval, material_ambient, material_emission}
+#else
 #import loupe::material::{Surface, MATERIAL_WORDS, material_word_count, material_unpack, material_eval, material_ambient, material_emission}
+#endif
 #ifdef SHADOWS
 #import loupe::shadows::shadow
 #endif
@@ -14,7 +21,11 @@
 #import loupe::media::transmittance
 #endif
 #ifdef LIGHT_RECT
+#ifdef SIMPLE_CLASS
+#import loupe::material_simple::material_rect
+#else
 #import loupe::material::material_rect
+#endif
 @group(2) @binding(0) var ltc_matrix: texture_2d<f32>;
 @group(2) @binding(1) var ltc_amplitude: texture_2d<f32>;
 #endif
@@ -47,11 +58,12 @@ fn rect_sampled(light: Light, n: vec3<f32>, v: vec3<f32>, p: vec3<f32>, s: Surfa
 // The G-buffer's material buffer (`geometry/gbuffer.wgsl`): with depth,
 // all the lighting reads of the surface.
 @group(0) @binding(14) var<storage, read> material_words: array<u32>;
-
-@vertex
-fn vs_fullscreen(@builtin(vertex_index) vertex_index: u32) -> FullscreenOut {
-    return fullscreen(vertex_index);
-}
+@group(0) @binding(15) var lit: texture_storage_2d<rgba16float, write>;
+// The classify pass's tile lists and statistics (tiles per class), and
+// which class this pass lights (x).
+@group(4) @binding(0) var<storage, read> tile_lists: array<u32>;
+@group(4) @binding(1) var<storage, read> tile_stats: array<u32>;
+@group(4) @binding(2) var<uniform> tile_class: vec4<u32>;
 
 // How much of a light reaches `p`: occluders' shadow maps times the media's
 // transmittance toward the light.
@@ -81,15 +93,36 @@ fn load_words(pixel: vec2<i32>) -> array<u32, MATERIAL_WORDS> {
     return words;
 }
 
-@fragment
-fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
-    let pixel = vec2<i32>(in.position.xy);
+@compute @workgroup_size(8, 8)
+fn light(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let size = textureDimensions(depth);
+    let kind = tile_class.x;
+    let count = tile_stats[STATS_TILES + kind];
+    // More tiles than one dispatch's workgroups: each takes every
+    // groups.x-th.
+    for (var t = group.x; t < count; t += groups.x) {
+        let tile = tile_lists[kind * tile_count(size) + t];
+        shade_at(tile_origin(tile, size) + local.xy, size);
+    }
+}
+
+fn shade_at(pixel: vec2<u32>, size: vec2<u32>) {
+    if any(pixel >= size) {
+        return;
+    }
+    textureStore(lit, pixel, vec4(shade(pixel), 1.0));
+}
+
+// The lit colour of one pixel.
+fn shade(texel: vec2<u32>) -> vec3<f32> {
+    let pixel = vec2<i32>(texel);
+    let centre = vec2<f32>(texel) + 0.5;
     let z = textureLoad(depth, pixel, 0);
     if z >= 1.0 {
-        let p = world_position(in.position.xy, 1.0);
-        return vec4(environment_radiance(normalize(p - view.position.xyz)), 1.0);
+        let p = world_position(centre, 1.0);
+        return environment_radiance(normalize(p - view.position.xyz));
     }
-    let p = world_position(in.position.xy, z);
+    let p = world_position(centre, z);
     let v = normalize(view.position.xyz - p);
     let unpacked = material_unpack(load_words(pixel), v);
     let s = unpacked.surface;
@@ -122,5 +155,5 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
         let seen = visibility(light, p, n, inc.l, inc.distance);
         color += inc.radiance * material_eval(s, n, v, inc.l) * seen;
     }
-    return vec4(color, 1.0);
+    return color;
 }

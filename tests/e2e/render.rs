@@ -34,7 +34,7 @@ fn minimal_scene_builds_only_what_it_needs() {
     let (run, report) = render(&p, "scenes/minimal.toml", &[]);
     run.code(0);
     let r = report.expect("report.json written");
-    assert_eq!(names(&r["passes"]), ["shadows", "depth_prepass", "gbuffer", "lighting", "tonemap"], "{r}");
+    assert_eq!(names(&r["passes"]), ["shadows", "depth_prepass", "gbuffer", "classify", "lighting", "lighting_simple", "tonemap"], "{r}");
     assert!(culled_reason(&r, "volumes").contains("no participating media"));
     assert!(culled_reason(&r, "volume_shadows").contains("no participating media"));
     assert!(culled_reason(&r, "volume_march").contains("no participating media"));
@@ -42,20 +42,22 @@ fn minimal_scene_builds_only_what_it_needs() {
     assert!(culled_reason(&r, "exposure").contains("0"));
     assert!(culled_reason(&r, "debug_view").contains("none"));
     assert!(culled_reason(&r, "test_pattern").contains("content"));
-    // Feature permutations follow the scene: no area light, no media.
-    let lighting = &r["passes"].as_array().unwrap()[3];
-    assert_eq!(lighting["pipelines"], serde_json::json!(["lighting.deferred[SHADOWS]"]), "{lighting}");
+    // Feature permutations follow the scene: no area light, no media; the
+    // shorthand's tiles are simple (and the sky's empty).
+    let lighting = &r["passes"].as_array().unwrap()[5];
+    assert_eq!(lighting["pipelines"], serde_json::json!(["lighting.deferred[SHADOWS,SIMPLE_CLASS]"]), "{lighting}");
     assert!(r["nan"].is_null(), "{r}");
-    // Every output written both ways, at the requested size.
+    // Every texture written both ways, at the requested size (the classify
+    // pass's buffers are `.npy`).
     for pass in r["passes"].as_array().unwrap() {
-        for o in pass["outputs"].as_array().unwrap() {
+        for o in pass["outputs"].as_array().unwrap().iter().filter(|o| o.get("png").is_some()) {
             for key in ["png", "exr"] {
                 let f = p.path(&format!("out/{}", o[key].as_str().unwrap()));
                 assert!(f.is_file(), "{} missing", f.display());
             }
         }
     }
-    let tonemap = &r["passes"].as_array().unwrap()[4]["outputs"][0];
+    let tonemap = &r["passes"].as_array().unwrap()[6]["outputs"][0];
     assert_eq!((tonemap["width"].as_u64(), tonemap["height"].as_u64()), (Some(96), Some(54)));
     // The lit knot reaches the final image: some pixel is clearly brighter
     // than the sky's darkest blue.
@@ -78,8 +80,12 @@ fn showcase_renders_every_pass() {
             "shadows",
             "depth_prepass",
             "gbuffer",
+            "classify",
             "ltc_tables",
             "lighting",
+            "lighting_simple",
+            "lighting_single",
+            "lighting_complex",
             "volume_shadows",
             "volume_march",
             "volumes",
@@ -92,6 +98,17 @@ fn showcase_renders_every_pass() {
         "{r}"
     );
     assert_eq!(names(&r["culled"]), ["path_trace", "denoise_autoexposure", "denoise_input", "denoise", "test_pattern"]);
+    // Tile classification's counts: every pixel and tile in one class, and
+    // the material bytes of the pixels with geometry.
+    let tiles = &r["tiles"];
+    let sum =
+        |counts: &serde_json::Value| ["empty", "simple", "single", "complex"].iter().map(|c| counts[*c].as_u64().unwrap()).sum::<u64>();
+    let (w, h) = (r["width"].as_u64().unwrap(), r["height"].as_u64().unwrap());
+    assert_eq!(sum(&tiles["pixels"]), w * h, "{tiles}");
+    assert_eq!(sum(&tiles["tiles"]), w.div_ceil(8) * h.div_ceil(8), "{tiles}");
+    assert!(tiles["tiles"]["complex"].as_u64().unwrap() > 0, "the car paint's tiles: {tiles}");
+    let geometry = sum(&tiles["pixels"]) - tiles["pixels"]["empty"].as_u64().unwrap();
+    assert!(tiles["material_bytes_written"].as_u64().unwrap() >= geometry * 16, "{tiles}");
     // Auto exposure: compute passes whose buffers are written as tensors.
     let pass = |name: &str| r["passes"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap().clone();
     assert_eq!(pass("exposure_histogram")["kind"], "compute");
@@ -141,7 +158,7 @@ fn nan_report_names_the_pass_that_divides_by_zero() {
     // `view.environment_top.w` is always 0 (unused): a division by it is a runtime divide by
     // zero naga cannot fold away.
     let lighting = p.read("shaders/passes/lighting.wgsl");
-    let broken = lighting.replace("    return vec4(color, 1.0);\n}", "    return vec4(color / view.environment_top.w, 1.0);\n}");
+    let broken = lighting.replace("    return color;\n}", "    return color / view.environment_top.w;\n}");
     assert_ne!(broken, lighting, "the edit applies");
     p.write("shaders/passes/lighting.wgsl", broken);
     let (run, report) = render(&p, "scenes/minimal.toml", &[]);

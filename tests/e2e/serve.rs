@@ -58,10 +58,12 @@ fn broken_shader_keeps_last_good_frame_and_reports_location_then_clears() {
 
 #[test]
 fn a_change_to_an_imported_module_rebuilds_only_its_dependents() {
-    // minimal.toml renders depth, G-buffer, lighting and tonemap; of their
-    // shaders the G-buffer's and lighting.wgsl import lib/brdf.wgsl, through
-    // the generated material module (volume_march.wgsl, which shares other
-    // modules with them, is culled here).
+    // minimal.toml renders depth, G-buffer, tile classification, lighting
+    // and tonemap; of their shaders the G-buffer's, classify.wgsl and
+    // lighting.wgsl import lib/brdf.wgsl, through the generated material
+    // modules (volume_march.wgsl, which shares other modules with them, is
+    // culled here; the empty tiles' lighting_environment.wgsl imports no
+    // material).
     const BRDF: &str = "shaders/lib/brdf.wgsl";
     const UNUSED: &str = "shaders/lib/unused.wgsl";
     let p = Project::copy_of_repo("serve-deps");
@@ -71,8 +73,11 @@ fn a_change_to_an_imported_module_rebuilds_only_its_dependents() {
         s.get_json("/api/pipelines").as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap().to_owned()).collect();
     let lighting: BTreeSet<String> = all.iter().filter(|n| n.starts_with("lighting.deferred")).cloned().collect();
     assert!(!lighting.is_empty() && all.contains("post.tonemap") && all.iter().any(|n| n.starts_with("geometry.gbuffer")), "{all:?}");
-    let brdf_users: BTreeSet<String> =
-        all.iter().filter(|n| n.starts_with("lighting.deferred") || n.starts_with("geometry.gbuffer")).cloned().collect();
+    let brdf_users: BTreeSet<String> = all
+        .iter()
+        .filter(|n| ["lighting.deferred", "geometry.gbuffer", "passes.classify"].iter().any(|u| n.starts_with(u)))
+        .cloned()
+        .collect();
 
     // Three saves, each followed to its frame: the imported module, a file
     // nobody imports, an unrelated shader. The last one bounds the stream:

@@ -15,6 +15,7 @@ pub mod layout;
 pub mod operators;
 pub mod pack;
 pub mod report;
+pub mod simple;
 pub mod simplify;
 pub mod texture;
 pub mod tree;
@@ -91,10 +92,15 @@ impl Program {
         }
     }
 
+    /// The definitions the raster compiles: simplified to the budget.
+    pub fn raster_definitions(&self) -> Vec<Definition> {
+        self.compiled(true).0
+    }
+
     /// The material buffer's words per pixel: the most a pixel of the
     /// raster's (simplified) definitions takes, within the budget.
     pub fn raster_words(&self) -> u32 {
-        pack::program_words(&self.compiled(true).0)
+        pack::program_words(&self.raster_definitions())
     }
 
     /// Whether `other` generates the same two modules.

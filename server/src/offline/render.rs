@@ -10,6 +10,7 @@ use super::{Job, OfflineError, frame, frames_to_finish, prepare};
 use crate::diag::display_path;
 use crate::render::capture::{ImageStats, TensorStats};
 use crate::render::frame::NanOrigin;
+use crate::render::passes::classify::Statistics;
 use crate::render::quads::{DrawReport, WhatIf};
 use crate::render::resource::TensorLayout;
 use crate::render::session::{PassState, PassSummary};
@@ -28,6 +29,9 @@ pub struct FrameReport {
     pub culled: Vec<CulledReport>,
     /// Where a NaN or Inf first appeared; `null` for a clean frame.
     pub nan: Option<NanOrigin>,
+    /// Tile classification's pixels and tiles per class and the material
+    /// bytes written; `null` when the frame classified nothing.
+    pub tiles: Option<Statistics>,
     /// wgpu errors no error scope caught (an invalid frame).
     pub gpu_errors: Vec<String>,
 }
@@ -147,6 +151,7 @@ pub fn run(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
         passes,
         culled,
         nan: result.nan.clone(),
+        tiles: Statistics::of_frame(&result.tensors),
         gpu_errors: session.take_uncaptured(),
     })
 }

@@ -381,20 +381,37 @@ impl<'a> PassContext<'a> {
 
     /// Dispatches compute pipeline `key` over `workgroups`.
     pub fn dispatch(&mut self, key: &PipelineKey, bindings: &Bindings<'_>, workgroups: [u32; 3]) {
+        if let Some(mut cp) = self.compute(key, bindings) {
+            cp.dispatch_workgroups(workgroups[0], workgroups[1], workgroups[2]);
+        }
+    }
+
+    /// Dispatches compute pipeline `key` over the workgroups the three
+    /// `u32`s at byte `offset` of buffer `args` say (written on the GPU).
+    pub fn dispatch_indirect(&mut self, key: &PipelineKey, bindings: &Bindings<'_>, args: Handle, offset: u64) {
+        let args = self.buffer(args);
+        if let Some(mut cp) = self.compute(key, bindings) {
+            cp.dispatch_workgroups_indirect(args, offset);
+        }
+    }
+
+    /// A compute pass with `key`'s pipeline and bind groups set; `None`
+    /// (the pass marked skipped) when the pipeline never built.
+    fn compute(&mut self, key: &PipelineKey, bindings: &Bindings<'_>) -> Option<wgpu::ComputePass<'_>> {
         let pipeline = match self.pipelines.get(key) {
             Some(Pipeline::Compute(p)) => p.clone(),
             _ => {
                 self.skipped = true;
-                return;
+                return None;
             }
         };
-        let Some(groups) = self.bind_groups(key, |i| pipeline.get_bind_group_layout(i), bindings) else { return };
+        let groups = self.bind_groups(key, |i| pipeline.get_bind_group_layout(i), bindings)?;
         let mut cp = self.begin_compute();
         cp.set_pipeline(&pipeline);
         for (i, g) in &groups {
             cp.set_bind_group(*i, g, &[]);
         }
-        cp.dispatch_workgroups(workgroups[0], workgroups[1], workgroups[2]);
+        Some(cp)
     }
 }
 

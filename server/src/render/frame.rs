@@ -248,7 +248,13 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
             if f.capture.is_some_and(|c| !c.contains(&r.name)) {
                 continue;
             }
-            if let Some(c) = copy_out(f.device, &mut encoder, physical[h.0].expect("written resources are allocated"), r, &pass.name) {
+            // A resource several passes write (the lighting's classes) is
+            // captured once, complete, after the last, under its own name.
+            if graph.passes[i + 1..].iter().any(|later| later.writes().any(|w| w == h)) {
+                continue;
+            }
+            let owner = r.name.rsplit_once('/').map_or(pass.name.as_str(), |(p, _)| p);
+            if let Some(c) = copy_out(f.device, &mut encoder, physical[h.0].expect("written resources are allocated"), r, owner) {
                 captures.push(c);
             }
         }

@@ -266,6 +266,11 @@ mod tests {
         p.sample(color);
         let sum = p.create("sum", Meaning::Data, TensorLayout::new(&[("bin", 8)], Element::U32), Access::StorageWrite);
         p.execute(|_| {});
+        // Indirect dispatch arguments: INDIRECT as well.
+        let mut p = g.pass("dispatch", PassKind::Compute);
+        p.access(sum, Access::Indirect);
+        p.access(sum, Access::StorageWrite);
+        p.execute(|_| {});
         let mut p = g.pass("state", PassKind::Compute);
         p.access(sum, Access::StorageRead);
         let state = p.history("state", Meaning::Data, TensorLayout::new(&[("v", 4)], Element::F32), Access::StorageWrite);
@@ -279,8 +284,8 @@ mod tests {
         let graph = g.build();
         use wgpu::{BufferUsages as B, TextureUsages as T};
         assert_eq!(graph.resource(color).texture_usage, T::RENDER_ATTACHMENT | T::TEXTURE_BINDING | T::COPY_SRC);
-        assert_eq!(graph.resource(sum).buffer_usage, B::STORAGE | B::COPY_SRC);
+        assert_eq!(graph.resource(sum).buffer_usage, B::STORAGE | B::INDIRECT | B::COPY_SRC);
         assert_eq!(graph.resource(state).lifetime, Lifetime::History);
-        assert_eq!(graph.passes.iter().map(|p| p.name.as_str()).collect::<Vec<_>>(), ["render", "reduce", "state"]);
+        assert_eq!(graph.passes.iter().map(|p| p.name.as_str()).collect::<Vec<_>>(), ["render", "reduce", "dispatch", "state"]);
     }
 }

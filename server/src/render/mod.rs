@@ -40,13 +40,18 @@ pub struct FrameOptions {
     /// material buffer, simplified to the budget
     /// (`material::Program::raster_words`, the session's).
     pub material_words: u32,
+    /// The tile classes the scene's materials can make
+    /// (`classify::Classes::of`, the session's): the others' lighting
+    /// passes are culled.
+    pub tile_classes: classify::Classes,
 }
 
 /// Assembles the frame from the scene and the network its `[denoiser]`
 /// names (`loaded::Loaded::denoiser`): only what the scene calls for.
 pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOptions) -> Graph {
     let mut g = GraphBuilder::new();
-    let raster = ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volume_march", "volumes"];
+    // Every pass that makes the HDR image but the path tracer.
+    let raster: Vec<&str> = crate::scene::settings::RENDERED.iter().copied().filter(|p| *p != "path_trace").collect();
     let (hdr, gbuffer) = if scene.is_empty() {
         let empty = "the scene is empty: it shows the test pattern";
         for pass in raster.iter().chain(&["path_trace"]) {
@@ -67,18 +72,19 @@ pub fn build_graph(scene: &Scene, denoiser: Option<&Network>, options: FrameOpti
         let shadows = shadows::shadows(&mut g, scene);
         let depth = depth_prepass::depth_prepass(&mut g, scene);
         let gb = gbuffer::gbuffer(&mut g, scene, depth, options.material_words);
+        let tiles = classify::classify(&mut g, scene, &gb, depth, options.tile_classes);
         let ltc = ltc_tables::ltc_tables(&mut g, scene);
-        let lit = lighting::lighting(&mut g, scene, &gb, depth, shadows, ltc);
+        let lit = lighting::lighting(&mut g, scene, &gb, depth, tiles, options.tile_classes, shadows, ltc);
         let grid = volume_shadows::volume_shadows(&mut g, scene);
         let marched = volume_march::volume_march(&mut g, scene, depth, shadows, grid);
-        (volumes::volumes(&mut g, scene, lit, depth, marched), Some((gb, depth)))
+        (volumes::volumes(&mut g, scene, lit, depth, marched), Some((gb, depth, tiles)))
     };
     let adapted = auto_exposure::auto_exposure(&mut g, scene, hdr);
     let exposed = exposure::exposure(&mut g, scene, hdr, adapted);
     let ldr = tonemap::tonemap(&mut g, scene, exposed);
     let watch = options.nan_watch.then(|| nan_watch::nan_watch(&mut g, scene, exposed));
     let debug = match &gbuffer {
-        Some((gb, depth)) => debug_view::debug_view(&mut g, scene, gb, *depth),
+        Some((gb, depth, tiles)) => debug_view::debug_view(&mut g, scene, gb, *depth, *tiles),
         None => {
             g.cull("debug_view", "no G-buffer to show: the scene is empty or path traced");
             None

@@ -190,6 +190,8 @@ pub enum Access {
     DepthTest,
     CopySrc,
     CopyDst,
+    /// A buffer of indirect dispatch arguments.
+    Indirect,
 }
 
 impl Access {
@@ -205,6 +207,7 @@ impl Access {
             Access::ColorTarget | Access::DepthTarget | Access::DepthTest => U::RENDER_ATTACHMENT,
             Access::CopySrc => U::COPY_SRC,
             Access::CopyDst => U::COPY_DST,
+            Access::Indirect => U::empty(),
         }
     }
 
@@ -214,6 +217,7 @@ impl Access {
             Access::StorageRead | Access::StorageWrite | Access::Sampled => U::STORAGE,
             Access::CopySrc => U::COPY_SRC,
             Access::CopyDst => U::COPY_DST,
+            Access::Indirect => U::INDIRECT,
             Access::ColorTarget | Access::DepthTarget | Access::DepthTest => U::empty(),
         }
     }

@@ -153,6 +153,7 @@ impl Session {
         let options = FrameOptions {
             max_buffer: Some(crate::gpu::largest_binding(&limits)),
             material_words: loaded.materials.raster_words(),
+            tile_classes: super::passes::classify::Classes::of(&loaded.materials.raster_definitions()),
             ..FrameOptions::default()
         };
         Session {
@@ -181,7 +182,8 @@ impl Session {
     /// Builds frames with `options` from now on (the device's limits stay
     /// the session's).
     pub fn with_options(mut self, options: FrameOptions) -> Self {
-        self.options = FrameOptions { max_buffer: self.options.max_buffer, material_words: self.options.material_words, ..options };
+        let o = &self.options;
+        self.options = FrameOptions { max_buffer: o.max_buffer, material_words: o.material_words, tile_classes: o.tile_classes, ..options };
         self.graph = super::build_graph(&self.scene, self.network.as_deref(), self.options);
         self
     }
@@ -259,14 +261,15 @@ impl Session {
         let mut changed = BTreeSet::new();
         if !self.materials.same_code(&loaded.materials) {
             let mut lib = (*self.lib).clone();
-            let modules = material_module(&mut lib, &self.shader_root, &loaded.materials);
-            if !modules.is_empty() {
-                changed.extend(modules);
+            let regenerated = material_module(&mut lib, &self.shader_root, &loaded.materials);
+            if !regenerated.is_empty() {
+                changed.extend(regenerated.into_iter().map(str::to_owned));
                 self.lib = Arc::new(lib);
             }
         }
         self.materials = loaded.materials.clone();
         self.options.material_words = loaded.materials.raster_words();
+        self.options.tile_classes = super::passes::classify::Classes::of(&loaded.materials.raster_definitions());
         self.graph = super::build_graph(&self.scene, self.network.as_deref(), self.options);
         // History describes the old scene: accumulation starts over.
         self.reset_history();
@@ -568,21 +571,29 @@ fn output_summary(graph: &Graph, h: super::resource::Handle, camera: &Camera) ->
     }
 }
 
-/// Puts `program`'s two material modules into `lib` (generated, never on
-/// disk; they sit among the shaders as `material::back::DISPLAY`, the
-/// raster's `loupe::material`, and `PATH_DISPLAY`, the path tracer's
-/// `loupe::material_path`). Returns the displays whose text changed: only
-/// the pipelines importing those rebuild.
-pub fn material_module(lib: &mut Library, shader_root: &Path, program: &Program) -> Vec<String> {
-    let mut changed = Vec::new();
-    for (display, text) in [(material::back::DISPLAY, program.wgsl()), (material::back::PATH_DISPLAY, program.path_wgsl())] {
-        if lib.get(display).is_some_and(|f| *f.text == *text) {
-            continue;
-        }
-        lib.upsert(SourceFile::from_text(display.to_owned(), shader_root.join(display), text.into()));
-        changed.push(display.to_owned());
+/// Puts `program`'s generated material modules into `lib` (never on disk;
+/// they sit among the shaders at their displays): the raster's
+/// `loupe::material`, the path tracer's `loupe::material_path` and the
+/// simple tile class's `loupe::material_simple`. Returns the displays whose
+/// text changed: only the pipelines importing those rebuild.
+pub fn material_module(lib: &mut Library, shader_root: &Path, program: &Program) -> Vec<&'static str> {
+    [
+        (material::back::DISPLAY, program.wgsl()),
+        (material::back::PATH_DISPLAY, program.path_wgsl()),
+        (material::simple::DISPLAY, material::simple::wgsl(&program.definitions)),
+    ]
+    .into_iter()
+    .filter_map(|(display, text)| generated_module(lib, shader_root, display, text).then_some(display))
+    .collect()
+}
+
+/// Puts generated module `text` into `lib` at `display`; whether it changed.
+fn generated_module(lib: &mut Library, shader_root: &Path, display: &str, text: String) -> bool {
+    if lib.get(display).is_some_and(|f| *f.text == *text) {
+        return false;
     }
-    changed
+    lib.upsert(SourceFile::from_text(display.to_owned(), shader_root.join(display), text.into()));
+    true
 }
 
 #[cfg(test)]

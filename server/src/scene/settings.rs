@@ -241,6 +241,13 @@ choice!(
         /// The G-buffer's UV, its fractional part in red and green.
         Uv = "uv",
         Depth = "depth",
+        /// Each 8×8 tile by its class (tile classification): empty grey,
+        /// simple green, single yellow, complex red.
+        TileClass = "tile_class",
+        /// Per pixel, its closures: 1 green, 2 yellow, 3 or more red.
+        Closures = "closures",
+        /// Per pixel, its material bytes, white at the scene's most.
+        Bytes = "bytes",
     }
 );
 
@@ -410,9 +417,23 @@ fn auto_exposure(s: &Scene) -> bool {
     s.post.auto_exposure
 }
 
-/// Every pass that makes the HDR image, raster or path traced.
-const RENDERED: [&str; 9] =
-    ["shadows", "depth_prepass", "gbuffer", "ltc_tables", "lighting", "volume_shadows", "volume_march", "volumes", "path_trace"];
+/// Every pass that makes the HDR image, raster or path traced (the path
+/// tracer last).
+pub(crate) const RENDERED: [&str; 13] = [
+    "shadows",
+    "depth_prepass",
+    "gbuffer",
+    "classify",
+    "ltc_tables",
+    "lighting",
+    "lighting_simple",
+    "lighting_single",
+    "lighting_complex",
+    "volume_shadows",
+    "volume_march",
+    "volumes",
+    "path_trace",
+];
 
 /// In `affects`: every pass drawn as a fullscreen triangle. The passes are
 /// declared by the renderer, above the scene, so the table names the group
@@ -485,6 +506,10 @@ settings! {
         /// the budget's error is measured against).
         path_simplified_materials: bool = false, Toggle, "Path tracer: simplified materials", affects ["path_trace"],
             shown_when path_traced;
+        /// Classify 8×8 tiles by the dearest material class among their
+        /// pixels and light each class with its own pipeline over its
+        /// tiles only; off, every tile goes through the complex pipeline.
+        tile_classification: bool = true, Toggle, "Tile classification", affects ["classify", "lighting"], shown_when rastered;
         /// Ray-march steps per pixel through the media.
         volume_steps: u32 = 48, Int { min: 1, max: 1024, step: 1 }, "Volume steps", affects ["volume_march", "volumes"], shown_when raster_media;
         /// Steps of the march toward each light (self-shadowing), from each

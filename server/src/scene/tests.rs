@@ -250,7 +250,7 @@ fn a_bad_choice_lists_the_options() {
     let e = err(&text);
     assert_eq!(
         e.message,
-        "post.debug_view: must be one of \"none\", \"normal\", \"albedo\", \"roughness\", \"metallic\", \"uv\", \"depth\", not \"normals\""
+        "post.debug_view: must be one of \"none\", \"normal\", \"albedo\", \"roughness\", \"metallic\", \"uv\", \"depth\", \"tile_class\", \"closures\", \"bytes\", not \"normals\""
     );
     assert_eq!(at(&e), line_col(&text, "\"normals\"", 0));
     let e = err("[quality]\nvolume_estimator = \"exact\"\n");

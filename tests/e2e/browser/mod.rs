@@ -18,6 +18,7 @@ mod layout;
 mod materials;
 mod presets;
 mod readouts;
+mod tiles;
 mod timings;
 
 const LIMIT: Duration = Duration::from_secs(60);
@@ -507,7 +508,7 @@ async fn a_nan_made_by_a_pass_is_named_live_and_opened_at_its_pixel() {
     // `view.environment_top.w` is always 0 (unused): a runtime divide by zero in lighting.
     const LIGHTING: &str = "shaders/passes/lighting.wgsl";
     let good = p.read(LIGHTING);
-    let broken = good.replace("    return vec4(color, 1.0);\n}", "    return vec4(color / view.environment_top.w, 1.0);\n}");
+    let broken = good.replace("    return color;\n}", "    return color / view.environment_top.w;\n}");
     assert_ne!(broken, good, "the edit applies");
     p.save_by_rename(LIGHTING, &broken);
     let pass = until(

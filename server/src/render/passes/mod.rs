@@ -27,6 +27,7 @@ passes![
     shadows,
     depth_prepass,
     gbuffer,
+    classify,
     ltc_tables,
     lighting,
     volume_shadows,
@@ -55,9 +56,17 @@ pub fn fullscreen() -> impl Iterator<Item = &'static str> {
 }
 
 /// A setting's `affects` as pass names: its groups (`settings::FULLSCREEN`)
-/// expanded.
+/// expanded, and `lighting` as every tile class's lighting pass
+/// (`lighting::PASSES`): what changes the lighting changes each.
 pub fn affected(affects: &[&'static str]) -> Vec<&'static str> {
-    affects.iter().flat_map(|&a| if a == FULLSCREEN { fullscreen().collect() } else { vec![a] }).collect()
+    affects
+        .iter()
+        .flat_map(|&a| match a {
+            FULLSCREEN => fullscreen().collect(),
+            "lighting" => lighting::PASSES.to_vec(),
+            _ => vec![a],
+        })
+        .collect()
 }
 
 /// The spec named `name`.
@@ -75,7 +84,7 @@ pub const VIEW: Binding = uniform("view", 0, ALL, sizes::VIEW);
 pub const LIGHTS: Binding = storage("lights", 1, FRAG.union(COMPUTE));
 /// Shadow maps and their views (`lib/shadows.wgsl`), with SHADOWS on.
 pub const SHADOW_GROUP: Group =
-    Group::when(1, SHADOWS, &[crate::gpu::pipeline::depth_array("shadow_maps", 0), storage("shadow_views", 1, FRAG)]);
+    Group::when(1, SHADOWS, &[crate::gpu::pipeline::depth_array("shadow_maps", 0), storage("shadow_views", 1, FRAG.union(COMPUTE))]);
 /// The participating media (`lib/media.wgsl`), for raster and compute passes.
 /// `loupe::material`'s parameters and instance table (group 0, in every
 /// pass that imports the module; `material::back`'s binding numbers).

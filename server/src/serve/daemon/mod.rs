@@ -34,7 +34,7 @@ use crate::gpu::Gpu;
 use crate::protocol::{NanReport, PassInfo, QUAD_STATISTICS, ServerEvent};
 use crate::render::FrameOptions;
 use crate::render::frame::{FrameResult, PendingFrame};
-use crate::render::passes::nan_watch;
+use crate::render::passes::{classify, nan_watch};
 use crate::render::pipelines::Installed;
 use crate::render::resource::PipelineKey;
 use crate::render::session::Session;
@@ -553,6 +553,8 @@ impl Daemon {
         let mut capture: BTreeSet<String> = self.subscriptions.values().flatten().filter(|k| *k != QUAD_STATISTICS).cloned().collect();
         capture.extend(final_key.clone());
         capture.insert(nan_watch::OUTPUT.to_owned());
+        // The frame event's tile statistics.
+        capture.extend([classify::STATS, classify::BYTES].map(str::to_owned));
         // A traced frame captures every output.
         let trace = self.trace_next.take();
         let pending = self.session.submit(if trace.is_some() { None } else { Some(&capture) }, dt);

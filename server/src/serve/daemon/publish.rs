@@ -63,6 +63,7 @@ impl Daemon {
             log::warn!("the adapter's timestamps do not bracket compute work: passes are timed by the wall clock from now on");
             self.session.set_serial(true);
         }
+        let tiles = crate::render::passes::classify::Statistics::of_frame(&result.tensors);
         let mut images = None;
         if clean {
             let mut captures = (*shared::read(&self.shared.captures)).clone();
@@ -101,6 +102,7 @@ impl Daemon {
             unattributed_ms: t.unattributed_ms,
             reload: ids.last().copied(),
             reloads: ids,
+            tiles,
         });
         let mut status = shared::read(&self.shared.status);
         status.frame = result.frame;
