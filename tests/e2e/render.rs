@@ -560,7 +560,7 @@ fn the_uv_debug_view_shows_where_each_pixel_sits_on_the_sphere() {
     run.code(0);
     let r = report.expect("report.json written");
     let gbuffer = r["passes"].as_array().unwrap().iter().find(|p| p["name"] == "gbuffer").unwrap();
-    assert_eq!(names(&gbuffer["outputs"]), ["normal", "albedo", "material", "uv"], "{gbuffer}");
+    assert_eq!(names(&gbuffer["outputs"]), ["normal", "albedo", "material", "uv", "material_words"], "{gbuffer}");
     let uv = exr_rgb(&p.path("out/gbuffer.uv.exr"));
     let shown = exr_rgb(&p.path("out/debug_view.color.exr"));
     for (x, y) in [(32, 32), (20, 24), (44, 40), (26, 44), (40, 20)] {

@@ -9,6 +9,7 @@ pub mod analysis;
 pub mod back;
 #[cfg(test)]
 mod build;
+pub mod features;
 pub mod front;
 pub mod gltf;
 pub mod layout;

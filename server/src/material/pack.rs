@@ -20,7 +20,7 @@ use std::collections::BTreeSet;
 use std::fmt::Write;
 
 use super::analysis::{self, Feature};
-use super::back::Features;
+use super::features::Features;
 use super::layout::{CORE_WORDS, HEADER_WORDS, SIMPLE_WORDS, StorageClass};
 use super::tree::{Definition, Field, NodeId, NodeKind};
 

@@ -3,7 +3,7 @@
 //! simplified to `quality.material_bytes = 24`, then whole again when an
 //! override raises the budget to 80; the simplification preview (full
 //! against the budget, and their difference) while it is simplified, and
-//! the frame, which changes with the budget.
+//! the frame and its tile classes, which change with the budget.
 
 use serde_json::json;
 
@@ -11,16 +11,20 @@ use super::{LIMIT, Project, Server, browser, until, until_within};
 
 const SCENE: &str = "scenes/budget.toml";
 
+/// The car paint on a torus knot at 64×36, at `budget` bytes per pixel.
+fn car_paint(budget: u32) -> String {
+    format!(
+        "[output]\nwidth = 64\nheight = 36\n\n[quality]\nmaterial_bytes = {budget}\n\n[camera]\nposition = [0.0, 1.0, 3.2]\ntarget = [0.0, 0.0, 0.0]\n\n\
+         [[materials]]\nname = \"car paint\"\nfile = \"materials/car_paint.mat\"\n\n\
+         [[objects]]\nmesh = \"meshes/torus_knot.gltf\"\nmaterial = \"car paint\"\n\n\
+         [[lights]]\ntype = \"point\"\nposition = [1.5, 2.5, 2.0]\nintensity = 12.0\n"
+    )
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_materials_panel_shows_what_the_budget_did_and_follows_it() {
     let p = Project::copy_of_repo("browser-budget");
-    p.write(
-        SCENE,
-        "[output]\nwidth = 64\nheight = 36\n\n[quality]\nmaterial_bytes = 24\n\n[camera]\nposition = [0.0, 1.0, 3.2]\ntarget = [0.0, 0.0, 0.0]\n\n\
-         [[materials]]\nname = \"car paint\"\nfile = \"materials/car_paint.mat\"\n\n\
-         [[objects]]\nmesh = \"meshes/torus_knot.gltf\"\nmaterial = \"car paint\"\n\n\
-         [[lights]]\ntype = \"point\"\nposition = [1.5, 2.5, 2.0]\nintensity = 12.0\n",
-    );
+    p.write(SCENE, car_paint(24));
     let s = Server::start(&p.root, &["--render", "on-change", "--scene", SCENE]);
     let (_driver, c) = browser().await;
     c.goto(&s.url("/")).await.unwrap();
@@ -33,6 +37,9 @@ async fn the_materials_panel_shows_what_the_budget_did_and_follows_it() {
     let rules = until(&c, &s, "its rules", &row("simplified")).await;
     assert_eq!(rules, "yes: mix #3 → 40 B, layer #4 → 28 B, drop haze #4 → 16 B");
     assert_eq!(until(&c, &s, "the closures kept", &row("closures_kept")).await, "1");
+    // One slab of 16 B: its tiles are simple, none complex.
+    let tiles = |class: &str| format!("Number(document.querySelector('#tiles-info [data-class=\"{class}\"]')?.dataset.tiles ?? -1)");
+    until(&c, &s, "simple tiles and no complex one", &format!("{} > 0 && {} === 0", tiles("simple"), tiles("complex"))).await;
 
     // Simplified, so the preview compares by itself: the raster's full car
     // paint against 24 B differ (the coat's reflection is gone). Its
@@ -61,6 +68,36 @@ async fn the_materials_panel_shows_what_the_budget_did_and_follows_it() {
     // Whole again: the preview no longer compares by itself, and the frame
     // shows the coat.
     until(&c, &s, "the comparison off", "!document.querySelector('#material-budget-compare').checked").await;
+    until(&c, &s, "complex tiles (three closures)", &format!("{} > 0", tiles("complex"))).await;
     s.wait_for("a frame at 80 B", LIMIT, || (s.get("/api/captures/tonemap/color.png").1 != frame_at_24).then_some(()));
+    c.close().await.unwrap();
+}
+
+/// `loupe bench tradeoffs` sweeps the budget where it simplifies a material
+/// (against the path tracer with the full material: the car paint at one
+/// slab is further from it than whole), and the Pareto panel plots that
+/// series from the run's results.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_budget_series_is_measured_and_plotted() {
+    let p = Project::copy_of_repo("browser-budget-series");
+    p.write(SCENE, car_paint(80));
+    let args = ["bench", "tradeoffs", "--scene", SCENE, "--size", "32x18", "--repeats", "1", "--reference-spp", "64", "--out", "tradeoffs"];
+    p.run(&args).code(0).stdout_has("## material_bytes");
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(p.path("tradeoffs/tradeoffs.json")).unwrap()).unwrap();
+    let series = json["series"].as_array().unwrap();
+    let k = series.iter().position(|s| s["setting"] == "quality.material_bytes").expect("a material_bytes series");
+    let points = series[k]["points"].as_array().unwrap();
+    let budgets: Vec<u64> = points.iter().map(|p| p["value"].as_u64().unwrap()).collect();
+    assert_eq!(budgets.first(), Some(&24), "{budgets:?}");
+    assert!(budgets.windows(2).all(|w| w[0] < w[1]), "{budgets:?}");
+    let error = |i: usize| points[i]["relative_mse"].as_f64().unwrap();
+    assert!(error(0) > error(points.len() - 1), "one slab is further from the full car paint than the whole: {points:?}");
+
+    let s = Server::start(&p.root, &["--render", "on-change", "--scene", SCENE]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "the results, current", "window.loupe.state.tradeoffs.state === 'current'").await;
+    let plotted = format!("document.querySelectorAll('#tradeoffs-chart circle[data-series=\"{k}\"]').length");
+    assert_eq!(until(&c, &s, "the budget's points plotted", &plotted).await, points.len());
     c.close().await.unwrap();
 }

@@ -201,10 +201,7 @@ fn an_edited_vertex_shader_is_followed() {
     let mut lib = repository_library();
     let path = shader_root().join(GBUFFER.shader);
     let original = lib.get(&display_path(&path)).unwrap().text.to_string();
-    let edited = original.replace(
-        "view.view_proj * world_position(v, object),",
-        "view.view_proj * world_position(v, object) + vec4(0.25, -0.5, 0.0, 0.125),",
-    );
+    let edited = original.replace("Varyings(view.view_proj * world,", "Varyings(view.view_proj * world + vec4(0.25, -0.5, 0.0, 0.125),");
     assert_ne!(edited, original, "the edit applies");
     lib.upsert(SourceFile::from_text(display_path(&path), path, edited.into()));
     let (key, vc) = gbuffer_capture(&gpu, &lib);
