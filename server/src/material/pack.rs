@@ -21,8 +21,8 @@ use std::fmt::Write;
 
 use super::analysis::{self, Feature};
 use super::features::Features;
-use super::layout::{CORE_WORDS, HEADER_WORDS, SIMPLE_WORDS, StorageClass};
-use super::tree::{Definition, Field, NodeId, NodeKind};
+use super::layout::{self, CORE_WORDS, HEADER_WORDS, SIMPLE_WORDS, StorageClass};
+use super::tree::{Definition, Field, NodeKind};
 
 /// Header (word 0) bits 0–1: the storage class (`layout` counts the words).
 const SIMPLE: u32 = StorageClass::Simple as u32;
@@ -108,25 +108,11 @@ fn part_of(feature: Feature) -> Option<&'static Part> {
     }
 }
 
-/// The leaf slabs in the order `init` fills the closures (`back::Init`).
-fn leaves(d: &Definition, id: NodeId, out: &mut Vec<NodeId>) {
-    match &d.node(id).kind {
-        NodeKind::Slab(_) => out.push(id),
-        NodeKind::Mix { a, b, .. } | NodeKind::Layer { top: a, base: b } | NodeKind::Add { a, b } => {
-            leaves(d, *a, out);
-            leaves(d, *b, out);
-        }
-        NodeKind::Coverage { a, .. } => leaves(d, *a, out),
-    }
-}
-
 /// Per closure of `d` (as `init` orders them), the mask of its optional
 /// words.
 pub fn masks(d: &Definition) -> Vec<u32> {
     let a = analysis::analyse(d);
-    let mut slabs = Vec::new();
-    leaves(&a.def, a.def.root, &mut slabs);
-    slabs
+    layout::leaves(&a.def, a.def.root)
         .iter()
         .map(|&id| {
             let features: &BTreeSet<Feature> = &a.features[id.0 as usize];
