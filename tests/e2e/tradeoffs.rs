@@ -1,7 +1,7 @@
 //! `loupe bench tradeoffs`: a real sweep of a small scene through the
 //! binary, its three files, and the reference cache.
 
-use loupe_tests::Project;
+use loupe_tests::{Project, Server};
 
 fn cached(p: &Project) -> Vec<(String, std::time::SystemTime)> {
     let mut v: Vec<_> = std::fs::read_dir(p.path("cache"))
@@ -61,6 +61,14 @@ fn sweeps_settings_into_a_table_a_plot_and_json_with_cached_references() {
     let svg = std::fs::read_to_string(p.path("out/tradeoffs.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.matches("<polyline").count() >= 2, "the plot has the series with errors");
     assert!(std::fs::read_to_string(p.path("out/tradeoffs.md")).unwrap().contains("| value | time (ms) |"));
+
+    // A server started on them says they are this scene's from its first
+    // answer: a page that connects at once plots them.
+    std::fs::create_dir_all(p.path("tradeoffs")).unwrap();
+    std::fs::copy(p.path("out/tradeoffs.json"), p.path("tradeoffs/tradeoffs.json")).unwrap();
+    let s = Server::start(&p.root, &["--scene", "scenes/minimal.toml", "--render", "on-change"]);
+    assert_eq!(s.get_state("/api/tradeoffs"), (200, Some("current".to_owned())), "{}", s.log());
+    drop(s);
 
     // A second run renders no reference: each is read from the cache.
     let before = cached(&p);

@@ -69,8 +69,11 @@ pub fn run(opts: ServeOptions) -> Result<(), ServeError> {
                     eprintln!("loupe: {line}");
                 }
                 eprintln!("loupe: rendering on {}", gpu.adapter_name());
+                // Ready once the daemon has published what the HTTP side
+                // reads before the first frame.
+                let daemon = Daemon::new(gpu, config, shared_r, tx_r);
                 let _ = ready_tx.send(Ok(()));
-                Daemon::new(gpu, config, shared_r, tx_r).run(inbox);
+                daemon.run(inbox);
             }
             Err(e) => {
                 let _ = ready_tx.send(Err(e));

@@ -177,7 +177,7 @@ impl Daemon {
             Session::new(gpu, &config.shader_root, lib, &loaded).with_options(FrameOptions { nan_watch: true, ..FrameOptions::default() });
         session.set_serial(wall_clock);
         let previews = super::preview::Previews::start(&config.shader_root);
-        Daemon {
+        let daemon = Daemon {
             loaded: Arc::new(loaded.clone()),
             stale_inputs: BTreeSet::new(),
             previews,
@@ -211,7 +211,11 @@ impl Daemon {
             trace_next: None,
             trace_stale: false,
             nan_report: None,
-        }
+        };
+        // Before the server listens (it waits for `new`): a client's first
+        // `/api/tradeoffs` is judged against this scene, not an empty one.
+        daemon.publish_measured();
+        daemon
     }
 
     fn gpu(&self) -> &Gpu {
@@ -225,7 +229,6 @@ impl Daemon {
         self.start_reload(keys, Vec::new(), 0.0);
         self.publish_state();
         self.publish_controls();
-        self.publish_measured();
         let interval = Duration::from_secs_f64(1.0 / self.config.max_fps.max(0.1));
         loop {
             // Frames on their way back are polled for; otherwise only an
