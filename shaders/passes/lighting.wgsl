@@ -4,13 +4,17 @@
 // The environment lights every surface; pixels without geometry show it.
 // One workgroup lights one 8×8 tile of one class's list (the classify
 // pass's). SIMPLE_CLASS compiles against `loupe::material_simple`
-// (one closure, no optional feature): the simple tiles' specialisation.
+// (one closure, no optional feature): the simple tiles' specialisation;
+// SINGLE_CLASS against `loupe::material_single` (one closure, the
+// one-closure materials' features): the single tiles'.
 #import loupe::view::{view, world_position}
 #import loupe::lights::{Light, lights, incident, light_type, rect_area, rect_cosine, LIGHT_RECT}
 #import loupe::environment::environment_radiance
 #import loupe::tiles::{STATS_TILES, tile_count, tile_origin}
 #ifdef SIMPLE_CLASS
 #import loupe::material_simple::{Surface, MATERIAL_WORDS, material_word_count, material_unpack, material_eval, material_ambient, material_emission}
+#else ifdef SINGLE_CLASS
+#import loupe::material_single::{Surface, MATERIAL_WORDS, material_word_count, material_unpack, material_eval, material_ambient, material_emission}
 #else
 #import loupe::material::{Surface, MATERIAL_WORDS, material_word_count, material_unpack, material_eval, material_ambient, material_emission}
 #endif
@@ -23,6 +27,8 @@
 #ifdef LIGHT_RECT
 #ifdef SIMPLE_CLASS
 #import loupe::material_simple::material_rect
+#else ifdef SINGLE_CLASS
+#import loupe::material_single::material_rect
 #else
 #import loupe::material::material_rect
 #endif

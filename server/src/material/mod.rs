@@ -18,6 +18,7 @@ pub mod pack;
 pub mod report;
 pub mod simple;
 pub mod simplify;
+pub mod single;
 pub mod texture;
 pub mod tree;
 

@@ -573,14 +573,16 @@ fn output_summary(graph: &Graph, h: super::resource::Handle, camera: &Camera) ->
 
 /// Puts `program`'s generated material modules into `lib` (never on disk;
 /// they sit among the shaders at their displays): the raster's
-/// `loupe::material`, the path tracer's `loupe::material_path` and the
-/// simple tile class's `loupe::material_simple`. Returns the displays whose
+/// `loupe::material`, the path tracer's `loupe::material_path`, and the
+/// simple and single tile classes' `loupe::material_simple` and
+/// `loupe::material_single`. Returns the displays whose
 /// text changed: only the pipelines importing those rebuild.
 pub fn material_module(lib: &mut Library, shader_root: &Path, program: &Program) -> Vec<&'static str> {
     [
         (material::back::DISPLAY, program.wgsl()),
         (material::back::PATH_DISPLAY, program.path_wgsl()),
         (material::simple::DISPLAY, material::simple::wgsl(&program.definitions)),
+        (material::single::DISPLAY, material::single::wgsl(&program.raster_definitions())),
     ]
     .into_iter()
     .filter_map(|(display, text)| generated_module(lib, shader_root, display, text).then_some(display))

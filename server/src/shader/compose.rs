@@ -44,7 +44,7 @@ pub struct NagaOil;
 
 impl Compose for NagaOil {
     fn compose(&self, lib: &Library, entry: &SourceFile, defs: &ShaderDefs, caps: Capabilities) -> Result<Composed, Vec<Diagnostic>> {
-        compose_and_validate(lib, entry, caps, |deps| compose_with_naga_oil(deps, entry, defs, caps))
+        compose_and_validate(lib, entry, defs, caps, |deps| compose_with_naga_oil(deps, entry, defs, caps))
     }
 }
 
@@ -137,7 +137,7 @@ impl ComposeCache {
 
 impl Compose for ComposeCache {
     fn compose(&self, lib: &Library, entry: &SourceFile, defs: &ShaderDefs, caps: Capabilities) -> Result<Composed, Vec<Diagnostic>> {
-        compose_and_validate(lib, entry, caps, |deps| {
+        compose_and_validate(lib, entry, defs, caps, |deps| {
             let mut warm = self.take(caps, deps);
             match warm.compose(deps, entry, defs) {
                 Ok(module) => {
@@ -156,12 +156,17 @@ impl Compose for ComposeCache {
 fn compose_and_validate(
     lib: &Library,
     entry: &SourceFile,
+    defs: &ShaderDefs,
     caps: Capabilities,
     compose: impl FnOnce(&[Arc<SourceFile>]) -> Result<naga::Module, Vec<Diagnostic>>,
 ) -> Result<Composed, Vec<Diagnostic>> {
     let deps = lib.dependencies(entry)?;
-    let mut files: Vec<String> = deps.iter().map(|f| f.display.clone()).collect();
-    files.push(entry.display.clone());
+    // What the module is built from: the imports its defs can reach (an
+    // edit to a module only other defs import leaves it alone). The defs
+    // the imports imply may be on as well.
+    let reachable = lib.reachable_under(entry, defs, &with_implied(defs, &deps));
+    let files: Vec<String> =
+        deps.iter().map(|f| f.display.clone()).chain([entry.display.clone()]).filter(|d| reachable.contains(d)).collect();
     let module = if !entry.has_directives {
         naga::front::wgsl::parse_str(&entry.text).map_err(|e| {
             let labels = e.labels().map(|(s, m)| (s.to_range().unwrap_or(0..0), m.to_owned())).collect();

@@ -28,6 +28,8 @@ pub struct SourceFile {
     pub import_path: Option<(String, Range<usize>)>,
     /// Every `#import`, as written (module part only) with its byte range.
     pub imports: Vec<(String, Range<usize>)>,
+    /// Per entry of `imports`, the `#ifdef`-style conditions it sits under.
+    pub guards: Vec<Vec<Guard>>,
     /// Whether any preprocessor directive appears; files without one are
     /// plain WGSL and skip the composer entirely.
     pub has_directives: bool,
@@ -40,7 +42,7 @@ impl SourceFile {
 
     /// Builds a source file from text already in memory.
     pub fn from_text(display: String, path: PathBuf, text: Arc<str>) -> Self {
-        let (import_path, imports, has_directives) = scan_directives(&text);
+        let Directives { import_path, imports, guards, has_directives } = scan_directives(&text);
         SourceFile {
             display,
             path,
@@ -49,6 +51,7 @@ impl SourceFile {
             text,
             import_path,
             imports,
+            guards,
             has_directives,
         }
     }
@@ -92,13 +95,72 @@ fn too_large(len: u64, at: Location) -> Diagnostic {
     Diagnostic::error(Code::FileTooLarge, format!("file is {len} bytes; the limit is {MAX_FILE_BYTES} bytes")).at(at)
 }
 
+/// A condition an `#import` sits under, as far as the import graph needs
+/// it: a def defined, a def not defined, or an `#if` expression, which may
+/// hold either way.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Guard {
+    Defined(String),
+    Undefined(String),
+    Unknown,
+}
+
+impl Guard {
+    fn negated(&self) -> Guard {
+        match self {
+            Guard::Defined(d) => Guard::Undefined(d.clone()),
+            Guard::Undefined(d) => Guard::Defined(d.clone()),
+            Guard::Unknown => Guard::Unknown,
+        }
+    }
+
+    /// Whether the condition may hold with every def of `surely` defined
+    /// and none outside `maybe`.
+    fn may_hold(&self, surely: &BTreeSet<String>, maybe: &BTreeSet<String>) -> bool {
+        match self {
+            Guard::Defined(d) => maybe.contains(d),
+            Guard::Undefined(d) => !surely.contains(d),
+            Guard::Unknown => true,
+        }
+    }
+
+    /// The condition an `#if…` directive's rest of line opens (`ifdef X`,
+    /// `ifndef X`, `if …`).
+    fn of(directive: &str) -> Guard {
+        let mut words = directive.split_whitespace();
+        match (words.next(), words.next()) {
+            (Some("ifdef"), Some(d)) => Guard::Defined(d.to_owned()),
+            (Some("ifndef"), Some(d)) => Guard::Undefined(d.to_owned()),
+            _ => Guard::Unknown,
+        }
+    }
+}
+
+/// One `#if…` … `#endif` being read: the negations of the branches passed
+/// and the current branch's own condition (none after a bare `#else`).
+struct Branch {
+    passed: Vec<Guard>,
+    current: Option<Guard>,
+}
+
+struct Directives {
+    import_path: Option<(String, Range<usize>)>,
+    imports: Vec<(String, Range<usize>)>,
+    guards: Vec<Vec<Guard>>,
+    has_directives: bool,
+}
+
 /// Scans preprocessor lines. Only the module part of an import matters for
 /// the graph: `#import a::b::{x, y}` and `#import a::b as c` import `a::b`,
-/// and `#import a::b::item` is resolved against known paths later.
-#[allow(clippy::type_complexity)]
-fn scan_directives(text: &str) -> (Option<(String, Range<usize>)>, Vec<(String, Range<usize>)>, bool) {
+/// and `#import a::b::item` is resolved against known paths later. Each
+/// import keeps the conditions it sits under (naga_oil's `#ifdef`,
+/// `#ifndef`, `#if`, `#else`, `#else ifdef`, `#endif`), so a pipeline is
+/// built only from the imports its defs can reach.
+fn scan_directives(text: &str) -> Directives {
     let mut import_path = None;
     let mut imports = Vec::new();
+    let mut guards = Vec::new();
+    let mut open: Vec<Branch> = Vec::new();
     let mut has_directives = false;
     let mut offset = 0;
     for line in text.split_inclusive('\n') {
@@ -118,12 +180,26 @@ fn scan_directives(text: &str) -> (Option<(String, Range<usize>)>, Vec<(String, 
         } else if let Some(rest) = body.strip_prefix("#import") {
             let spec = rest.trim();
             let at = start + lead + body.len() - rest.trim_start().len();
+            let under: Vec<Guard> = open.iter().flat_map(|b| b.passed.iter().chain(&b.current)).cloned().collect();
             for module in import_modules(spec) {
                 imports.push((module, at..at + spec.len()));
+                guards.push(under.clone());
             }
+        } else if let Some(rest) = body.strip_prefix("#else") {
+            if let Some(b) = open.last_mut() {
+                if let Some(c) = b.current.take() {
+                    b.passed.push(c.negated());
+                }
+                let rest = rest.trim();
+                b.current = rest.starts_with("if").then(|| Guard::of(rest));
+            }
+        } else if body.starts_with("#endif") {
+            open.pop();
+        } else if let Some(rest) = body.strip_prefix('#').filter(|r| r.starts_with("if")) {
+            open.push(Branch { passed: Vec::new(), current: Some(Guard::of(rest)) });
         }
     }
-    (import_path, imports, has_directives)
+    Directives { import_path, imports, guards, has_directives }
 }
 
 /// The module paths one `#import` line names. Handles naga_oil's forms:
@@ -320,6 +396,30 @@ impl Library {
         }
     }
 
+    /// The display paths of `root` and the files it can import with every
+    /// def of `surely` defined and none outside `maybe` (transitively; an
+    /// import under a condition that may hold counts): what a pipeline
+    /// composed from `root` with those defs is built from.
+    pub fn reachable_under(&self, root: &SourceFile, surely: &BTreeSet<String>, maybe: &BTreeSet<String>) -> BTreeSet<String> {
+        let mut out = BTreeSet::from([root.display.clone()]);
+        let mut todo = vec![root.display.clone()];
+        while let Some(display) = todo.pop() {
+            let file = if display == root.display { Some(root) } else { self.files.get(&display).map(|f| &**f) };
+            let Some(file) = file else { continue };
+            for ((import, _), guards) in file.imports.iter().zip(&file.guards) {
+                if !guards.iter().all(|g| g.may_hold(surely, maybe)) {
+                    continue;
+                }
+                if let Some(dep) = self.resolve(import)
+                    && out.insert(dep.display.clone())
+                {
+                    todo.push(dep.display.clone());
+                }
+            }
+        }
+        out
+    }
+
     /// Display paths of every file that (transitively) imports `display`,
     /// plus `display` itself: what a change to it invalidates.
     pub fn dependents(&self, display: &str) -> BTreeSet<String> {
@@ -451,6 +551,78 @@ mod tests {
         assert_eq!(import_modules("a::b as c"), ["a::b"]);
         assert_eq!(import_modules("a::b::{x, y}"), ["a::b", "a::b::x", "a::b::y"]);
         assert_eq!(import_modules("\"lib.wgsl\""), ["lib.wgsl"]);
+    }
+
+    /// The lighting's shape: one material module per class def, chosen by
+    /// an `#ifdef` / `#else ifdef` / `#else` chain, one more behind
+    /// `#ifndef` nested in it, one behind an `#if` expression.
+    #[test]
+    fn a_pipeline_is_built_from_the_imports_its_defs_reach() {
+        let lib = Library::new([
+            file(
+                "simple.wgsl",
+                "#define_import_path simple
+",
+            ),
+            file(
+                "single.wgsl",
+                "#define_import_path single
+",
+            ),
+            file(
+                "full.wgsl",
+                "#define_import_path full
+#import deep
+",
+            ),
+            file(
+                "deep.wgsl",
+                "#define_import_path deep
+",
+            ),
+            file(
+                "rect.wgsl",
+                "#define_import_path rect
+",
+            ),
+            file(
+                "count.wgsl",
+                "#define_import_path count
+",
+            ),
+            file(
+                "light.wgsl",
+                "#ifdef SIMPLE
+#import simple
+#else ifdef SINGLE
+#import single
+#else
+  #ifndef NO_RECT
+  #import rect
+  #endif
+#import full::{x}
+#endif
+#if COUNT == 2
+#import count
+#endif
+",
+            ),
+        ]);
+        let light = lib.get("light.wgsl").unwrap();
+        let reach = |surely: &[&str], maybe: &[&str]| {
+            let set = |d: &[&str]| d.iter().map(|s| s.to_string()).collect::<BTreeSet<_>>();
+            let (surely, maybe) = (set(surely), set(maybe));
+            let mut all = maybe.clone();
+            all.extend(surely.iter().cloned());
+            let out = lib.reachable_under(light, &surely, &all);
+            out.into_iter().filter(|d| d != "light.wgsl").map(|d| d.trim_end_matches(".wgsl").to_owned()).collect::<Vec<_>>()
+        };
+        assert_eq!(reach(&["SIMPLE"], &[]), ["count", "simple"]);
+        assert_eq!(reach(&["SINGLE"], &[]), ["count", "single"]);
+        assert_eq!(reach(&[], &[]), ["count", "deep", "full", "rect"]);
+        assert_eq!(reach(&["NO_RECT"], &[]), ["count", "deep", "full"]);
+        // A def that may be on (a module implies it) keeps both branches.
+        assert_eq!(reach(&[], &["SIMPLE"]), ["count", "deep", "full", "rect", "simple"]);
     }
 
     #[test]

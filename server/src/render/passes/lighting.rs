@@ -7,8 +7,9 @@
 //! tiles by an indirect dispatch, all writing the one `lighting/color`:
 //! `lighting` (created there) lights the empty tiles with the environment
 //! alone, `lighting_simple` against `loupe::material_simple` (one closure,
-//! no optional field), `lighting_single` and `lighting_complex` against the
-//! program's `loupe::material`. Each tile is in exactly one list, so each
+//! no optional field), `lighting_single` against `loupe::material_single`
+//! (one closure, the one-closure materials' features) and
+//! `lighting_complex` against the program's `loupe::material`. Each tile is in exactly one list, so each
 //! pixel is written once. A class no material of the scene makes is
 //! culled with its reason. With `quality.tile_classification` off, the
 //! classify pass lists every tile as complex and `lighting` alone lights
@@ -32,6 +33,8 @@ pub const RECT_SAMPLED: &str = "RECT_SAMPLED";
 pub const MEDIA_SHADOWS: &str = "MEDIA_SHADOWS";
 /// Compiled against `loupe::material_simple`: the simple tiles'.
 pub const SIMPLE_CLASS: &str = "SIMPLE_CLASS";
+/// Compiled against `loupe::material_single`: the single tiles'.
+pub const SINGLE_CLASS: &str = "SINGLE_CLASS";
 
 /// Where the lit colour is stored.
 const LIT: u32 = 15;
@@ -59,7 +62,7 @@ pub static DEFERRED: PipelineSpec = PipelineSpec {
         Group::when(3, MEDIA_SHADOWS, MEDIA),
         Group::always(4, &[storage("tile_lists", 0, COMPUTE), storage("tile_stats", 1, COMPUTE), uniform("tile_class", 2, COMPUTE, sizes::VEC4)]),
     ],
-    defs: &[SHADOWS, LIGHT_RECT, RECT_SAMPLED, MEDIA_SHADOWS, SIMPLE_CLASS],
+    defs: &[SHADOWS, LIGHT_RECT, RECT_SAMPLED, MEDIA_SHADOWS, SIMPLE_CLASS, SINGLE_CLASS],
 };
 /// The empty tiles: the environment only.
 pub static ENVIRONMENT: PipelineSpec = PipelineSpec {
@@ -131,9 +134,10 @@ pub fn lighting(
     let media = !scene.media.is_empty();
     let sampled = scene.has_rect_lights() && scene.quality.rect_lights == RectLights::Sampled;
     let defs = [(SHADOWS, shadows.is_some()), (LIGHT_RECT, ltc.is_some()), (RECT_SAMPLED, sampled), (MEDIA_SHADOWS, media)];
-    let key = |simple: bool| {
+    // The pipeline specialised for `class`'s tiles.
+    let key = |class: usize| {
         let mut all = defs.to_vec();
-        all.push((SIMPLE_CLASS, simple));
+        all.extend([(SIMPLE_CLASS, class == classify::SIMPLE), (SINGLE_CLASS, class == classify::SINGLE)]);
         PipelineKey::new(&DEFERRED, &all)
     };
     let reads = |p: &mut crate::render::graph::PassBuilder<'_>| {
@@ -177,7 +181,7 @@ pub fn lighting(
         for pass in &PASSES[1..] {
             g.cull(pass, "quality.tile_classification is off: `lighting` lights every tile through the complex pipeline");
         }
-        return class_pass(g, PASSES[0], classify::COMPLEX, key(false), None);
+        return class_pass(g, PASSES[0], classify::COMPLEX, key(classify::COMPLEX), None);
     }
     // The empty tiles: the environment, and the colour every class writes.
     let mut p = g.pass(PASSES[0], PassKind::Compute);
@@ -197,7 +201,7 @@ pub fn lighting(
     });
     for class in [classify::SIMPLE, classify::SINGLE, classify::COMPLEX] {
         if classes.possible(class) {
-            class_pass(g, PASSES[class], class, key(class == classify::SIMPLE), Some(color));
+            class_pass(g, PASSES[class], class, key(class), Some(color));
         } else {
             g.cull(PASSES[class], CANNOT[class]);
         }

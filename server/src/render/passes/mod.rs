@@ -66,7 +66,13 @@ pub fn affected(affects: &[&'static str]) -> Vec<&'static str> {
             "lighting" => lighting::PASSES.to_vec(),
             _ => vec![a],
         })
-        .collect()
+        .fold(Vec::new(), |mut out, p| {
+            // A group and a pass of it may both be named: each once.
+            if !out.contains(&p) {
+                out.push(p);
+            }
+            out
+        })
 }
 
 /// The spec named `name`.

@@ -15,7 +15,8 @@ use crate::scene::overrides::Overrides;
 use crate::scene::settings::Value;
 
 /// A plane of the shorthand on the left, a two-closure material (a
-/// coat over a base) on a small box, the sky above.
+/// coat over a base) on a small box, a one-closure material with a
+/// feature (fuzz) on a sphere, the sky above.
 const SCENE: &str = r#"
 [output]
 width = 64
@@ -35,6 +36,14 @@ roughness = 0.6
 [[materials]]
 name = "paint"
 file = "coat.mat"
+[[materials]]
+name = "cloth"
+file = "sheen.mat"
+[[objects]]
+shape = "sphere"
+material = "cloth"
+position = [-1.1, 0.4, 0.8]
+scale = [0.35, 0.35, 0.35]
 [[objects]]
 shape = "plane"
 material = "floor"
@@ -47,11 +56,14 @@ position = [0.6, 0.5, 0.5]
 scale = [0.5, 0.5, 0.5]
 "#;
 
+const SHEEN: &str = "material sheen {\n    slab { base_color: rgb(0.2, 0.3, 0.8), fuzz_weight: 0.8, fuzz_color: rgb(1, 0.9, 0.8) }\n}\n";
+
 const COAT: &str = "material coat {\n    layer(slab { base_color: grey(0), specular_roughness: 0.1 }, slab { base_color: rgb(0.7, 0.1, 0.1) })\n}\n";
 
 fn load(dir: &Path, scene: &str, overrides: &Overrides) -> Loaded {
     std::fs::write(dir.join("scene.toml"), scene).unwrap();
     std::fs::write(dir.join("coat.mat"), COAT).unwrap();
+    std::fs::write(dir.join("sheen.mat"), SHEEN).unwrap();
     crate::loaded::load_with(&dir.join("scene.toml"), overrides).unwrap_or_else(|d| panic!("{d}"))
 }
 
@@ -118,12 +130,18 @@ fn tiles_are_classified_by_their_dearest_pixel_and_the_tiled_lighting_matches_th
     assert_eq!(per(&stats.pixels), want_pixels);
     assert_eq!(per(&stats.tiles), want_tiles);
     assert_eq!(tensor(&r, "classify/classes"), want_classes.as_slice());
-    // The scene has every class but single: sky, floor, box.
-    assert!(want_tiles[EMPTY] > 0 && want_tiles[SIMPLE] > 0 && want_tiles[COMPLEX] > 0, "{want_tiles:?}");
-    assert_eq!(want_tiles[SINGLE], 0);
+    // The scene has every class: sky, floor, sphere, box.
+    assert!(want_tiles.iter().all(|&t| t > 0), "{want_tiles:?}");
     let simple_pixels = want_pixels[SIMPLE];
     assert!(stats.material_bytes_written >= simple_pixels * 16 + want_pixels[COMPLEX] * 4 * 10, "{stats:?}");
     let tiled = image(&r, "lighting/color").to_vec();
+
+    // Each class's own pipeline lit its tiles: the simple and single
+    // ones compiled against their modules.
+    let keys: Vec<String> = s.graph().pipelines().iter().map(|k| k.label()).collect();
+    for def in [crate::render::passes::lighting::SIMPLE_CLASS, crate::render::passes::lighting::SINGLE_CLASS] {
+        assert!(keys.iter().any(|k| k.contains(def)), "{def} in {keys:?}");
+    }
 
     // Every tile through the complex pipeline: the same image.
     let off = load(dir.path(), SCENE, &Overrides::from([("quality.tile_classification".to_owned(), Value::Bool(false))]));
@@ -154,8 +172,9 @@ fn tiles_are_classified_by_their_dearest_pixel_and_the_tiled_lighting_matches_th
         for ty in 0..down as usize {
             for tx in 0..across as usize {
                 let (x, y) = (tx * 8 + 3, ty * 8 + 3);
-                // A two-closure pixel shows 2 closures (yellow) per pixel.
-                let want = if per_pixel { [EMPTY, SIMPLE, SINGLE, SINGLE][pixel_class(x, y)] } else { want_classes[ty * across as usize + tx] as usize };
+                // Per pixel, one closure (simple, single) shows green and
+                // the coat's two yellow.
+                let want = if per_pixel { [EMPTY, SIMPLE, SIMPLE, SINGLE][pixel_class(x, y)] } else { want_classes[ty * across as usize + tx] as usize };
                 let i = (y * w + x) * 4;
                 assert_eq!(hue(&shown[i..i + 3]), want, "{view} at ({x}, {y}): {:?}", &shown[i..i + 3]);
             }
@@ -166,7 +185,9 @@ fn tiles_are_classified_by_their_dearest_pixel_and_the_tiled_lighting_matches_th
 #[test]
 fn a_scene_without_two_closure_materials_culls_the_complex_pass_and_builds_no_pipeline_for_it() {
     let dir = tempfile::tempdir().unwrap();
-    let text = SCENE.replace("name = \"paint\"\nfile = \"coat.mat\"", "name = \"paint\"\nbase_color = [0.7, 0.1, 0.1]");
+    let text = SCENE
+        .replace("name = \"paint\"\nfile = \"coat.mat\"", "name = \"paint\"\nbase_color = [0.7, 0.1, 0.1]")
+        .replace("name = \"cloth\"\nfile = \"sheen.mat\"", "name = \"cloth\"\nbase_color = [0.2, 0.3, 0.8]");
     let loaded = load(dir.path(), &text, &Overrides::new());
     let s = session(&loaded);
     let graph = s.graph();
