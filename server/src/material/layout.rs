@@ -74,23 +74,29 @@ pub enum StorageClass {
     Complex = 2,
 }
 
+/// The words a closure's feature takes beyond its core: the one table of
+/// them, which `pack.rs` packs by.
+pub const fn feature_words(f: Feature) -> u32 {
+    match f {
+        Feature::EdgeTint | Feature::Haze | Feature::Fuzz | Feature::Emission | Feature::Anisotropy | Feature::ThinFilm => 1,
+        Feature::Transmission => 2,
+        Feature::Diffuse | Feature::Specular | Feature::Metal | Feature::Absorption => 0,
+    }
+}
+
+/// The words of a closure's own normal (not an analysis feature: a field
+/// the back end gives every closure when set).
+pub const NORMAL_WORDS: u32 = 1;
+
 /// A closure's feature words (its core not counted).
 pub fn closure_words(features: &BTreeSet<Feature>) -> u32 {
-    features
-        .iter()
-        .map(|f| match f {
-            Feature::EdgeTint | Feature::Haze | Feature::Fuzz | Feature::Emission | Feature::Anisotropy | Feature::ThinFilm => 1,
-            Feature::Transmission => 2,
-            Feature::Diffuse | Feature::Specular | Feature::Metal | Feature::Absorption => 0,
-        })
-        .sum()
+    features.iter().map(|&f| feature_words(f)).sum()
 }
 
 /// The words one closure of the slab `id` takes: its core, its features'
-/// and its own normal's (not an analysis feature: a field the back end
-/// gives every closure when set).
+/// and its own normal's.
 fn slab_words(analysis: &Analysis, id: NodeId, slab: &Slab) -> u32 {
-    CORE_WORDS + closure_words(&analysis.features[id.0 as usize]) + u32::from(slab.get(Field::Normal).is_some())
+    CORE_WORDS + closure_words(&analysis.features[id.0 as usize]) + if slab.get(Field::Normal).is_some() { NORMAL_WORDS } else { 0 }
 }
 
 /// The material's bytes per pixel, worst case over its instances.

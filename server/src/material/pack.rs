@@ -21,7 +21,7 @@ use std::fmt::Write;
 
 use super::analysis::{self, Feature};
 use super::features::Features;
-use super::layout::{self, CORE_WORDS, HEADER_WORDS, SIMPLE_WORDS, StorageClass};
+use super::layout::{self, CORE_WORDS, HEADER_WORDS, NORMAL_WORDS, SIMPLE_WORDS, StorageClass, feature_words};
 use super::tree::{Definition, Field, NodeKind};
 
 /// Header (word 0) bits 0–1: the storage class (`layout` counts the words).
@@ -29,8 +29,8 @@ const SIMPLE: u32 = StorageClass::Simple as u32;
 const SINGLE: u32 = StorageClass::Single as u32;
 const COMPLEX: u32 = StorageClass::Complex as u32;
 
-/// A closure's optional words: (mask bit, words, WGSL to pack, WGSL to
-/// unpack). `w` is the word index, `c` the closure, `p.words` the output.
+/// A closure's optional words: (mask bit, words (`layout`'s count),
+/// WGSL to pack, WGSL to unpack). `w` is the word index, `c` the closure, `p.words` the output.
 struct Part {
     bit: u32,
     words: u32,
@@ -38,43 +38,51 @@ struct Part {
     unpack: &'static str,
 }
 
-const EDGE: Part =
-    Part { bit: 1, words: 1, pack: "p.words[w] = pack_unorm3(c.edge, 10u, 0.0);", unpack: "c.edge = unpack_unorm3(words[w], 10u);" };
+const EDGE: Part = Part {
+    bit: 1,
+    words: feature_words(Feature::EdgeTint),
+    pack: "p.words[w] = pack_unorm3(c.edge, 10u, 0.0);",
+    unpack: "c.edge = unpack_unorm3(words[w], 10u);",
+};
 const HAZE: Part = Part {
     bit: 2,
-    words: 1,
+    words: feature_words(Feature::Haze),
     pack: "p.words[w] = unorm_encode(c.haze.x, 16u, 0.0) | (unorm_encode(c.haze.y, 16u, 0.0) << 16u);",
     unpack: "c.haze = vec2(unorm_decode(words[w], 0u, 16u), unorm_decode(words[w], 16u, 16u));",
 };
 const FUZZ: Part = Part {
     bit: 4,
-    words: 1,
+    words: feature_words(Feature::Fuzz),
     pack: "p.words[w] = pack_sqrt3(c.fuzz_color, 8u, dither) | (unorm_encode(c.fuzz_roughness, 8u, 0.0) << 24u);",
     unpack: "c.fuzz_color = unpack_sqrt3(words[w], 8u);\n            c.fuzz_roughness = unorm_decode(words[w], 24u, 8u);",
 };
-const EMISSION: Part =
-    Part { bit: 8, words: 1, pack: "p.words[w] = pack_rgb9e5(c.emission);", unpack: "c.emission = unpack_rgb9e5(words[w]);" };
+const EMISSION: Part = Part {
+    bit: 8,
+    words: feature_words(Feature::Emission),
+    pack: "p.words[w] = pack_rgb9e5(c.emission);",
+    unpack: "c.emission = unpack_rgb9e5(words[w]);",
+};
 const NORMAL: Part = Part {
     bit: 16,
-    words: 1,
+    words: NORMAL_WORDS,
     pack: "p.words[w] = pack_octahedral(closure_normal(c, n), 16u);",
     unpack: "c.normal = unpack_octahedral(words[w], 16u);",
 };
 const ANISOTROPY: Part = Part {
     bit: 32,
-    words: 1,
+    words: feature_words(Feature::Anisotropy),
     pack: "p.words[w] = unorm_encode(c.anisotropy, 8u, 0.0) | (pack_octahedral(c.tangent, 12u) << 8u);",
     unpack: "c.anisotropy = unorm_decode(words[w], 0u, 8u);\n            c.tangent = select(unpack_octahedral(words[w] >> 8u, 12u), vec3(0.0), c.anisotropy == 0.0);",
 };
 const TRANSMISSION: Part = Part {
     bit: 64,
-    words: 2,
+    words: feature_words(Feature::Transmission),
     pack: "p.words[w] = unorm_encode(c.transmission, 8u, 0.0) | (u32(c.thin > 0.5) << 8u) | (pack2x16float(vec2(min(c.eta, 65504.0), 0.0)) << 16u);\n            p.words[w + 1u] = pack_unorm3(c.tint, 10u, 0.0);",
     unpack: "c.transmission = unorm_decode(words[w], 0u, 8u);\n            c.thin = f32((words[w] >> 8u) & 1u);\n            c.eta = unpack2x16float(words[w] >> 16u).x;\n            c.tint = unpack_unorm3(words[w + 1u], 10u);",
 };
 const FILM: Part = Part {
     bit: 128,
-    words: 1,
+    words: feature_words(Feature::ThinFilm),
     pack: "p.words[w] = unorm_encode(c.film, 8u, 0.0) | (pack_unorm3(c.film_fresnel, 8u, 0.0) << 8u);",
     unpack: "c.film = unorm_decode(words[w], 0u, 8u);\n            c.film_fresnel = unpack_unorm3(words[w] >> 8u, 8u);",
 };

@@ -141,11 +141,11 @@ impl Previewer {
             Materials::Full => (quality.material_bytes, false),
             Materials::Budget(bytes) => (bytes, true),
         };
-        let program = program(scene_program, budget);
+        let (program, bytes) = program(scene_program, budget);
         let instance = if simplified { count + material } else { material };
         // As the compile report counts them.
-        let fitted = simplify::simplify(&scene_program.definitions[scene_program.instances[material].definition as usize], budget);
-        let material_bytes = if simplified { fitted.bytes_after } else { fitted.bytes_before };
+        let (before, after) = bytes[scene_program.instances[material].definition as usize];
+        let material_bytes = if simplified { after } else { before };
         let mut lib = source.lib.clone();
         super::session::material_module(&mut lib, &self.shader_root, &program);
         let loaded = Loaded {
@@ -198,11 +198,14 @@ impl Previewer {
 /// definition only where simplification changed it. Both renderers
 /// compile every definition as it stands (nothing left to simplify), so
 /// one module serves the full and the budget previews of every material.
-pub fn program(scene: &Program, budget: u32) -> Program {
+/// With it, each scene definition's bytes per pixel before and after.
+pub fn program(scene: &Program, budget: u32) -> (Program, Vec<(u32, u32)>) {
     let mut out = Program { simplified: Vec::new(), path_simplified: false, ..scene.clone() };
     let mut at_budget = Vec::with_capacity(scene.definitions.len());
+    let mut bytes = Vec::with_capacity(scene.definitions.len());
     for (k, d) in scene.definitions.iter().enumerate() {
         let s = simplify::simplify(d, budget);
+        bytes.push((s.bytes_before, s.bytes_after));
         at_budget.push(if s.simplified() {
             out.definitions.push(s.def);
             (out.definitions.len() - 1) as u32
@@ -213,7 +216,7 @@ pub fn program(scene: &Program, budget: u32) -> Program {
     let copies: Vec<_> =
         scene.instances.iter().map(|i| crate::material::Instance { definition: at_budget[i.definition as usize], ..i.clone() }).collect();
     out.instances.extend(copies);
-    out
+    (out, bytes)
 }
 
 /// The files whose text differs between two versions of the sources.
@@ -274,7 +277,7 @@ mod tests {
         let loaded = crate::loaded::load(&path).unwrap_or_else(|d| panic!("{d}"));
         let full = &loaded.materials;
         let (n, count) = (full.definitions.len(), full.instances.len());
-        let p = program(full, 40);
+        let (p, _) = program(full, 40);
         assert_eq!(p.definitions[..n], full.definitions[..]);
         assert_eq!(p.definitions.len(), n + 3, "the car paint, the rust and the crate's wood");
         assert!(p.simplified.is_empty() && !p.path_simplified, "both renderers compile the definitions as they stand");
@@ -288,7 +291,7 @@ mod tests {
             let simplified = ["car_paint", "rust"].contains(&name.as_str()) || name.ends_with("::wood");
             assert_eq!(budget.definition as usize >= n, simplified, "{name}");
         }
-        assert_eq!(program(full, 256).definitions.len(), n);
+        assert_eq!(program(full, 256).0.definitions.len(), n);
     }
 
     /// An edit to the material file is new generated code: the preview
