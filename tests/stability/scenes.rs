@@ -106,8 +106,7 @@ fn scanned(s: &Session) -> BTreeSet<String> {
 /// Renders two frames of `scene` with `scanned` outputs captured; returns
 /// what the NaN scan found, one line per bad output.
 pub fn scan(s: &mut Session, loaded: &Loaded, scene: &Scene) -> Vec<String> {
-    s.set_scene(&loaded.with_scene(scene.clone()));
-    let diagnostics = s.install_missing();
+    let diagnostics = s.set_scene_now(&loaded.with_scene(scene.clone()));
     if !diagnostics.is_empty() {
         return diagnostics.iter().map(ToString::to_string).collect();
     }

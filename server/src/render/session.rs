@@ -281,6 +281,20 @@ impl Session {
         changed
     }
 
+    /// `set_scene` for a caller that renders at once (the offline
+    /// commands, the tests): the pipelines built from what the scene
+    /// changed (a regenerated material module) are rebuilt and the missing
+    /// ones built, here and now. Returns the diagnostics of those that
+    /// failed. The daemon instead rebuilds in the background, the last
+    /// good pipelines rendering meanwhile.
+    pub fn set_scene_now(&mut self, loaded: &Loaded) -> Vec<Diagnostic> {
+        let changed = self.set_scene(loaded);
+        let stale = self.built_from(&changed);
+        let mut errors = self.install_now(stale);
+        errors.extend(self.install_missing());
+        errors
+    }
+
     /// A new version of the shader sources; pipelines rebuild only when
     /// installed.
     pub fn apply_sources(&mut self, lib: Library) {
@@ -720,8 +734,7 @@ mod tests {
         let one: BTreeSet<String> = s.wanted().iter().map(PipelineKey::label).collect();
         assert_eq!(one, BTreeSet::from(["debug.test_pattern".to_owned(), "post.tonemap".to_owned()]));
 
-        s.set_scene(&pattern(true));
-        assert_eq!(s.install_missing(), vec![]);
+        assert_eq!(s.set_scene_now(&pattern(true)), vec![]);
         let two: BTreeSet<String> = s.wanted().iter().map(PipelineKey::label).collect();
         let reported: BTreeSet<String> = s.pipeline_summaries().into_iter().map(|p| p.name).collect();
         assert_eq!(reported, two, "only what the frame uses is reported");
@@ -735,5 +748,39 @@ mod tests {
         s.set_scene(&pattern(false));
         let missing: BTreeSet<String> = s.missing().iter().map(PipelineKey::label).collect();
         assert_eq!(missing, one, "switching back builds them again");
+    }
+
+    /// A new budget regenerates the material modules: `set_scene_now`
+    /// rebuilds the pipelines built from them, so the frame is the one a
+    /// fresh session renders at that budget, not the old budget's through
+    /// the old pipelines (the tradeoffs sweep once rendered every budget
+    /// from 40 B up as the first one it built).
+    #[test]
+    fn a_scene_whose_materials_change_renders_with_the_new_code_at_once() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/tiles.toml");
+        let at = |bytes: i64| {
+            let mut l =
+                crate::loaded::load_with(&scenes, &Overrides::from([("quality.material_bytes".to_owned(), Value::Int(bytes))])).unwrap();
+            (l.scene.width, l.scene.height) = (48, 27);
+            l
+        };
+        let lit = |s: &mut Session| {
+            let wanted = BTreeSet::from(["lighting/color".to_owned()]);
+            let pending = s.submit(Some(&wanted), 0.0);
+            s.wait(pending).captures.into_iter().find(|c| c.key() == "lighting/color").expect("captured").data
+        };
+        let gpu = crate::gpu::open().unwrap_or_else(|e| panic!("a GPU device (lavapipe will do): {e}"));
+        let mut s = Session::new(gpu.clone(), &root, library::read_tree(&root).unwrap(), &at(256));
+        assert_eq!(s.install_missing(), vec![]);
+        let full = lit(&mut s);
+        // 24 B: the car paint's coat and flakes folded into one closure.
+        assert_eq!(s.set_scene_now(&at(24)), vec![]);
+        let swapped = lit(&mut s);
+        let mut fresh = Session::new(gpu, &root, library::read_tree(&root).unwrap(), &at(24));
+        assert_eq!(fresh.install_missing(), vec![]);
+        let differing = |a: &[f32], b: &[f32]| a.iter().zip(b).filter(|(x, y)| x != y).count();
+        assert_eq!(differing(&swapped, &lit(&mut fresh)), 0, "the new budget's frame");
+        assert!(differing(&swapped, &full) > 0, "the budget changes the car paint");
     }
 }

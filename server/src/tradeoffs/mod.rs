@@ -200,8 +200,7 @@ fn view(c: &CapturedImage) -> Rgba<'_> {
 fn load(session: &mut Session, job: &Job, overrides: &Overrides) -> Result<(), OfflineError> {
     let mut loaded = crate::loaded::load_with(&job.scene, &merged(job, overrides)).map_err(|d| OfflineError::Input(vec![d]))?;
     (loaded.scene.width, loaded.scene.height) = job.size;
-    session.set_scene(&loaded);
-    let errors = session.install_missing();
+    let errors = session.set_scene_now(&loaded);
     if errors.is_empty() { Ok(()) } else { Err(OfflineError::Input(errors)) }
 }
 

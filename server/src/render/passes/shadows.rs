@@ -66,8 +66,7 @@ mod tests {
         let wanted: BTreeSet<String> = ["lighting/color".to_owned()].into();
         let mut images = Vec::new();
         for r in 0..=3 {
-            s.set_scene(&scene(r));
-            assert_eq!(s.install_missing(), vec![]);
+            assert_eq!(s.set_scene_now(&scene(r)), vec![]);
             let pending = s.submit(Some(&wanted), 1.0 / 30.0);
             let frame = s.wait(pending);
             let lit = frame.captures.iter().find(|c| c.key() == "lighting/color").expect("captured");

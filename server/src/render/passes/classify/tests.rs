@@ -145,8 +145,7 @@ fn tiles_are_classified_by_their_dearest_pixel_and_the_tiled_lighting_matches_th
 
     // Every tile through the complex pipeline: the same image.
     let off = load(dir.path(), SCENE, &Overrides::from([("quality.tile_classification".to_owned(), Value::Bool(false))]));
-    s.set_scene(&off);
-    assert_eq!(s.install_missing(), vec![]);
+    assert_eq!(s.set_scene_now(&off), vec![]);
     let r = render(&mut s);
     let untiled = image(&r, "lighting/color");
     let worst = tiled.iter().zip(untiled).map(|(a, b)| (a - b).abs() / b.abs().max(1.0)).fold(0.0f32, f32::max);
@@ -163,8 +162,7 @@ fn tiles_are_classified_by_their_dearest_pixel_and_the_tiled_lighting_matches_th
     };
     for (view, per_pixel) in [("tile_class", false), ("closures", true)] {
         let o = Overrides::from([("post.debug_view".to_owned(), Value::Text(view.to_owned()))]);
-        s.set_scene(&load(dir.path(), SCENE, &o));
-        assert_eq!(s.install_missing(), vec![]);
+        assert_eq!(s.set_scene_now(&load(dir.path(), SCENE, &o)), vec![]);
         let wanted: BTreeSet<String> = ["debug_view/color".to_owned()].into();
         let pending = s.submit(Some(&wanted), 1.0 / 30.0);
         let r = s.wait(pending);

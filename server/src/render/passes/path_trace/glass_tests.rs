@@ -48,8 +48,7 @@ fn centre(c: &CapturedImage, r: u32) -> [f64; 3] {
 }
 
 fn render(s: &mut Session, loaded: &crate::loaded::Loaded) -> CapturedImage {
-    s.set_scene(loaded);
-    assert_eq!(s.install_missing(), vec![], "the frame's shaders build");
+    assert_eq!(s.set_scene_now(loaded), vec![], "the frame's shaders build");
     let frames = accumulate(s, &[SPP], Some(&[COLOR]));
     image(&frames[0], COLOR).clone()
 }

@@ -145,7 +145,7 @@ fn a_sphere_in_a_white_furnace_reflects_the_brdfs_directional_albedo() {
     ];
     let mut s = session(&loaded(&furnace_scene(&materials[0], FURNACE_SPP), BTreeMap::new()));
     for m in &materials {
-        s.set_scene(&loaded(&furnace_scene(m, FURNACE_SPP), BTreeMap::new()));
+        assert_eq!(s.set_scene_now(&loaded(&furnace_scene(m, FURNACE_SPP), BTreeMap::new())), vec![]);
         let albedo = Albedo::new(m);
         let r = accumulate(&mut s, &[FURNACE_SPP], Some(&[COLOR, ALBEDO, NORMAL])).pop().unwrap();
         let (color, base, normal) = (image(&r, COLOR), image(&r, ALBEDO), image(&r, NORMAL));
@@ -263,11 +263,9 @@ fn direct_light_path_traced_agrees_with_the_raster() {
     let (w, h) = (64, 48);
     let mut s = session(&loaded(&agreement_scene("raster", w * SUPER, h * SUPER, LIGHTS[0].1), BTreeMap::new()));
     for (where_, light) in LIGHTS {
-        s.set_scene(&loaded(&agreement_scene("raster", w * SUPER, h * SUPER, light), BTreeMap::new()));
-        assert_eq!(s.install_missing(), vec![]);
+        assert_eq!(s.set_scene_now(&loaded(&agreement_scene("raster", w * SUPER, h * SUPER, light), BTreeMap::new())), vec![]);
         let lit = accumulate(&mut s, &[1], Some(&["lighting/color", "gbuffer/normal"])).pop().unwrap();
-        s.set_scene(&loaded(&agreement_scene("path", w, h, light), BTreeMap::new()));
-        assert_eq!(s.install_missing(), vec![]);
+        assert_eq!(s.set_scene_now(&loaded(&agreement_scene("path", w, h, light), BTreeMap::new())), vec![]);
         let traced = accumulate(&mut s, &[AGREEMENT_SPP], Some(&[COLOR, ALBEDO])).pop().unwrap();
         let (raster, gbuffer) = (image(&lit, "lighting/color"), image(&lit, "gbuffer/normal"));
         let (got, albedo) = (image(&traced, COLOR), image(&traced, ALBEDO));
@@ -400,8 +398,7 @@ fn every_library_material_path_traced_agrees_with_the_raster() {
     let (w, h) = (4 * LIBRARY_CELL, rows * LIBRARY_CELL);
     let mut s = session_patched(&loaded(&library_scene("raster", &materials), BTreeMap::new()), &SAME_SAMPLES);
     let lit = accumulate(&mut s, &[1], Some(&["lighting/color", "gbuffer/normal"])).pop().unwrap();
-    s.set_scene(&loaded(&library_scene("path", &materials), BTreeMap::new()));
-    assert_eq!(s.install_missing(), vec![]);
+    assert_eq!(s.set_scene_now(&loaded(&library_scene("path", &materials), BTreeMap::new())), vec![]);
     let traced = accumulate(&mut s, &[1], Some(&[COLOR])).pop().unwrap();
     let (raster, gbuffer, got) = (image(&lit, "lighting/color"), image(&lit, "gbuffer/normal"), image(&traced, COLOR));
     assert!(!raster.stats.has_non_finite() && !got.stats.has_non_finite(), "raster {:?}, path {:?}", raster.stats, got.stats);
@@ -508,13 +505,11 @@ fn a_sampled_rect_light_agrees_with_the_path_tracer_and_measures_ltc() {
     let mut s = session(&loaded(&scene("path", "ltc", materials[0].1), BTreeMap::new()));
     let mut report = Vec::new();
     for (what, material) in materials {
-        s.set_scene(&loaded(&scene("path", "ltc", material), BTreeMap::new()));
-        assert_eq!(s.install_missing(), vec![]);
+        assert_eq!(s.set_scene_now(&loaded(&scene("path", "ltc", material), BTreeMap::new())), vec![]);
         let traced = accumulate(&mut s, &[AGREEMENT_SPP], Some(&[COLOR])).pop().unwrap();
         let traced = image(&traced, COLOR).clone();
         for rect in ["sampled", "ltc"] {
-            s.set_scene(&loaded(&scene("raster", rect, material), BTreeMap::new()));
-            assert_eq!(s.install_missing(), vec![]);
+            assert_eq!(s.set_scene_now(&loaded(&scene("raster", rect, material), BTreeMap::new())), vec![]);
             let culled = s.passes().into_iter().any(|p| p.name == "ltc_tables" && p.status == PassState::Culled);
             assert_eq!(culled, rect == "sampled", "the LTC tables only for LTC");
             let lit = accumulate(&mut s, &[1], Some(&["lighting/color"])).pop().unwrap();
@@ -691,7 +686,7 @@ fn degenerate_geometry_makes_no_nan_and_takes_no_light() {
     let mut s = session(&clean);
     without_guard(&mut s);
     let want = assert_finite(&mut s, "clean", &COUNTS);
-    s.set_scene(&degenerate);
+    assert_eq!(s.set_scene_now(&degenerate), vec![]);
     let got = assert_finite(&mut s, "degenerate", &COUNTS);
     // The same paths: only rounding may differ.
     let worst = largest_difference(&got, &want);
@@ -715,9 +710,9 @@ fn a_zero_area_rect_light_makes_no_nan_and_takes_no_light() {
     // Validation wants sizes above 0: 1e-30 squared is 0 in f32, the area
     // the shader sees; 1e-20 × 1 is not, but its area pdf squared (the
     // power heuristic's) is past f32's range.
-    s.set_scene(&loaded(&stage(48, 32, &rect("[1e-30, 1e-30]")), BTreeMap::new()));
+    assert_eq!(s.set_scene_now(&loaded(&stage(48, 32, &rect("[1e-30, 1e-30]")), BTreeMap::new())), vec![]);
     let zero = assert_finite(&mut s, "a rect light of zero area", &COUNTS);
-    s.set_scene(&loaded(&stage(48, 32, &rect("[1e-20, 1.0]")), BTreeMap::new()));
+    assert_eq!(s.set_scene_now(&loaded(&stage(48, 32, &rect("[1e-20, 1.0]")), BTreeMap::new())), vec![]);
     let thin = assert_finite(&mut s, "a rect light 1e-20 wide", &COUNTS);
     // Sampling a rect light draws two numbers, so the paths differ from
     // the scene without one: equal means within noise. The thin light
@@ -743,19 +738,18 @@ fn degenerate_views_make_no_nan() {
     let mut s = session(&loaded(&grazing("1e-4"), BTreeMap::new()));
     without_guard(&mut s);
     for height in ["1e-4", "0.0"] {
-        s.set_scene(&loaded(&grazing(height), BTreeMap::new()));
+        assert_eq!(s.set_scene_now(&loaded(&grazing(height), BTreeMap::new())), vec![]);
         let c = assert_finite(&mut s, &format!("camera at height {height} looking along the floor"), &COUNTS);
         assert!(mean(&c) > 0.1, "camera at height {height}: the image is dark ({})", mean(&c));
     }
     let camera = "[[lights]]\ntype = \"point\"\nposition = [0.0, 1.5, 3.5]\nintensity = 10.0\n";
-    s.set_scene(&loaded(&stage(48, 32, camera), BTreeMap::new()));
+    assert_eq!(s.set_scene_now(&loaded(&stage(48, 32, camera), BTreeMap::new())), vec![]);
     let c = assert_finite(&mut s, "a light at the camera", &COUNTS);
     assert!(mean(&c) > 0.1, "a light at the camera: the image is dark ({})", mean(&c));
     let fog = "[[media]]\nabsorption = [0.1, 0.1, 0.1]\nscattering = [1.5, 1.2, 0.9]\nemission = [0.05, 0.02, 0.0]\nedge = 0.3\n\
         shapes = [{ type = \"sphere\", center = [0.0, 1.0, 2.5], radius = 2.0 }]\nnoise = { octaves = 2, frequency = 2.0, amplitude = 0.5 }\n";
-    s.set_scene(&loaded(&stage(48, 32, fog), BTreeMap::new()));
     // The media permutation, built from the sources without the guard.
-    assert_eq!(s.install_missing(), vec![]);
+    assert_eq!(s.set_scene_now(&loaded(&stage(48, 32, fog), BTreeMap::new())), vec![]);
     let c = assert_finite(&mut s, "camera inside fog", &COUNTS);
     assert!(mean(&c) > 0.1, "camera inside fog: the image is dark ({})", mean(&c));
 }
@@ -792,7 +786,7 @@ fn a_camera_inside_a_medium_sees_what_beer_lambert_says() {
     let mut s = session(&loaded(&medium(cases[0].1, cases[0].2), BTreeMap::new()));
     without_guard(&mut s);
     for (what, absorption, emission) in cases {
-        s.set_scene(&loaded(&medium(absorption, emission), BTreeMap::new()));
+        assert_eq!(s.set_scene_now(&loaded(&medium(absorption, emission), BTreeMap::new())), vec![]);
         let c = assert_finite(&mut s, &format!("camera inside {what}"), &[1, 2, 8, 64]);
         // Every pixel sees the same radiance: the image's mean is that of
         // 262,144 samples, whose noise is 0.3 % (1σ) at most.

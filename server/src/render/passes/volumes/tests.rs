@@ -45,8 +45,7 @@ fn parsed(text: &str) -> Loaded {
 /// Renders `loaded` in `s` (its pipelines built on first use), capturing
 /// the march's inputs and outputs and the grid.
 fn render(s: &mut Session, loaded: &Loaded) -> FrameResult {
-    s.set_scene(loaded);
-    assert_eq!(s.install_missing(), vec![], "the frame's shaders build");
+    assert_eq!(s.set_scene_now(loaded), vec![], "the frame's shaders build");
     let wanted: BTreeSet<String> = [COLOR, TRANSMITTANCE, LIT, GRID, MARCHED].map(str::to_owned).into();
     let pending = s.submit(Some(&wanted), 1.0 / 30.0);
     let r = s.wait(pending);
