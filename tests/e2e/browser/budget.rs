@@ -92,6 +92,15 @@ async fn the_budget_series_is_measured_and_plotted() {
     assert!(budgets.windows(2).all(|w| w[0] < w[1]), "{budgets:?}");
     let error = |i: usize| points[i]["relative_mse"].as_f64().unwrap();
     assert!(error(0) > error(points.len() - 1), "one slab is further from the full car paint than the whole: {points:?}");
+    // The same points against the raster at the last budget (nothing
+    // simplified): that point is its reference exactly, each smaller
+    // budget simplifies the car paint and is not, by a fraction of the
+    // image (rendered through the last budget's pipelines, a point read
+    // its words in another layout: relative MSE 1.9e10).
+    let own = &series[k + 1];
+    assert_eq!(own["setting"], "quality.material_bytes");
+    let own: Vec<f64> = own["points"].as_array().unwrap().iter().map(|p| p["relative_mse"].as_f64().unwrap()).collect();
+    assert!(own[..own.len() - 1].iter().all(|e| *e > 0.0 && *e < 0.1) && own[own.len() - 1] == 0.0, "{budgets:?}: {own:?}");
 
     let s = Server::start(&p.root, &["--render", "on-change", "--scene", SCENE]);
     let (_driver, c) = browser().await;
