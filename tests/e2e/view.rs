@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use egui_kittest::kittest::Queryable;
 use egui_kittest::{Harness, wgpu::WgpuTestRenderer};
 use loupe::serve::display::Display;
-use loupe::serve::viewer::InProcess;
+use loupe::serve::viewer::{self, InProcess};
 use loupe::serve::{Attached, ServeOptions, daemon::RenderMode};
 use loupe_tests::reload::{TONEMAP, broken, constant_colour};
 use loupe_tests::{Project, loupe_with_env, repo};
@@ -69,12 +69,7 @@ fn the_window_shows_the_daemons_passes_frame_and_problems() {
         max_fps: 30.0,
         debug_api: false,
     };
-    let setup = egui_wgpu::WgpuSetupExisting {
-        instance: gpu.instance.clone(),
-        adapter: gpu.adapter.clone(),
-        device: gpu.device.clone(),
-        queue: gpu.queue.clone(),
-    };
+    let setup = viewer::window_device(&gpu);
     let running = loupe::serve::start(opts, Some(Attached { gpu, display: display.clone() })).expect("the daemon starts");
     let shared = running.shared().clone();
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();

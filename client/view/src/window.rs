@@ -21,25 +21,14 @@ pub fn check_display() -> Result<(), WindowError> {
     if set("DISPLAY") || set("WAYLAND_DISPLAY") { Ok(()) } else { Err(WindowError::NoDisplay) }
 }
 
-/// The device the window renders with.
-pub struct Device {
-    pub instance: wgpu::Instance,
-    pub adapter: wgpu::Adapter,
-    pub device: wgpu::Device,
-    pub queue: wgpu::Queue,
-}
-
 /// Opens the window and runs it until it is closed (or the link says the
 /// daemon stopped). Must run on the main thread (winit's rule).
-pub fn run(title: &str, device: Device, link: Box<dyn Link>) -> Result<(), WindowError> {
+/// `device`: the one the window renders with.
+pub fn run(title: &str, device: egui_wgpu::WgpuSetupExisting, link: Box<dyn Link>) -> Result<(), WindowError> {
     check_display()?;
-    let Device { instance, adapter, device, queue } = device;
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default().with_title(title).with_inner_size([1280.0, 800.0]),
-        wgpu_options: egui_wgpu::WgpuConfiguration {
-            wgpu_setup: egui_wgpu::WgpuSetup::Existing(egui_wgpu::WgpuSetupExisting { instance, adapter, device, queue }),
-            ..Default::default()
-        },
+        wgpu_options: egui_wgpu::WgpuConfiguration { wgpu_setup: egui_wgpu::WgpuSetup::Existing(device), ..Default::default() },
         ..Default::default()
     };
     let viewer = Viewer::new(link, crate::editor::from_env());

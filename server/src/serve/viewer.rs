@@ -7,7 +7,7 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use loupe_view::{Command, DisplayImage, Link, window};
+use loupe_view::{Command, DisplayImage, Link, egui_wgpu, window};
 use tokio::sync::broadcast::{self, error::TryRecvError};
 
 use super::display::Display;
@@ -30,12 +30,7 @@ pub enum ViewError {
 pub fn run(opts: ServeOptions) -> Result<(), ViewError> {
     window::check_display()?;
     let gpu = crate::gpu::open().map_err(ServeError::NoDevice)?;
-    let device = window::Device {
-        instance: gpu.instance.clone(),
-        adapter: gpu.adapter.clone(),
-        device: gpu.device.clone(),
-        queue: gpu.queue.clone(),
-    };
+    let device = window_device(&gpu);
     let display = Display::new(gpu.device.clone());
     let running = super::start(opts, Some(Attached { gpu, display: display.clone() }))?;
     let link = InProcess::new(running.shared().clone(), display);
@@ -60,6 +55,17 @@ pub fn run(opts: ServeOptions) -> Result<(), ViewError> {
     let served = http.join().unwrap_or_else(|_| Err(ServeError::Other("the HTTP thread panicked".into())));
     shown?;
     Ok(served?)
+}
+
+/// The daemon's device as egui's renderer takes it: the window draws on
+/// it, so the display texture needs no copy between devices.
+pub fn window_device(gpu: &crate::gpu::Gpu) -> egui_wgpu::WgpuSetupExisting {
+    egui_wgpu::WgpuSetupExisting {
+        instance: gpu.instance.clone(),
+        adapter: gpu.adapter.clone(),
+        device: gpu.device.clone(),
+        queue: gpu.queue.clone(),
+    }
 }
 
 /// The window's link to a daemon in this process.
