@@ -15,3 +15,4 @@ mod render;
 mod serve;
 mod timings;
 mod tradeoffs;
+mod view;

@@ -9,9 +9,10 @@ use loupe_tests::{Project, Run, loupe, loupe_with_env, repo};
 use super::denoise::{fixture, weights};
 
 /// Runs `loupe args` in `dir` with the Vulkan loader pointed at no driver
-/// at all: a machine with no GPU and no lavapipe.
+/// at all: a machine with no GPU and no lavapipe. A display is named (none
+/// is reached) so that `view` gets as far as looking for an adapter.
 fn without_adapter(dir: &Path, args: &[&str]) -> Run {
-    loupe_with_env(dir, args, &[("VK_ICD_FILENAMES", "/nonexistent.json"), ("VK_DRIVER_FILES", "/nonexistent.json")])
+    loupe_with_env(dir, args, &[("VK_ICD_FILENAMES", "/nonexistent.json"), ("VK_DRIVER_FILES", "/nonexistent.json"), ("DISPLAY", ":0")])
 }
 
 /// The `--flags` words of `text`, cut where the name ends (`=value`,
@@ -60,8 +61,9 @@ fn every_command_without_an_adapter_gives_advice_that_works() {
     let out = p.path("out").display().to_string();
     let (w, color) = (weights("rt_ldr.tza"), fixture("color.pfm"));
     let denoised = p.path("denoised.pfm").display().to_string();
-    let runs: [(&str, Vec<&str>); 4] = [
+    let runs: [(&str, Vec<&str>); 5] = [
         ("serve", vec!["serve", "--root", &root, "--port", "0"]),
+        ("view", vec!["view", "--root", &root, "--port", "0"]),
         ("render", vec!["render", "--root", &root, "--size", "32x18", "--out", &out]),
         ("denoise", vec!["denoise", "--root", &root, "--weights", &w, "--color", &color, "--ldr", "-o", &denoised]),
         // `check` requires its device only when asked to, and says how not to.

@@ -213,15 +213,22 @@ impl Server {
 
     /// Starts `BIN serve --port PORT ...extra` in `dir`.
     pub fn start_with(bin: &Path, dir: &Path, port: u16, extra: &[&str]) -> Server {
+        Self::start_command(bin, dir, "serve", port, extra, &[])
+    }
+
+    /// Starts `BIN COMMAND --port PORT ...extra` in `dir` with `env` set:
+    /// `serve`, or `view`, which runs the same daemon.
+    pub fn start_command(bin: &Path, dir: &Path, command: &str, port: u16, extra: &[&str], env: &[(&str, &str)]) -> Server {
         // Run in `dir`: a relative binary path is relative to here.
         let bin = std::path::absolute(bin).expect("an absolute path");
         // The daemon's tests want frames quickly on lavapipe: unless a test
         // names a scene, serve the test pattern, the lightest scene.
         let scene: &[&str] = if extra.contains(&"--scene") { &[] } else { &["--scene", "scenes/pattern.toml"] };
         let mut child = Command::new(bin)
-            .args(["serve", "--port", &port.to_string()])
+            .args([command, "--port", &port.to_string()])
             .args(scene)
             .args(extra)
+            .envs(env.iter().copied())
             .current_dir(dir)
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())

@@ -9,6 +9,7 @@ pub mod denoise;
 pub mod render;
 pub mod serve;
 pub mod tradeoffs;
+pub mod view;
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -52,6 +53,14 @@ pub enum Command {
     ///
     /// Exit codes: 0 after Ctrl-C; 2 bad usage; 3 no GPU adapter.
     Serve(serve::Args),
+    /// Run the daemon of `serve` (the browser inspector stays on the port)
+    /// and open a native window on its GPU device: the live frame, the
+    /// passes, and the problems (click one to open $VISUAL or $EDITOR at
+    /// its line).
+    ///
+    /// Exit codes: 0 after the window closes or Ctrl-C; 2 bad usage or no
+    /// display (`loupe serve` is the headless alternative); 3 no GPU adapter.
+    View(view::Args),
     /// Render one frame without a server: every pass output as PNG and
     /// OpenEXR, plus `report.json` (passes, culled passes with reasons,
     /// timings, NaN report, statistics).
@@ -82,6 +91,7 @@ impl Command {
         match self {
             Command::Check(args) => check::run(args),
             Command::Serve(args) => serve::run(args),
+            Command::View(args) => view::run(args),
             Command::Render(args) => render::run(args),
             Command::Bench(args) => bench::run(args),
             Command::Denoise(args) => denoise::run(args),

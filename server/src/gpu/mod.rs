@@ -42,6 +42,9 @@ pub enum OpenError {
 /// An open device and what it can do.
 #[derive(Clone)]
 pub struct Gpu {
+    /// Kept for what shares the device: `loupe view`'s window creates its
+    /// surface with it.
+    pub instance: wgpu::Instance,
     pub adapter: wgpu::Adapter,
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
@@ -207,7 +210,7 @@ pub fn open() -> Result<Gpu, OpenError> {
             v.push(e.to_string());
         }
     }));
-    Ok(Gpu { adapter, device, queue, info, features, degraded, uncaptured })
+    Ok(Gpu { instance, adapter, device, queue, info, features, degraded, uncaptured })
 }
 
 #[cfg(test)]

@@ -32,6 +32,11 @@ impl ResourcePool {
         &self.entries[graph.resource(h)]
     }
 
+    /// The memory of `h`, when the pool holds it (a culled resource has none).
+    pub fn try_get<'p>(&'p self, graph: &Graph, h: Handle) -> Option<&'p Physical> {
+        self.entries.get(graph.resource(h))
+    }
+
     /// Forgets every history resource: the next frame starts from zeros.
     pub fn reset_history(&mut self) {
         self.entries.retain(|k, _| k.lifetime != Lifetime::History);

@@ -463,6 +463,17 @@ impl Session {
         }
     }
 
+    /// The texture of the frame's final output as the newest submitted
+    /// frame wrote it; `None` when the graph has none or it is not
+    /// allocated (its pass culled). Commands submitted after that frame
+    /// see what it wrote.
+    pub fn final_texture(&self) -> Option<&wgpu::Texture> {
+        match self.pool.try_get(&self.graph, self.graph.final_output()?)? {
+            super::resource::Physical::Texture { texture, .. } => Some(texture),
+            super::resource::Physical::Buffer(_) => None,
+        }
+    }
+
     /// Polls the device without blocking, so readbacks can land.
     pub fn poll(&self) {
         let _ = self.gpu.device.poll(wgpu::PollType::Poll);

@@ -6,12 +6,14 @@
 //! thread (clients' bounded by `inbox`) and `Shared` snapshots out of it.
 
 pub mod daemon;
+pub mod display;
 pub mod event;
 pub mod http;
 pub mod inbox;
 pub mod materials;
 pub mod preview;
 pub mod shared;
+pub mod viewer;
 pub mod watch;
 
 use std::net::{IpAddr, SocketAddr};
@@ -47,6 +49,32 @@ pub enum ServeError {
 /// Runs the daemon until Ctrl-C. Prints `listening on http://ADDR` once
 /// clients can connect.
 pub fn run(opts: ServeOptions) -> Result<(), ServeError> {
+    start(opts, None)?.serve(async {
+        let _ = tokio::signal::ctrl_c().await;
+    })
+}
+
+/// What `loupe view` lends the daemon: its device, already open (the
+/// window renders with it), and the display the daemon copies frames into.
+pub struct Attached {
+    pub gpu: crate::gpu::Gpu,
+    pub display: std::sync::Arc<display::Display>,
+}
+
+/// A started daemon whose HTTP side is bound but not yet serving.
+pub struct Running {
+    shared: std::sync::Arc<shared::Shared>,
+    tx: mpsc::Sender<Event>,
+    render: std::thread::JoinHandle<()>,
+    _watch: watch::WatchGuard,
+    runtime: tokio::runtime::Runtime,
+    listener: tokio::net::TcpListener,
+    local: SocketAddr,
+}
+
+/// Starts the watcher and the render thread (opening a device on it,
+/// unless `attached` lends one) and binds the port.
+pub fn start(opts: ServeOptions, attached: Option<Attached>) -> Result<Running, ServeError> {
     let shader_root = opts.root.join("shaders");
     let scene_root = opts.root.join("scenes");
     let (tx, clients, inbox) = inbox::open();
@@ -59,11 +87,16 @@ pub fn run(opts: ServeOptions) -> Result<(), ServeError> {
 
     // The device is opened on the render thread, which then owns it.
     let (ready_tx, ready_rx) = mpsc::channel();
-    let config = Config { shader_root, scene_path: opts.scene.clone(), mode: opts.mode, max_fps: opts.max_fps, watch_files: watch.files() };
+    let (gpu, display) = match attached {
+        Some(a) => (Some(a.gpu), Some(a.display)),
+        None => (None, None),
+    };
+    let config =
+        Config { shader_root, scene_path: opts.scene.clone(), mode: opts.mode, max_fps: opts.max_fps, watch_files: watch.files(), display };
     let (shared_r, tx_r) = (shared.clone(), tx.clone());
     let render = std::thread::Builder::new()
         .name("loupe-render".into())
-        .spawn(move || match crate::gpu::open() {
+        .spawn(move || match gpu.map_or_else(crate::gpu::open, Ok) {
             Ok(gpu) => {
                 for line in &gpu.degraded {
                     eprintln!("loupe: {line}");
@@ -88,23 +121,32 @@ pub fn run(opts: ServeOptions) -> Result<(), ServeError> {
         .build()
         .map_err(|e| ServeError::Other(format!("cannot start the async runtime: {e}")))?;
     let addr = SocketAddr::new(opts.bind, opts.port);
-    let result = runtime.block_on(async {
-        let (listener, local) = http::bind(addr).await.map_err(|source| ServeError::Bind { addr, source })?;
-        if !opts.bind.is_loopback() {
-            eprintln!("loupe: warning: listening on {local}, reachable from other machines; loupe has no authentication");
-        }
-        if opts.debug_api {
-            eprintln!("loupe: warning: the debug API is on (POST /api/debug/lose-device destroys the GPU device)");
-        }
+    let (listener, local) = runtime.block_on(http::bind(addr)).map_err(|source| ServeError::Bind { addr, source })?;
+    if !opts.bind.is_loopback() {
+        eprintln!("loupe: warning: listening on {local}, reachable from other machines; loupe has no authentication");
+    }
+    if opts.debug_api {
+        eprintln!("loupe: warning: the debug API is on (POST /api/debug/lose-device destroys the GPU device)");
+    }
+    Ok(Running { shared, tx, render, _watch: watch, runtime, listener, local })
+}
+
+impl Running {
+    /// What the daemon publishes, and the clients' way back to it.
+    pub fn shared(&self) -> &std::sync::Arc<shared::Shared> {
+        &self.shared
+    }
+
+    /// Serves HTTP until `shutdown` completes (or serving fails), then
+    /// stops the render thread.
+    pub fn serve(self, shutdown: impl std::future::Future<Output = ()> + Send + 'static) -> Result<(), ServeError> {
+        let Running { shared, tx, render, _watch, runtime, listener, local } = self;
         println!("listening on http://{local}");
-        let shutdown = async {
-            let _ = tokio::signal::ctrl_c().await;
-        };
-        http::serve(listener, shared, http::allowed_hosts(local), shutdown)
-            .await
-            .map_err(|e| ServeError::Other(format!("server error: {e}")))
-    });
-    let _ = tx.send(Event::Shutdown);
-    let _ = render.join();
-    result
+        let result = runtime
+            .block_on(http::serve(listener, shared, http::allowed_hosts(local), shutdown))
+            .map_err(|e| ServeError::Other(format!("server error: {e}")));
+        let _ = tx.send(Event::Shutdown);
+        let _ = render.join();
+        result
+    }
 }

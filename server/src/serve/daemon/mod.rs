@@ -57,6 +57,8 @@ pub struct Config {
     pub max_fps: f64,
     /// Where the scene's files outside the watched roots are named.
     pub watch_files: super::watch::WatchedFiles,
+    /// `loupe view`'s window, which each clean frame is copied for.
+    pub display: Option<Arc<super::display::Display>>,
 }
 
 /// Where a submitted frame's results stand.
@@ -563,7 +565,12 @@ impl Daemon {
         let pending = self.session.submit(if trace.is_some() { None } else { Some(&capture) }, dt);
         // wgpu reports invalid frame commands on this thread, while the
         // frame is recorded and submitted: they belong to this frame.
-        let errors = self.session.take_uncaptured();
+        let mut errors = self.session.take_uncaptured();
+        if let (true, Some(display), Some(texture)) = (errors.is_empty(), &self.config.display, self.session.final_texture()) {
+            display.copy(&self.gpu().device, &self.gpu().queue, texture);
+            // The copy's own errors, if any, are this frame's too.
+            errors = self.session.take_uncaptured();
+        }
         let clean = errors.is_empty();
         let ForFrame { reloads, swapped } = self.reloads.for_frame();
         self.set_gpu_errors(&errors, &swapped);

@@ -1,0 +1,6 @@
+//! One module per panel; each draws from the model (and the frame
+//! texture) and reports what the user asked for, never acting on a link.
+
+pub mod frame;
+pub mod passes;
+pub mod problems;

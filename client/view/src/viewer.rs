@@ -1,0 +1,121 @@
+//! The window's contents, one frame at a time: read what the link
+//! received, draw the panels, act on what the user clicked. Nothing here
+//! waits on the daemon: the link's calls return at once, and the frame
+//! shown is whichever the daemon finished last.
+
+use std::collections::HashMap;
+
+use crate::link::{Command, Link};
+use crate::model::{Location, Model, Problem};
+use crate::panels::{self, frame::FrameTexture};
+
+pub struct Viewer {
+    link: Box<dyn Link>,
+    model: Model,
+    frame: FrameTexture,
+    /// Source texts for excerpts, read once per file while the problems
+    /// stay the same.
+    sources: HashMap<String, Option<String>>,
+    sources_for: Vec<Problem>,
+    editor: Option<String>,
+}
+
+impl Viewer {
+    /// `editor`: the command problems open in (`editor::from_env()`).
+    pub fn new(link: Box<dyn Link>, editor: Option<String>) -> Self {
+        Viewer { link, model: Model::default(), frame: FrameTexture::default(), sources: HashMap::new(), sources_for: Vec::new(), editor }
+    }
+
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// The daemon stopped: the window should close.
+    pub fn closed(&self) -> bool {
+        self.link.closed()
+    }
+
+    /// The window is minimised: nothing of the frame is on screen.
+    pub fn hidden(&self) {
+        self.link.set_shown(false);
+    }
+
+    /// One frame of the window. `render`: the renderer the frame texture is
+    /// registered with (none: the frame is not shown).
+    pub fn ui(&mut self, ui: &mut egui::Ui, render: Option<&egui_wgpu::RenderState>) {
+        for event in self.link.poll() {
+            self.model.apply(event);
+        }
+        if self.sources_for != self.model.problems {
+            self.sources.clear();
+            self.sources_for = self.model.problems.clone();
+        }
+        let image = self.link.display();
+        if let (Some(image), Some(render)) = (&image, render) {
+            self.frame.sync(image, render);
+        }
+
+        // Sizes are bounded by the window, not by the longest line: text
+        // is cut to the panel and scrolls.
+        let (width, height) = (ui.available_width(), ui.available_height());
+        egui::Panel::top("toolbar").show(ui, |ui| self.toolbar(ui));
+        let clicked = egui::Panel::bottom("problems")
+            .default_size(height * 0.3)
+            .max_size(height * 0.6)
+            .resizable(true)
+            .show(ui, |ui| {
+                let (link, sources) = (&self.link, &mut self.sources);
+                panels::problems::show(ui, &self.model.problems, |loc| excerpt(link.as_ref(), sources, loc))
+            })
+            .inner;
+        egui::Panel::right("passes")
+            .default_size(width * 0.35)
+            .max_size(width * 0.6)
+            .resizable(true)
+            .show(ui, |ui| panels::passes::show(ui, &self.model.passes));
+        let shown = egui::CentralPanel::default().show(ui, |ui| self.frame.show(ui, image.as_ref())).inner;
+        self.link.set_shown(shown);
+        if let Some(loc) = clicked {
+            self.open(&loc);
+        }
+        // The frame changes at the renderer's rate: repaint at the display's.
+        ui.ctx().request_repaint();
+    }
+
+    fn toolbar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            if ui.button("Recompile all").clicked() {
+                self.send(Command::Rebuild);
+            }
+            if let Some((frame, ms)) = self.model.frame {
+                ui.label(format!("frame {frame}, {ms:.1} ms"));
+            }
+            if let Some(notice) = &self.model.notice {
+                ui.add(egui::Label::new(egui::RichText::new(notice).color(egui::Color32::from_rgb(220, 170, 60))).truncate());
+            }
+            let s = &self.model.status;
+            ui.add(egui::Label::new(format!("{} on {}", s.scene, s.adapter)).truncate());
+        });
+    }
+
+    fn send(&mut self, command: Command) {
+        if let Err(e) = self.link.send(command) {
+            self.model.notice = Some(e);
+        }
+    }
+
+    fn open(&mut self, loc: &Location) {
+        let Some(editor) = &self.editor else {
+            self.model.notice = Some("set $VISUAL or $EDITOR to open problems in an editor".into());
+            return;
+        };
+        if let Err(e) = crate::editor::open(editor, &loc.file, loc.line, loc.column) {
+            self.model.notice = Some(e);
+        }
+    }
+}
+
+fn excerpt(link: &dyn Link, sources: &mut HashMap<String, Option<String>>, loc: &Location) -> Option<String> {
+    let text = sources.entry(loc.file.clone()).or_insert_with(|| link.source(&loc.file)).as_deref()?;
+    crate::excerpt::excerpt(text, loc.line, loc.column)
+}

@@ -1,0 +1,136 @@
+//! `loupe view`: the daemon of `loupe serve` with a native window on its
+//! own device. The window (`loupe_view`) reads the daemon through
+//! [`InProcess`], the in-process [`Link`]: the events every WebSocket
+//! client gets, the inbox commands they send, and the display texture the
+//! render thread copies each frame into (`display`).
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use loupe_view::{Command, DisplayImage, Link, egui_wgpu, window};
+use tokio::sync::broadcast::{self, error::TryRecvError};
+
+use super::display::Display;
+use super::inbox;
+use super::shared::{Shared, read};
+use super::{Attached, ServeError, ServeOptions};
+use crate::protocol::{ServerEvent, VERSION};
+
+#[derive(Debug, thiserror::Error)]
+pub enum ViewError {
+    #[error(transparent)]
+    Window(#[from] window::WindowError),
+    #[error(transparent)]
+    Serve(#[from] ServeError),
+}
+
+/// Runs the daemon and the window until the window is closed or Ctrl-C.
+/// Checks for a display before opening the device, and opens the device
+/// before the window (the window renders with it).
+pub fn run(opts: ServeOptions) -> Result<(), ViewError> {
+    window::check_display()?;
+    let gpu = crate::gpu::open().map_err(ServeError::NoDevice)?;
+    let device = window_device(&gpu);
+    let display = Display::new(gpu.device.clone());
+    let running = super::start(opts, Some(Attached { gpu, display: display.clone() }))?;
+    let link = InProcess::new(running.shared().clone(), display);
+    let stopped = link.stopped.clone();
+    let (close_tx, close_rx) = tokio::sync::oneshot::channel::<()>();
+    // HTTP on a thread of its own: the window needs the main thread.
+    let http = std::thread::Builder::new()
+        .name("loupe-http".into())
+        .spawn(move || {
+            let result = running.serve(async {
+                tokio::select! {
+                    _ = tokio::signal::ctrl_c() => {}
+                    _ = close_rx => {}
+                }
+            });
+            stopped.store(true, Ordering::Relaxed);
+            result
+        })
+        .map_err(|e| ServeError::Other(format!("cannot start the HTTP thread: {e}")))?;
+    let shown = window::run("loupe view", device, Box::new(link));
+    let _ = close_tx.send(());
+    let served = http.join().unwrap_or_else(|_| Err(ServeError::Other("the HTTP thread panicked".into())));
+    shown?;
+    Ok(served?)
+}
+
+/// The daemon's device as egui's renderer takes it: the window draws on
+/// it, so the display texture needs no copy between devices.
+pub fn window_device(gpu: &crate::gpu::Gpu) -> egui_wgpu::WgpuSetupExisting {
+    egui_wgpu::WgpuSetupExisting {
+        instance: gpu.instance.clone(),
+        adapter: gpu.adapter.clone(),
+        device: gpu.device.clone(),
+        queue: gpu.queue.clone(),
+    }
+}
+
+/// The window's link to a daemon in this process.
+pub struct InProcess {
+    shared: Arc<Shared>,
+    events: broadcast::Receiver<ServerEvent>,
+    /// The snapshot a client starts from, sent on the first poll.
+    snapshot: Vec<ServerEvent>,
+    display: Arc<Display>,
+    stopped: Arc<AtomicBool>,
+}
+
+impl InProcess {
+    pub fn new(shared: Arc<Shared>, display: Arc<Display>) -> Self {
+        // Subscribed before the snapshot is read, as a WebSocket client,
+        // so nothing after it is missed.
+        let events = shared.events.subscribe();
+        let snapshot = vec![
+            ServerEvent::Hello { protocol: VERSION, status: read(&shared.status) },
+            ServerEvent::Passes { passes: read(&shared.passes) },
+            ServerEvent::Diagnostics { diagnostics: read(&shared.diagnostics) },
+        ];
+        InProcess { shared, events, snapshot, display, stopped: Arc::new(AtomicBool::new(false)) }
+    }
+}
+
+impl Link for InProcess {
+    fn poll(&mut self) -> Vec<serde_json::Value> {
+        let mut out: Vec<ServerEvent> = std::mem::take(&mut self.snapshot);
+        loop {
+            match self.events.try_recv() {
+                Ok(e) => out.push(e),
+                // Fell behind the event ring: what the panels show is
+                // rebuilt from the snapshots instead.
+                Err(TryRecvError::Lagged(_)) => {
+                    out.push(ServerEvent::Passes { passes: read(&self.shared.passes) });
+                    out.push(ServerEvent::Diagnostics { diagnostics: read(&self.shared.diagnostics) });
+                }
+                Err(TryRecvError::Empty | TryRecvError::Closed) => break,
+            }
+        }
+        out.iter().filter_map(|e| serde_json::to_value(e).ok()).collect()
+    }
+
+    fn send(&self, command: Command) -> Result<(), String> {
+        let command = match command {
+            Command::Rebuild => inbox::Command::Rebuild,
+        };
+        self.shared.clients.command(command).map_err(|e| e.to_string())
+    }
+
+    fn source(&self, file: &str) -> Option<String> {
+        // Diagnostics name files relative to this process's directory.
+        std::fs::read_to_string(file).ok()
+    }
+
+    fn display(&self) -> Option<DisplayImage> {
+        self.display.current().map(|t| DisplayImage { view: t.view, size: t.size, generation: t.generation })
+    }
+
+    fn set_shown(&self, shown: bool) {
+        self.display.set_shown(shown);
+    }
+
+    fn closed(&self) -> bool {
+        self.stopped.load(Ordering::Relaxed)
+    }
+}

@@ -1,0 +1,177 @@
+//! `loupe view`: its failures as the binary reports them, and the window's
+//! contents driven by egui_kittest against a real daemon on a temporary
+//! project, rendering on the daemon's own device (lavapipe here).
+
+use std::time::{Duration, Instant};
+
+use egui_kittest::kittest::Queryable;
+use egui_kittest::{Harness, wgpu::WgpuTestRenderer};
+use loupe::serve::display::Display;
+use loupe::serve::viewer::{self, InProcess};
+use loupe::serve::{Attached, ServeOptions, daemon::RenderMode};
+use loupe_tests::reload::{TONEMAP, broken, constant_colour};
+use loupe_tests::{Project, Server, loupe_bin, loupe_with_env, repo};
+use loupe_view::{Viewer, egui, egui_wgpu};
+
+#[test]
+fn without_a_display_view_names_serve_and_exits_2() {
+    let p = Project::empty("view-no-display");
+    let root = repo().display().to_string();
+    let run = loupe_with_env(&p.root, &["view", "--root", &root, "--port", "0"], &[("DISPLAY", ""), ("WAYLAND_DISPLAY", "")]);
+    run.code(2).stderr_has("no display").stderr_has("`loupe serve`");
+    assert!(!run.stderr.contains("panicked"), "{}", run.stderr);
+}
+
+/// The colour the test's tonemap shader writes everywhere (linear), and
+/// the 8-bit sRGB value the window must show for it.
+const COLOUR: [f32; 3] = [0.8, 0.05, 0.6];
+const SHOWN: [u8; 3] = [231, 63, 203];
+
+/// Steps the window until `done` holds, for at most `limit` (lavapipe
+/// compiles the first pipelines slowly; this is a bound, not a timing).
+fn step_until(harness: &mut Harness<'_, Viewer>, what: &str, limit: Duration, mut done: impl FnMut(&mut Harness<'_, Viewer>) -> bool) {
+    let start = Instant::now();
+    loop {
+        harness.step();
+        if done(harness) {
+            return;
+        }
+        assert!(start.elapsed() < limit, "the window never showed {what}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// How many pixels of `image` are `SHOWN` (within 3 per channel).
+fn frame_pixels(image: &image::RgbaImage) -> usize {
+    image.pixels().filter(|p| p.0[..3].iter().zip(SHOWN).all(|(a, b)| a.abs_diff(b) <= 3)).count()
+}
+
+#[test]
+fn the_window_shows_the_daemons_passes_frame_and_problems() {
+    let p = Project::copy_of_repo("view-window");
+    let scene = p.read("scenes/minimal.toml").replace("width = 640\nheight = 360", "width = 64\nheight = 36");
+    p.write("scenes/minimal.toml", scene);
+    let good = constant_colour(&p.read(TONEMAP), COLOUR);
+    p.write(TONEMAP, &good);
+    // An "editor" that records how it was called: named `vim`, so it gets
+    // vim's `+LINE FILE`.
+    p.write("bin/vim", format!("#!/bin/sh\necho \"$@\" > {}\n", p.path("opened").display()));
+    std::process::Command::new("chmod").arg("+x").arg(p.path("bin/vim")).status().expect("chmod");
+
+    let gpu = loupe::gpu::open().unwrap_or_else(|e| panic!("needs a device (lavapipe will do): {e}"));
+    let display = Display::new(gpu.device.clone());
+    let opts = ServeOptions {
+        root: p.root.clone(),
+        scene: p.path("scenes/minimal.toml"),
+        bind: std::net::Ipv4Addr::LOCALHOST.into(),
+        port: 0,
+        mode: RenderMode::Continuous,
+        max_fps: 30.0,
+        debug_api: false,
+    };
+    let setup = viewer::window_device(&gpu);
+    let running = loupe::serve::start(opts, Some(Attached { gpu, display: display.clone() })).expect("the daemon starts");
+    let shared = running.shared().clone();
+    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+    let http = std::thread::spawn(move || {
+        running.serve(async {
+            let _ = stopped.await;
+        })
+    });
+
+    let render = egui_kittest::wgpu::create_render_state(egui_wgpu::WgpuSetup::Existing(setup), egui_wgpu::RendererOptions::PREDICTABLE);
+    let viewer = Viewer::new(Box::new(InProcess::new(shared.clone(), display)), Some(p.path("bin/vim").display().to_string()));
+    let r = render.clone();
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(640.0, 480.0))
+        .renderer(WgpuTestRenderer::from_render_state(render))
+        .build_ui_state(move |ui, viewer: &mut Viewer| viewer.ui(ui, Some(&r)), viewer);
+
+    // The pass list: every pass the daemon reports, by name.
+    let limit = Duration::from_secs(120);
+    step_until(&mut harness, "a frame", limit, |h| h.state().model().frame.is_some());
+    let passes = loupe::serve::shared::read(&shared.passes);
+    assert!(passes.len() > 3, "the minimal scene has its passes: {passes:?}");
+    for pass in &passes {
+        assert!(harness.query_by_label(&pass.name).is_some(), "the Passes panel lists `{}`", pass.name);
+    }
+    // The frame, on screen: the shader's colour fills the Frame panel.
+    step_until(&mut harness, "the frame", limit, |h| frame_pixels(&h.render().expect("renders")) > 10_000);
+
+    // A broken shader: its error in Problems, at its line.
+    let bad = broken(&good);
+    let line = bad.lines().position(|l| l.contains("mux(")).expect("the broken line") + 1;
+    p.write(TONEMAP, &bad);
+    let place = format!("shaders/post/tonemap.wgsl:{line}:");
+    step_until(&mut harness, "the error", limit, |h| h.query_by_label_contains(&place).is_some());
+    assert!(harness.query_by_label_contains(&format!("{line} |     let c = mux(")).is_some(), "the excerpt shows the broken line");
+    // Clicking it (as assistive technology clicks: a pointer click at the
+    // wrapped link's centre did not register in kittest) opens the editor
+    // at that line, without waiting for it.
+    harness.get_by_label_contains(&place).click_accesskit();
+    step_until(&mut harness, "the editor's start", limit, |_| std::fs::read_to_string(p.path("opened")).is_ok_and(|s| s.ends_with('\n')));
+    let opened = std::fs::read_to_string(p.path("opened")).expect("the editor ran");
+    assert!(opened.starts_with(&format!("+{line} ")) && opened.trim_end().ends_with("tonemap.wgsl"), "{opened}");
+
+    // Fixed: the problem goes.
+    p.write(TONEMAP, &good);
+    step_until(&mut harness, "the fix", limit, |h| h.query_by_label_contains("tonemap.wgsl:").is_none());
+
+    drop(harness);
+    let _ = stop.send(());
+    http.join().expect("the HTTP thread").expect("the daemon stops cleanly");
+}
+
+/// The real binary's window under Xvfb: it opens, renders frames, and a
+/// screenshot of the screen shows more than a blank window.
+#[test]
+fn the_real_window_shows_frames_under_xvfb() {
+    let p = Project::copy_of_repo("view-xvfb");
+    let scene = p.read("scenes/minimal.toml").replace("width = 640\nheight = 360", "width = 64\nheight = 36");
+    p.write("scenes/minimal.toml", scene);
+    // A display number of this process's own, so parallel runs do not meet.
+    let display = format!(":{}", 100 + std::process::id() % 800);
+    let _xvfb = Stopped(
+        std::process::Command::new("Xvfb")
+            .args([display.as_str(), "-screen", "0", "640x480x24", "-nolisten", "tcp"])
+            .spawn()
+            .expect("Xvfb (tests/run installs xvfb)"),
+    );
+    let socket = std::path::PathBuf::from(format!("/tmp/.X11-unix/X{}", &display[1..]));
+    let start = Instant::now();
+    while !socket.exists() {
+        assert!(start.elapsed() < Duration::from_secs(30), "Xvfb did not start");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let s = Server::start_command(&loupe_bin(), &p.root, "view", 0, &["--scene", "scenes/minimal.toml"], &[("DISPLAY", &display)]);
+    s.wait_for("frames", Duration::from_secs(120), || (s.get_json("/api/status")["frame"].as_u64()? >= 5).then_some(()));
+    // The window draws what the daemon finished: give it a moment to.
+    std::thread::sleep(Duration::from_secs(2));
+    let shot = std::process::Command::new("xwd").args(["-root", "-silent", "-display", &display]).output().expect("xwd (x11-apps)");
+    s.kill();
+    assert!(shot.status.success(), "xwd failed");
+    let colours = xwd_colours(&shot.stdout);
+    // A blank or unrendered screen has one or two colours; the window's
+    // text, panels and lit frame have hundreds.
+    assert!(colours > 100, "the screenshot has {colours} colours");
+}
+
+/// A child process killed when the test ends, however it ends.
+struct Stopped(std::process::Child);
+
+impl Drop for Stopped {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// How many distinct pixel values a 32-bit ZPixmap XWD dump holds.
+fn xwd_colours(xwd: &[u8]) -> usize {
+    let word = |i: usize| u32::from_be_bytes(xwd[i * 4..i * 4 + 4].try_into().expect("four bytes")) as usize;
+    let (header, width, height, bits, ncolors) = (word(0), word(4), word(5), word(11), word(19));
+    assert_eq!(bits, 32, "32 bits per pixel");
+    let pixels = &xwd[header + ncolors * 12..];
+    let pixels = &pixels[..(width * height * 4).min(pixels.len())];
+    pixels.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect::<std::collections::BTreeSet<_>>().len()
+}
