@@ -130,6 +130,17 @@ pub fn under_root(root: &Path, path: &Path) -> PathBuf {
     if path.is_absolute() { path.to_owned() } else { root.join(path) }
 }
 
+/// The daemon's `--scene` under `root`, or the usage exit after saying
+/// that it does not exist (`command`: whose message it is).
+pub fn daemon_scene(command: &str, root: &Path, scene: &Path) -> Result<PathBuf, ExitCode> {
+    let scene = under_root(root, scene);
+    if scene.is_file() {
+        return Ok(scene);
+    }
+    eprintln!("loupe {command}: scene `{}` does not exist", scene.display());
+    Err(ExitCode::from(exit::USAGE))
+}
+
 /// Logs at `warn` unless RUST_LOG says otherwise.
 pub fn init_logging() {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();

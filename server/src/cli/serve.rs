@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::{exit, init_logging, under_root};
+use super::{daemon_scene, exit, init_logging};
 use loupe::serve::{self, ServeError, ServeOptions, daemon::RenderMode};
 
 #[derive(clap::Args)]
@@ -35,11 +35,10 @@ pub struct Args {
 
 pub fn run(args: Args) -> ExitCode {
     init_logging();
-    let scene = under_root(&args.root, &args.scene);
-    if !scene.is_file() {
-        eprintln!("loupe serve: scene `{}` does not exist", scene.display());
-        return ExitCode::from(exit::USAGE);
-    }
+    let scene = match daemon_scene("serve", &args.root, &args.scene) {
+        Ok(scene) => scene,
+        Err(code) => return code,
+    };
     let opts = ServeOptions {
         root: args.root,
         scene,

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::{exit, init_logging, under_root};
+use super::{daemon_scene, exit, init_logging};
 use loupe::serve::viewer::{self, ViewError};
 use loupe::serve::{ServeError, ServeOptions, daemon::RenderMode};
 
@@ -27,11 +27,10 @@ pub struct Args {
 
 pub fn run(args: Args) -> ExitCode {
     init_logging();
-    let scene = under_root(&args.root, &args.scene);
-    if !scene.is_file() {
-        eprintln!("loupe view: scene `{}` does not exist", scene.display());
-        return ExitCode::from(exit::USAGE);
-    }
+    let scene = match daemon_scene("view", &args.root, &args.scene) {
+        Ok(scene) => scene,
+        Err(code) => return code,
+    };
     let opts = ServeOptions {
         root: args.root,
         scene,
