@@ -122,7 +122,7 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     // Only a tree that imports the module gets it: someone else's WGSL is
     // checked as it is.
     let material_paths = [crate::material::back::IMPORT_PATH, crate::material::back::PATH_IMPORT_PATH];
-    if lib.files().any(|f| f.imports.iter().any(|(m, _)| material_paths.contains(&m.as_str()))) {
+    if lib.files().any(|f| f.imports.iter().any(|i| material_paths.contains(&i.module.as_str()))) {
         crate::render::session::material_module(&mut lib, &opts.shader_root, &project_materials(definitions));
     }
     let specs_by_file = specs_by_display(&lib, &shader_root);

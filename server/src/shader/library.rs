@@ -26,10 +26,8 @@ pub struct SourceFile {
     pub hash: blake3::Hash,
     /// `#define_import_path` value and where it is written.
     pub import_path: Option<(String, Range<usize>)>,
-    /// Every `#import`, as written (module part only) with its byte range.
-    pub imports: Vec<(String, Range<usize>)>,
-    /// Per entry of `imports`, the `#ifdef`-style conditions it sits under.
-    pub guards: Vec<Vec<Guard>>,
+    /// Every `#import`, as written (module part only).
+    pub imports: Vec<Import>,
     /// Whether any preprocessor directive appears; files without one are
     /// plain WGSL and skip the composer entirely.
     pub has_directives: bool,
@@ -42,7 +40,7 @@ impl SourceFile {
 
     /// Builds a source file from text already in memory.
     pub fn from_text(display: String, path: PathBuf, text: Arc<str>) -> Self {
-        let Directives { import_path, imports, guards, has_directives } = scan_directives(&text);
+        let Directives { import_path, imports, has_directives } = scan_directives(&text);
         SourceFile {
             display,
             path,
@@ -51,7 +49,6 @@ impl SourceFile {
             text,
             import_path,
             imports,
-            guards,
             has_directives,
         }
     }
@@ -93,6 +90,17 @@ impl SourceFile {
 
 fn too_large(len: u64, at: Location) -> Diagnostic {
     Diagnostic::error(Code::FileTooLarge, format!("file is {len} bytes; the limit is {MAX_FILE_BYTES} bytes")).at(at)
+}
+
+/// One module an `#import` line names.
+#[derive(Clone, Debug)]
+pub struct Import {
+    /// The module part, as written.
+    pub module: String,
+    /// The line's import specification, in the file's bytes.
+    pub range: Range<usize>,
+    /// The `#ifdef`-style conditions the line sits under.
+    pub guards: Vec<Guard>,
 }
 
 /// A condition an `#import` sits under, as far as the import graph needs
@@ -145,8 +153,7 @@ struct Branch {
 
 struct Directives {
     import_path: Option<(String, Range<usize>)>,
-    imports: Vec<(String, Range<usize>)>,
-    guards: Vec<Vec<Guard>>,
+    imports: Vec<Import>,
     has_directives: bool,
 }
 
@@ -159,7 +166,6 @@ struct Directives {
 fn scan_directives(text: &str) -> Directives {
     let mut import_path = None;
     let mut imports = Vec::new();
-    let mut guards = Vec::new();
     let mut open: Vec<Branch> = Vec::new();
     let mut has_directives = false;
     let mut offset = 0;
@@ -182,8 +188,7 @@ fn scan_directives(text: &str) -> Directives {
             let at = start + lead + body.len() - rest.trim_start().len();
             let under: Vec<Guard> = open.iter().flat_map(|b| b.passed.iter().chain(&b.current)).cloned().collect();
             for module in import_modules(spec) {
-                imports.push((module, at..at + spec.len()));
-                guards.push(under.clone());
+                imports.push(Import { module, range: at..at + spec.len(), guards: under.clone() });
             }
         } else if let Some(rest) = body.strip_prefix("#else") {
             if let Some(b) = open.last_mut() {
@@ -199,7 +204,7 @@ fn scan_directives(text: &str) -> Directives {
             open.push(Branch { passed: Vec::new(), current: Some(Guard::of(rest)) });
         }
     }
-    Directives { import_path, imports, guards, has_directives }
+    Directives { import_path, imports, has_directives }
 }
 
 /// The module paths one `#import` line names. Handles naga_oil's forms:
@@ -314,9 +319,9 @@ impl Library {
         let mut found: Vec<Arc<SourceFile>> = Vec::new();
         let mut missing = Vec::new();
         let mut by_line: BTreeMap<usize, (bool, &str)> = BTreeMap::new();
-        for (import, range) in &file.imports {
-            let entry = by_line.entry(range.start).or_insert((false, import));
-            if let Some(dep) = self.resolve(import) {
+        for Import { module, range, .. } in &file.imports {
+            let entry = by_line.entry(range.start).or_insert((false, module));
+            if let Some(dep) = self.resolve(module) {
                 entry.0 = true;
                 if !found.iter().any(|f| f.display == dep.display) {
                     found.push(dep.clone());
@@ -325,7 +330,7 @@ impl Library {
         }
         for (start, (resolved, import)) in by_line {
             if !resolved {
-                let range = file.imports.iter().find(|(_, r)| r.start == start).map(|(_, r)| r.clone());
+                let range = file.imports.iter().find(|i| i.range.start == start).map(|i| i.range.clone());
                 let range = range.unwrap_or(start..start);
                 missing.push(
                     Diagnostic::error(Code::ImportMissing, format!("no module provides import `{import}`"))
@@ -406,11 +411,11 @@ impl Library {
         while let Some(display) = todo.pop() {
             let file = if display == root.display { Some(root) } else { self.files.get(&display).map(|f| &**f) };
             let Some(file) = file else { continue };
-            for ((import, _), guards) in file.imports.iter().zip(&file.guards) {
-                if !guards.iter().all(|g| g.may_hold(surely, maybe)) {
+            for import in &file.imports {
+                if !import.guards.iter().all(|g| g.may_hold(surely, maybe)) {
                     continue;
                 }
-                if let Some(dep) = self.resolve(import)
+                if let Some(dep) = self.resolve(&import.module)
                     && out.insert(dep.display.clone())
                 {
                     todo.push(dep.display.clone());
@@ -444,7 +449,7 @@ impl Library {
 
 fn import_range_of(file: &SourceFile, dep: &SourceFile) -> Option<Range<usize>> {
     let (dep_path, _) = dep.import_path.as_ref()?;
-    file.imports.iter().find(|(i, _)| i == dep_path || i.starts_with(&format!("{dep_path}::"))).map(|(_, r)| r.clone())
+    file.imports.iter().find(|i| i.module == *dep_path || i.module.starts_with(&format!("{dep_path}::"))).map(|i| i.range.clone())
 }
 
 /// The readable `*.wgsl` files under `root`, as a library. Unreadable ones
@@ -559,53 +564,15 @@ mod tests {
     #[test]
     fn a_pipeline_is_built_from_the_imports_its_defs_reach() {
         let lib = Library::new([
-            file(
-                "simple.wgsl",
-                "#define_import_path simple
-",
-            ),
-            file(
-                "single.wgsl",
-                "#define_import_path single
-",
-            ),
-            file(
-                "full.wgsl",
-                "#define_import_path full
-#import deep
-",
-            ),
-            file(
-                "deep.wgsl",
-                "#define_import_path deep
-",
-            ),
-            file(
-                "rect.wgsl",
-                "#define_import_path rect
-",
-            ),
-            file(
-                "count.wgsl",
-                "#define_import_path count
-",
-            ),
+            file("simple.wgsl", "#define_import_path simple\n"),
+            file("single.wgsl", "#define_import_path single\n"),
+            file("full.wgsl", "#define_import_path full\n#import deep\n"),
+            file("deep.wgsl", "#define_import_path deep\n"),
+            file("rect.wgsl", "#define_import_path rect\n"),
+            file("count.wgsl", "#define_import_path count\n"),
             file(
                 "light.wgsl",
-                "#ifdef SIMPLE
-#import simple
-#else ifdef SINGLE
-#import single
-#else
-  #ifndef NO_RECT
-  #import rect
-  #endif
-#import full::{x}
-#endif
-#if COUNT == 2
-#import count
-#endif
-",
+                "#ifdef SIMPLE\n#import simple\n#else ifdef SINGLE\n#import single\n#else\n  #ifndef NO_RECT\n  #import rect\n  #endif\n#import full::{x}\n#endif\n#if COUNT == 2\n#import count\n#endif\n",
             ),
         ]);
         let light = lib.get("light.wgsl").unwrap();
