@@ -18,9 +18,5 @@ pub const DISPLAY: &str = "generated/material_simple.wgsl";
 pub fn wgsl(definitions: &[Definition]) -> String {
     let mut slab = super::shorthand(Location::file_start(DISPLAY));
     slab.energy_compensation = definitions.iter().any(|d| d.energy_compensation);
-    back::wgsl(&[slab], back::Bindings::RENDERER).replacen(
-        &format!("#define_import_path {}\n", back::IMPORT_PATH),
-        &format!("#define_import_path {IMPORT_PATH}\n"),
-        1,
-    )
+    back::module(&[slab], back::Bindings::RENDERER, IMPORT_PATH, &[false])
 }
