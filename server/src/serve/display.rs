@@ -12,6 +12,8 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
+use loupe_view::DisplayImage;
+
 /// The window's texture, shared by the render thread (writer) and the
 /// window (reader).
 pub struct Display {
@@ -22,13 +24,10 @@ pub struct Display {
     shown: AtomicBool,
 }
 
-#[derive(Clone)]
-pub struct Target {
-    pub texture: wgpu::Texture,
-    pub view: wgpu::TextureView,
-    pub size: [u32; 2],
-    /// Increases whenever the texture is replaced.
-    pub generation: u64,
+/// The copy's texture and what the window is handed of it.
+struct Target {
+    texture: wgpu::Texture,
+    image: DisplayImage,
 }
 
 impl Display {
@@ -37,8 +36,8 @@ impl Display {
     }
 
     /// The newest copied frame's texture.
-    pub fn current(&self) -> Option<Target> {
-        self.target.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    pub fn current(&self) -> Option<DisplayImage> {
+        self.target.lock().unwrap_or_else(|e| e.into_inner()).as_ref().map(|t| t.image.clone())
     }
 
     pub fn set_shown(&self, shown: bool) {
@@ -55,8 +54,8 @@ impl Display {
         }
         let size = [source.width(), source.height()];
         let mut slot = self.target.lock().unwrap_or_else(|e| e.into_inner());
-        if slot.as_ref().is_none_or(|t| t.size != size) {
-            let generation = slot.as_ref().map_or(0, |t| t.generation + 1);
+        if slot.as_ref().is_none_or(|t| t.image.size != size) {
+            let generation = slot.as_ref().map_or(0, |t| t.image.generation + 1);
             *slot = Some(Target::new(device, size, generation));
         }
         let target = slot.as_ref().expect("made above");
@@ -81,6 +80,6 @@ impl Target {
             view_formats: &[],
         });
         let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
-        Target { texture, view, size: [width, height], generation }
+        Target { texture, image: DisplayImage { view, size: [width, height], generation } }
     }
 }

@@ -123,7 +123,7 @@ impl Link for InProcess {
     }
 
     fn display(&self) -> Option<DisplayImage> {
-        self.display.current().map(|t| DisplayImage { view: t.view, size: t.size, generation: t.generation })
+        self.display.current()
     }
 
     fn set_shown(&self, shown: bool) {
