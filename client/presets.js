@@ -2,7 +2,8 @@
 // format (which channels it has, float or integer) and by the meaning its
 // pass declares (`writes[].meaning` of /api/passes: color, normal, depth,
 // data, id; PROTOCOL.md), and remembered per output in localStorage once
-// the user changes one.
+// the user changes one. The choice per meaning is the table in
+// presets.json, which `loupe view` compiles in too:
 //
 //   color   sRGB on, range 0…1
 //   normal  range −1…1 (shows n·0.5+0.5), sRGB off
@@ -20,6 +21,7 @@
 // `window.loupe.state.inspector.options` (the preset applied).
 
 import { CHANNELS } from './texture.js';
+import TABLE from './presets.json' with { type: 'json' };
 
 /** The display options a preset sets; the overlays stay the user's. */
 const PRESET_FIELDS = ['channel', 'exposure', 'min', 'max', 'srgb', 'linearize'];
@@ -80,22 +82,31 @@ export function canLinearize(depth) {
 export function choosePreset({ format, meaning, depth } = {}) {
   const info = formatInfo(format);
   const kind = meaningOf(meaning, info);
-  const opts = { channel: channelOptions(info)[0].value, exposure: 0, min: 0, max: 1, srgb: true, linearize: false };
-  let fit = false;
-  if (kind === 'depth') {
-    Object.assign(opts, { channel: 'r', srgb: false, linearize: canLinearize(depth) });
-    fit = true;
-  } else if (kind === 'normal') {
-    Object.assign(opts, { min: -1, max: 1, srgb: false });
-  } else if (kind !== 'color') {
-    opts.srgb = false;
-    fit = true;
-  }
+  const p = TABLE.meanings[kind] ?? TABLE.meanings[TABLE.unknown_meaning];
+  const opts = {
+    channel: p.channel ?? channelOptions(info)[0].value,
+    exposure: 0,
+    min: p.min,
+    max: p.max,
+    srgb: p.srgb,
+    linearize: p.linearize && canLinearize(depth),
+  };
+  let fit = p.fit;
   if (info.integer) {
-    opts.srgb = false;
-    fit = true;
+    opts.srgb = TABLE.integer.srgb;
+    fit = TABLE.integer.fit;
   }
   return { opts, fit, meaning: kind, info };
+}
+
+/** The false-colour map (presets.json): RGB 0…255 of `t` in 0…1 into `out`. */
+export function viridis(t, out) {
+  const c = TABLE.viridis;
+  for (let k = 0; k < 3; k++) {
+    let v = 0;
+    for (let p = c.length - 1; p >= 0; p--) v = v * t + c[p][k];
+    out[k] = Math.round(v * 255);
+  }
 }
 
 /** View distance of depth `d` through a perspective projection. */

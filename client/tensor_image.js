@@ -16,6 +16,7 @@
 // figure[data-constant] (the value) with its figcaption for a constant channel,
 // #tensor-pixel[data-x][data-y][data-values = JSON, one per channel].
 
+import { viridis } from './presets.js';
 import { $, el } from './util.js';
 
 const BINS = 64;
@@ -221,25 +222,6 @@ function toByte(v, [lo, hi]) {
   if (!Number.isFinite(v)) return 255;
   if (!(hi > lo)) return 128;
   return Math.min(255, Math.max(0, Math.round(((v - lo) / (hi - lo)) * 255)));
-}
-
-/** Viridis, a perceptually even map, as the polynomial fit by Matt Zucker
- * (shadertoy WlfXRN): a table of 256 entries would be most of this file. */
-function viridis(t, out) {
-  const c = [
-    [0.2777273272234177, 0.005407344544966578, 0.3340998053353061],
-    [0.1050930431085774, 1.404613529898575, 1.384590162594685],
-    [-0.3308618287255563, 0.214847559468213, 0.09509516302823659],
-    [-4.634230498983486, -5.799100973351585, -19.33244095627987],
-    [6.228269936347081, 14.17993336680509, 56.69055260068105],
-    [4.776384997670288, -13.74514537774601, -65.35303263337234],
-    [-5.435455855934631, 4.645852612178535, 26.3124352495832],
-  ];
-  for (let k = 0; k < 3; k++) {
-    let v = 0;
-    for (let p = c.length - 1; p >= 0; p--) v = v * t + c[p][k];
-    out[k] = Math.round(v * 255);
-  }
 }
 
 function fmt(v) {

@@ -13,12 +13,13 @@ pub mod excerpt;
 pub mod link;
 pub mod model;
 mod panels;
+pub mod presets;
 pub mod viewer;
 pub mod window;
 
 // The versions the panels are drawn with, for hosts and tests.
 pub use {egui, egui_wgpu};
 
-pub use link::{Command, DisplayImage, Link};
+pub use link::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed, Range};
 pub use model::Model;
 pub use viewer::Viewer;

@@ -19,6 +19,49 @@ pub struct DisplayImage {
     pub generation: u64,
 }
 
+/// What the Inspector shows: one texture output (`pass/output`, layer 0
+/// of an array) through the daemon's display pass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Inspect {
+    pub output: String,
+    pub options: crate::presets::DisplayOptions,
+}
+
+/// The inspected output as the display pass drew it after frame `frame`.
+#[derive(Clone, Debug)]
+pub struct Inspected {
+    pub image: DisplayImage,
+    pub inspect: Inspect,
+    pub frame: u64,
+}
+
+/// A texel of an output (`pass/output`, layer 0) to read back.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Probe {
+    pub output: String,
+    pub x: u32,
+    pub y: u32,
+}
+
+/// A texel read back: its value as a shader reads it (RGBA, missing
+/// channels 0, missing alpha 1; sRGB decoded), from frame `frame`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Probed {
+    pub probe: Probe,
+    pub frame: u64,
+    pub value: [f32; 4],
+}
+
+/// The finite range of an output's values, per shown channel (R, G, B,
+/// A, luminance), after depth linearisation when asked for and without a
+/// depth target's clear value; `None` per channel without a finite value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Range {
+    pub output: String,
+    pub frame: u64,
+    pub channels: [Option<(f32, f32)>; 5],
+}
+
 pub trait Link {
     /// Protocol events (PROTOCOL.md, "WebSocket text messages") received
     /// since the last call, oldest first. Never blocks.
@@ -33,6 +76,22 @@ pub trait Link {
     /// Whether the frame is on screen: the daemon skips its display copy
     /// while it is not (a minimised or zero-sized window).
     fn set_shown(&self, shown: bool);
+    /// Shows `inspect` from the next frame on (`None`: nothing is
+    /// inspected, and the display pass does not run). The newest wins.
+    fn inspect(&self, inspect: Option<Inspect>);
+    /// The inspected output as the display pass drew it, once it has.
+    fn inspected(&self) -> Option<Inspected>;
+    /// Reads back one texel after the next frame (the newest wins;
+    /// `None`: none).
+    fn probe(&self, probe: Option<Probe>);
+    /// The newest texel read back.
+    fn probed(&self) -> Option<Probed>;
+    /// Measures the range of an output once, after the next frame, with
+    /// the display options that matter to it (linearisation, the clear
+    /// value left out).
+    fn measure(&self, inspect: Inspect);
+    /// The newest range measured.
+    fn measured(&self) -> Option<Range>;
     /// The daemon stopped (Ctrl-C, or it died): the window closes.
     fn closed(&self) -> bool;
 }

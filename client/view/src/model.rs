@@ -17,6 +17,47 @@ pub struct Pass {
     pub timing: Option<String>,
     /// Why there is no time.
     pub timing_reason: Option<String>,
+    /// What it writes (`writes` of `GET /api/passes`).
+    #[serde(default)]
+    pub writes: Vec<Output>,
+}
+
+/// One output a pass writes.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+pub struct Output {
+    pub name: String,
+    /// `texture` or `buffer`.
+    pub kind: String,
+    pub format: String,
+    pub width: u32,
+    pub height: u32,
+    pub meaning: Option<String>,
+    pub depth: Option<DepthPlanes>,
+}
+
+/// `writes[].depth`: the planes are `null` for a light's depth.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+pub struct DepthPlanes {
+    pub near: Option<f32>,
+    pub far: Option<f32>,
+    pub reversed: bool,
+}
+
+impl Output {
+    /// The planes its depth reads as distance through, where known.
+    pub fn planes(&self) -> Option<crate::presets::Planes> {
+        let d = self.depth?;
+        Some(crate::presets::Planes { near: d.near?, far: d.far?, reversed: d.reversed })
+    }
+}
+
+/// Where a traced frame's NaN/Inf first appeared (`origin` of the `nan`
+/// event's report).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub struct NanOrigin {
+    pub pass: String,
+    pub output: String,
+    pub pixel: [u32; 2],
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -52,6 +93,11 @@ struct Timing {
 }
 
 #[derive(Deserialize)]
+struct NanReport {
+    origin: Option<NanOrigin>,
+}
+
+#[derive(Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 enum Event {
     Hello { status: Status },
@@ -60,6 +106,7 @@ enum Event {
     Diagnostics { diagnostics: Vec<Problem> },
     DeviceLost { message: String, recovered: bool },
     Error { message: String },
+    Nan { report: Option<NanReport> },
 }
 
 #[derive(Debug, Default)]
@@ -71,6 +118,9 @@ pub struct Model {
     pub frame: Option<(u64, f64)>,
     /// The newest notice worth a line (device lost, a refused command).
     pub notice: Option<String>,
+    /// Where the newest traced frame's NaN/Inf came from, while a frame
+    /// holds one.
+    pub nan: Option<NanOrigin>,
 }
 
 impl Model {
@@ -94,7 +144,13 @@ impl Model {
                 self.notice = Some(format!("device lost ({outcome}): {message}"));
             }
             Event::Error { message } => self.notice = Some(message),
+            Event::Nan { report } => self.nan = report.and_then(|r| r.origin),
         }
+    }
+
+    /// Every texture output of the passes, as `(pass/output, output)`.
+    pub fn textures(&self) -> impl Iterator<Item = (String, &Output)> {
+        self.passes.iter().flat_map(|p| p.writes.iter().filter(|w| w.kind == "texture").map(move |w| (format!("{}/{}", p.name, w.name), w)))
     }
 }
 

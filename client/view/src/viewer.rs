@@ -7,12 +7,22 @@ use std::collections::HashMap;
 
 use crate::link::{Command, Link};
 use crate::model::{Location, Model, Problem};
+use crate::panels::inspector::{Asks, Inspector};
 use crate::panels::{self, frame::FrameTexture};
+
+/// What the centre of the window shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Centre {
+    Frame,
+    Inspector,
+}
 
 pub struct Viewer {
     link: Box<dyn Link>,
     model: Model,
     frame: FrameTexture,
+    centre: Centre,
+    inspector: Inspector,
     /// Source texts for excerpts, read once per file while the problems
     /// stay the same.
     sources: HashMap<String, Option<String>>,
@@ -23,11 +33,34 @@ pub struct Viewer {
 impl Viewer {
     /// `editor`: the command problems open in (`editor::from_env()`).
     pub fn new(link: Box<dyn Link>, editor: Option<String>) -> Self {
-        Viewer { link, model: Model::default(), frame: FrameTexture::default(), sources: HashMap::new(), sources_for: Vec::new(), editor }
+        Viewer {
+            link,
+            model: Model::default(),
+            frame: FrameTexture::new(wgpu::FilterMode::Linear),
+            centre: Centre::Frame,
+            inspector: Inspector::default(),
+            sources: HashMap::new(),
+            sources_for: Vec::new(),
+            editor,
+        }
     }
 
     pub fn model(&self) -> &Model {
         &self.model
+    }
+
+    pub fn centre(&self) -> Centre {
+        self.centre
+    }
+
+    /// The output the Inspector shows (`pass/output`).
+    pub fn inspected(&self) -> Option<&str> {
+        self.inspector.selected()
+    }
+
+    /// How the Inspector shows it.
+    pub fn display_options(&self) -> Option<crate::presets::DisplayOptions> {
+        self.inspector.options()
     }
 
     /// The daemon stopped: the window should close.
@@ -36,8 +69,9 @@ impl Viewer {
     }
 
     /// The window is minimised: nothing of the frame is on screen.
-    pub fn hidden(&self) {
+    pub fn hidden(&mut self) {
         self.link.set_shown(false);
+        self.ask(Asks::default());
     }
 
     /// One frame of the window. `render`: the renderer the frame texture is
@@ -54,6 +88,8 @@ impl Viewer {
         if let (Some(image), Some(render)) = (&image, render) {
             self.frame.sync(image, render);
         }
+        let inspected = self.link.inspected();
+        self.inspector.sync(inspected.as_ref(), self.link.measured(), self.link.probed(), render);
 
         // Sizes are bounded by the window, not by the longest line: text
         // is cut to the panel and scrolls.
@@ -68,13 +104,37 @@ impl Viewer {
                 panels::problems::show(ui, &self.model.problems, |loc| excerpt(link.as_ref(), sources, loc))
             })
             .inner;
-        egui::Panel::right("passes")
+        let picked = egui::Panel::right("passes")
             .default_size(width * 0.35)
             .max_size(width * 0.6)
             .resizable(true)
-            .show(ui, |ui| panels::passes::show(ui, &self.model.passes));
-        let shown = egui::CentralPanel::default().show(ui, |ui| self.frame.show(ui, image.as_ref())).inner;
-        self.link.set_shown(shown);
+            .show(ui, |ui| panels::passes::show(ui, &self.model.passes, self.inspector.selected()))
+            .inner;
+        if let Some(pass) = picked
+            && let Some(asks) = self.inspector.select_pass(&self.model, &pass)
+        {
+            self.centre = Centre::Inspector;
+            self.ask(asks);
+        }
+        egui::CentralPanel::default().show(ui, |ui| {
+            ui.horizontal(|ui| {
+                ui.selectable_value(&mut self.centre, Centre::Frame, "Frame");
+                ui.selectable_value(&mut self.centre, Centre::Inspector, "Inspector");
+            });
+            // Only what is on screen is drawn by the daemon.
+            match self.centre {
+                Centre::Frame => {
+                    let shown = self.frame.show(ui, image.as_ref());
+                    self.link.set_shown(shown);
+                    self.ask(Asks::default());
+                }
+                Centre::Inspector => {
+                    self.link.set_shown(false);
+                    let asks = self.inspector.show(ui, &self.model, inspected.as_ref());
+                    self.ask(asks);
+                }
+            }
+        });
         if let Some(loc) = clicked {
             self.open(&loc);
         }
@@ -96,6 +156,14 @@ impl Viewer {
             let s = &self.model.status;
             ui.add(egui::Label::new(format!("{} on {}", s.scene, s.adapter)).truncate());
         });
+    }
+
+    fn ask(&mut self, asks: Asks) {
+        self.link.inspect(asks.inspect);
+        self.link.probe(asks.probe);
+        if let Some(measure) = asks.measure {
+            self.link.measure(measure);
+        }
     }
 
     fn send(&mut self, command: Command) {

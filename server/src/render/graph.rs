@@ -35,7 +35,8 @@ pub struct Resource {
     pub meaning: Meaning,
     pub lifetime: Lifetime,
     /// Derived from every access passes declare (plus COPY_SRC, so any
-    /// resource can be captured).
+    /// resource can be captured, and for a texture TEXTURE_BINDING, so
+    /// `loupe view`'s display pass can draw it).
     pub texture_usage: wgpu::TextureUsages,
     pub buffer_usage: wgpu::BufferUsages,
 }
@@ -145,7 +146,7 @@ impl GraphBuilder {
             desc,
             meaning,
             lifetime,
-            texture_usage: wgpu::TextureUsages::COPY_SRC,
+            texture_usage: wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING,
             buffer_usage: wgpu::BufferUsages::COPY_SRC,
         });
         Handle(self.resources.len() - 1)

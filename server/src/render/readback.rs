@@ -92,18 +92,46 @@ pub fn copy_texture(
     layers: u32,
     bytes_per_texel: u32,
 ) -> (Readback, Rows) {
-    let (width, height) = (texture.width(), texture.height());
+    let origin = wgpu::Origin3d { x: 0, y: 0, z: base_layer };
+    let extent = wgpu::Extent3d { width: texture.width(), height: texture.height(), depth_or_array_layers: layers };
+    copy_box(device, encoder, label, texture, origin, extent, bytes_per_texel)
+}
+
+/// Copies the texel at `[x, y]` of `layer` into a new readback: a value
+/// under the cursor, without the rest of the image.
+pub fn copy_texel(
+    device: &wgpu::Device,
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    texture: &wgpu::Texture,
+    [x, y, layer]: [u32; 3],
+    bytes_per_texel: u32,
+) -> Readback {
+    let extent = wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 };
+    copy_box(device, encoder, label, texture, wgpu::Origin3d { x, y, z: layer }, extent, bytes_per_texel).0
+}
+
+fn copy_box(
+    device: &wgpu::Device,
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    texture: &wgpu::Texture,
+    origin: wgpu::Origin3d,
+    extent: wgpu::Extent3d,
+    bytes_per_texel: u32,
+) -> (Readback, Rows) {
+    let (width, height, layers) = (extent.width, extent.height, extent.depth_or_array_layers);
     let row = width * bytes_per_texel;
     let padded = padded_row(row);
     let readback = Readback::new(device, label, u64::from(padded) * u64::from(height) * u64::from(layers));
     let aspect = if texture.format().has_depth_aspect() { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
     encoder.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo { texture, mip_level: 0, origin: wgpu::Origin3d { x: 0, y: 0, z: base_layer }, aspect },
+        wgpu::TexelCopyTextureInfo { texture, mip_level: 0, origin, aspect },
         wgpu::TexelCopyBufferInfo {
             buffer: readback.buffer(),
             layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(height) },
         },
-        wgpu::Extent3d { width, height, depth_or_array_layers: layers },
+        extent,
     );
     (readback, Rows { row: row as usize, padded: padded as usize, count: (height * layers) as usize })
 }

@@ -474,6 +474,17 @@ impl Session {
         }
     }
 
+    /// Output `name` (`pass/output`) as the newest submitted frame left
+    /// it, with what its values mean; `None` when it is a buffer or not
+    /// allocated (its pass culled).
+    pub fn output_texture(&self, name: &str) -> Option<(&wgpu::Texture, super::resource::Meaning)> {
+        let h = self.graph.resources.iter().position(|r| r.name == name).map(super::resource::Handle)?;
+        match self.pool.try_get(&self.graph, h)? {
+            super::resource::Physical::Texture { texture, .. } => Some((texture, self.graph.resource(h).meaning)),
+            super::resource::Physical::Buffer(_) => None,
+        }
+    }
+
     /// Polls the device without blocking, so readbacks can land.
     pub fn poll(&self) {
         let _ = self.gpu.device.poll(wgpu::PollType::Poll);

@@ -7,7 +7,7 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use loupe_view::{Command, DisplayImage, Link, egui_wgpu, window};
+use loupe_view::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed, Range, egui_wgpu, window};
 use tokio::sync::broadcast::{self, error::TryRecvError};
 
 use super::display::Display;
@@ -87,6 +87,7 @@ impl InProcess {
             ServerEvent::Hello { protocol: VERSION, status: read(&shared.status) },
             ServerEvent::Passes { passes: read(&shared.passes) },
             ServerEvent::Diagnostics { diagnostics: read(&shared.diagnostics) },
+            ServerEvent::Nan { report: read(&shared.nan) },
         ];
         InProcess { shared, events, snapshot, display, stopped: Arc::new(AtomicBool::new(false)) }
     }
@@ -128,6 +129,30 @@ impl Link for InProcess {
 
     fn set_shown(&self, shown: bool) {
         self.display.set_shown(shown);
+    }
+
+    fn inspect(&self, inspect: Option<Inspect>) {
+        self.display.inspect(inspect);
+    }
+
+    fn inspected(&self) -> Option<Inspected> {
+        self.display.inspected()
+    }
+
+    fn probe(&self, probe: Option<Probe>) {
+        self.display.probe(probe);
+    }
+
+    fn probed(&self) -> Option<Probed> {
+        self.display.probed()
+    }
+
+    fn measure(&self, inspect: Inspect) {
+        self.display.measure(inspect);
+    }
+
+    fn measured(&self) -> Option<Range> {
+        self.display.measured()
     }
 
     fn closed(&self) -> bool {

@@ -4,14 +4,24 @@
 
 use crate::link::DisplayImage;
 
-/// The display texture as egui knows it.
-#[derive(Default)]
+/// A display texture as egui knows it.
 pub struct FrameTexture {
     id: Option<egui::TextureId>,
     generation: Option<u64>,
+    /// Linear for a frame scaled to fit; nearest for texels zoomed into.
+    filter: wgpu::FilterMode,
 }
 
 impl FrameTexture {
+    pub fn new(filter: wgpu::FilterMode) -> Self {
+        FrameTexture { id: None, generation: None, filter }
+    }
+
+    /// Its id once registered.
+    pub fn id(&self) -> Option<egui::TextureId> {
+        self.id
+    }
+
     /// Registers `image` with the renderer, or points the registered id at
     /// it when the daemon replaced its texture.
     pub fn sync(&mut self, image: &DisplayImage, render: &egui_wgpu::RenderState) {
@@ -20,8 +30,8 @@ impl FrameTexture {
         }
         let mut renderer = render.renderer.write();
         match self.id {
-            Some(id) => renderer.update_egui_texture_from_wgpu_texture(&render.device, &image.view, wgpu::FilterMode::Linear, id),
-            None => self.id = Some(renderer.register_native_texture(&render.device, &image.view, wgpu::FilterMode::Linear)),
+            Some(id) => renderer.update_egui_texture_from_wgpu_texture(&render.device, &image.view, self.filter, id),
+            None => self.id = Some(renderer.register_native_texture(&render.device, &image.view, self.filter)),
         }
         self.generation = Some(image.generation);
     }

@@ -2,5 +2,7 @@
 //! texture) and reports what the user asked for, never acting on a link.
 
 pub mod frame;
+pub mod inspector;
 pub mod passes;
 pub mod problems;
+pub mod zoom;

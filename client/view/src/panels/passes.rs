@@ -1,24 +1,35 @@
 //! The Passes panel: every pass of the frame with its status, why it is
-//! culled or failed, and its time by the clock that measured it.
+//! culled or failed, and its time by the clock that measured it. A pass
+//! with a texture output is a link to it in the Inspector.
 
 use crate::model::Pass;
 
-pub fn show(ui: &mut egui::Ui, passes: &[Pass]) {
+/// Draws the passes; returns the one the user clicked.
+pub fn show(ui: &mut egui::Ui, passes: &[Pass], inspected: Option<&str>) -> Option<String> {
     ui.heading("Passes");
     if passes.is_empty() {
         ui.label("no passes yet");
-        return;
+        return None;
     }
+    let mut clicked = None;
     egui::ScrollArea::both().id_salt("passes").show(ui, |ui| {
         egui::Grid::new("passes-grid").striped(true).num_columns(3).show(ui, |ui| {
             for p in passes {
-                ui.label(&p.name);
+                if p.writes.iter().any(|w| w.kind == "texture") {
+                    let open = inspected.is_some_and(|o| o.split_once('/').is_some_and(|(pass, _)| pass == p.name));
+                    if ui.selectable_label(open, &p.name).on_hover_text("show its output in the Inspector").clicked() {
+                        clicked = Some(p.name.clone());
+                    }
+                } else {
+                    ui.label(&p.name);
+                }
                 ui.colored_label(status_color(&p.status), &p.status);
                 ui.label(detail(p));
                 ui.end_row();
             }
         });
     });
+    clicked
 }
 
 /// The reason a pass does not run, else its time and clock, else why it

@@ -26,6 +26,7 @@ use std::sync::Arc;
 use std::sync::mpsc::{self, RecvTimeoutError, Sender};
 use std::time::{Duration, Instant};
 
+use super::display::Source;
 use super::event::{CompileResult, Event, FileBatch, FileChange, SceneCommand};
 use super::inbox::Inbox;
 use super::shared::{self, Shared};
@@ -566,9 +567,12 @@ impl Daemon {
         // wgpu reports invalid frame commands on this thread, while the
         // frame is recorded and submitted: they belong to this frame.
         let mut errors = self.session.take_uncaptured();
-        if let (true, Some(display), Some(texture)) = (errors.is_empty(), &self.config.display, self.session.final_texture()) {
-            display.copy(&self.gpu().device, &self.gpu().queue, texture);
-            // The copy's own errors, if any, are this frame's too.
+        if let (true, Some(display)) = (errors.is_empty(), &self.config.display) {
+            let (session, gpu) = (&self.session, self.session.gpu());
+            display.after_frame(gpu, session.frame(), session.final_texture(), |name| {
+                session.output_texture(name).map(|(texture, meaning)| Source::new(texture, meaning))
+            });
+            // The display work's own errors, if any, are this frame's too.
             errors = self.session.take_uncaptured();
         }
         let clean = errors.is_empty();

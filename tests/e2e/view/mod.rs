@@ -2,11 +2,15 @@
 //! contents driven by egui_kittest against a real daemon on a temporary
 //! project, rendering on the daemon's own device (lavapipe here).
 
+mod inspector;
+
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use egui_kittest::kittest::Queryable;
 use egui_kittest::{Harness, wgpu::WgpuTestRenderer};
 use loupe::serve::display::Display;
+use loupe::serve::shared::Shared;
 use loupe::serve::viewer::{self, InProcess};
 use loupe::serve::{Attached, ServeOptions, daemon::RenderMode};
 use loupe_tests::reload::{TONEMAP, broken, constant_colour};
@@ -27,108 +31,134 @@ fn without_a_display_view_names_serve_and_exits_2() {
 const COLOUR: [f32; 3] = [0.8, 0.05, 0.6];
 const SHOWN: [u8; 3] = [231, 63, 203];
 
-/// Steps the window until `done` holds, for at most `limit` (lavapipe
-/// compiles the first pipelines slowly; this is a bound, not a timing).
-fn step_until(harness: &mut Harness<'_, Viewer>, what: &str, limit: Duration, mut done: impl FnMut(&mut Harness<'_, Viewer>) -> bool) {
-    let start = Instant::now();
-    loop {
-        harness.step();
-        if done(harness) {
-            return;
-        }
-        assert!(start.elapsed() < limit, "the window never showed {what}");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-}
-
 /// How many pixels of `image` are `SHOWN` (within 3 per channel).
 fn frame_pixels(image: &image::RgbaImage) -> usize {
     image.pixels().filter(|p| p.0[..3].iter().zip(SHOWN).all(|(a, b)| a.abs_diff(b) <= 3)).count()
 }
 
-#[test]
-fn the_window_shows_the_daemons_passes_frame_and_problems() {
-    let p = Project::copy_of_repo("view-window");
+/// A daemon on a temporary project rendering at 30 fps, and the window's
+/// contents over it in an egui_kittest harness, on the daemon's device.
+pub struct Window {
+    pub harness: Harness<'static, Viewer>,
+    pub shared: Arc<Shared>,
+    stop: Option<tokio::sync::oneshot::Sender<()>>,
+    http: Option<std::thread::JoinHandle<Result<(), loupe::serve::ServeError>>>,
+}
+
+impl Window {
+    /// Opens `scene` of `p` in a 640×480 window; `editor`: what problems
+    /// open in.
+    pub fn open(p: &Project, scene: &str, editor: Option<String>) -> Window {
+        let gpu = loupe::gpu::open().unwrap_or_else(|e| panic!("needs a device (lavapipe will do): {e}"));
+        let display = Display::new(gpu.device.clone());
+        let opts = ServeOptions {
+            root: p.root.clone(),
+            scene: p.path(scene),
+            bind: std::net::Ipv4Addr::LOCALHOST.into(),
+            port: 0,
+            mode: RenderMode::Continuous,
+            max_fps: 30.0,
+            debug_api: false,
+        };
+        let setup = viewer::window_device(&gpu);
+        let running = loupe::serve::start(opts, Some(Attached { gpu, display: display.clone() })).expect("the daemon starts");
+        let shared = running.shared().clone();
+        let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+        let http = std::thread::spawn(move || {
+            running.serve(async {
+                let _ = stopped.await;
+            })
+        });
+        let render =
+            egui_kittest::wgpu::create_render_state(egui_wgpu::WgpuSetup::Existing(setup), egui_wgpu::RendererOptions::PREDICTABLE);
+        let viewer = Viewer::new(Box::new(InProcess::new(shared.clone(), display)), editor);
+        let r = render.clone();
+        let harness = Harness::builder()
+            .with_size(egui::vec2(640.0, 480.0))
+            // Screens are compared at the pointer: it is not drawn.
+            .with_render_cursor(false)
+            .renderer(WgpuTestRenderer::from_render_state(render))
+            .build_ui_state(move |ui, viewer: &mut Viewer| viewer.ui(ui, Some(&r)), viewer);
+        Window { harness, shared, stop: Some(stop), http: Some(http) }
+    }
+
+    /// Steps the window until `done` holds, for at most two minutes
+    /// (lavapipe compiles the first pipelines slowly; this is a bound, not
+    /// a timing).
+    pub fn step_until(&mut self, what: &str, mut done: impl FnMut(&mut Harness<'static, Viewer>) -> bool) {
+        let start = Instant::now();
+        loop {
+            self.harness.step();
+            if done(&mut self.harness) {
+                return;
+            }
+            assert!(start.elapsed() < Duration::from_secs(120), "the window never showed {what}");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    /// Closes the window and stops the daemon, which must stop cleanly.
+    pub fn close(mut self) {
+        let _ = self.stop.take().expect("open").send(());
+        self.http.take().expect("open").join().expect("the HTTP thread").expect("the daemon stops cleanly");
+    }
+}
+
+/// `scenes/minimal.toml` at 64×36: cheap on lavapipe.
+pub fn small_minimal(name: &str) -> Project {
+    let p = Project::copy_of_repo(name);
     let scene = p.read("scenes/minimal.toml").replace("width = 640\nheight = 360", "width = 64\nheight = 36");
     p.write("scenes/minimal.toml", scene);
+    p
+}
+
+#[test]
+fn the_window_shows_the_daemons_passes_frame_and_problems() {
+    let p = small_minimal("view-window");
     let good = constant_colour(&p.read(TONEMAP), COLOUR);
     p.write(TONEMAP, &good);
     // An "editor" that records how it was called: named `vim`, so it gets
     // vim's `+LINE FILE`.
     p.write("bin/vim", format!("#!/bin/sh\necho \"$@\" > {}\n", p.path("opened").display()));
     std::process::Command::new("chmod").arg("+x").arg(p.path("bin/vim")).status().expect("chmod");
-
-    let gpu = loupe::gpu::open().unwrap_or_else(|e| panic!("needs a device (lavapipe will do): {e}"));
-    let display = Display::new(gpu.device.clone());
-    let opts = ServeOptions {
-        root: p.root.clone(),
-        scene: p.path("scenes/minimal.toml"),
-        bind: std::net::Ipv4Addr::LOCALHOST.into(),
-        port: 0,
-        mode: RenderMode::Continuous,
-        max_fps: 30.0,
-        debug_api: false,
-    };
-    let setup = viewer::window_device(&gpu);
-    let running = loupe::serve::start(opts, Some(Attached { gpu, display: display.clone() })).expect("the daemon starts");
-    let shared = running.shared().clone();
-    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
-    let http = std::thread::spawn(move || {
-        running.serve(async {
-            let _ = stopped.await;
-        })
-    });
-
-    let render = egui_kittest::wgpu::create_render_state(egui_wgpu::WgpuSetup::Existing(setup), egui_wgpu::RendererOptions::PREDICTABLE);
-    let viewer = Viewer::new(Box::new(InProcess::new(shared.clone(), display)), Some(p.path("bin/vim").display().to_string()));
-    let r = render.clone();
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(640.0, 480.0))
-        .renderer(WgpuTestRenderer::from_render_state(render))
-        .build_ui_state(move |ui, viewer: &mut Viewer| viewer.ui(ui, Some(&r)), viewer);
+    let mut w = Window::open(&p, "scenes/minimal.toml", Some(p.path("bin/vim").display().to_string()));
 
     // The pass list: every pass the daemon reports, by name.
-    let limit = Duration::from_secs(120);
-    step_until(&mut harness, "a frame", limit, |h| h.state().model().frame.is_some());
-    let passes = loupe::serve::shared::read(&shared.passes);
+    w.step_until("a frame", |h| h.state().model().frame.is_some());
+    let passes = loupe::serve::shared::read(&w.shared.passes);
     assert!(passes.len() > 3, "the minimal scene has its passes: {passes:?}");
     for pass in &passes {
-        assert!(harness.query_by_label(&pass.name).is_some(), "the Passes panel lists `{}`", pass.name);
+        assert!(w.harness.query_by_label(&pass.name).is_some(), "the Passes panel lists `{}`", pass.name);
     }
     // The frame, on screen: the shader's colour fills the Frame panel.
-    step_until(&mut harness, "the frame", limit, |h| frame_pixels(&h.render().expect("renders")) > 10_000);
+    w.step_until("the frame", |h| frame_pixels(&h.render().expect("renders")) > 10_000);
 
     // A broken shader: its error in Problems, at its line.
     let bad = broken(&good);
     let line = bad.lines().position(|l| l.contains("mux(")).expect("the broken line") + 1;
     p.write(TONEMAP, &bad);
     let place = format!("shaders/post/tonemap.wgsl:{line}:");
-    step_until(&mut harness, "the error", limit, |h| h.query_by_label_contains(&place).is_some());
-    assert!(harness.query_by_label_contains(&format!("{line} |     let c = mux(")).is_some(), "the excerpt shows the broken line");
+    w.step_until("the error", |h| h.query_by_label_contains(&place).is_some());
+    assert!(w.harness.query_by_label_contains(&format!("{line} |     let c = mux(")).is_some(), "the excerpt shows the broken line");
     // Clicking it (as assistive technology clicks: a pointer click at the
     // wrapped link's centre did not register in kittest) opens the editor
     // at that line, without waiting for it.
-    harness.get_by_label_contains(&place).click_accesskit();
-    step_until(&mut harness, "the editor's start", limit, |_| std::fs::read_to_string(p.path("opened")).is_ok_and(|s| s.ends_with('\n')));
+    w.harness.get_by_label_contains(&place).click_accesskit();
+    w.step_until("the editor's start", |_| std::fs::read_to_string(p.path("opened")).is_ok_and(|s| s.ends_with('\n')));
     let opened = std::fs::read_to_string(p.path("opened")).expect("the editor ran");
     assert!(opened.starts_with(&format!("+{line} ")) && opened.trim_end().ends_with("tonemap.wgsl"), "{opened}");
 
     // Fixed: the problem goes.
     p.write(TONEMAP, &good);
-    step_until(&mut harness, "the fix", limit, |h| h.query_by_label_contains("tonemap.wgsl:").is_none());
-
-    drop(harness);
-    let _ = stop.send(());
-    http.join().expect("the HTTP thread").expect("the daemon stops cleanly");
+    w.step_until("the fix", |h| h.query_by_label_contains("tonemap.wgsl:").is_none());
+    w.close();
 }
 
 /// The real binary's window under Xvfb: it opens, renders frames, and a
 /// screenshot of the screen shows more than a blank window.
 #[test]
 fn the_real_window_shows_frames_under_xvfb() {
-    let p = Project::copy_of_repo("view-xvfb");
-    let scene = p.read("scenes/minimal.toml").replace("width = 640\nheight = 360", "width = 64\nheight = 36");
-    p.write("scenes/minimal.toml", scene);
+    let p = small_minimal("view-xvfb");
     // A display number of this process's own, so parallel runs do not meet.
     let display = format!(":{}", 100 + std::process::id() % 800);
     let _xvfb = Stopped(
