@@ -2,15 +2,18 @@
 //! contents driven by egui_kittest against a real daemon on a temporary
 //! project, rendering on the daemon's own device (lavapipe here).
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{Queryable, by};
 use egui_kittest::{Harness, wgpu::WgpuTestRenderer};
 use loupe::serve::display::Display;
+use loupe::serve::shared::Shared;
 use loupe::serve::viewer::{self, InProcess};
 use loupe::serve::{Attached, ServeOptions, daemon::RenderMode};
 use loupe_tests::reload::{TONEMAP, broken, constant_colour};
 use loupe_tests::{Project, Server, loupe_bin, loupe_with_env, repo};
+use loupe_view::egui::accesskit::Role;
 use loupe_view::{Viewer, egui, egui_wgpu};
 
 #[test]
@@ -46,80 +49,165 @@ fn frame_pixels(image: &image::RgbaImage) -> usize {
     image.pixels().filter(|p| p.0[..3].iter().zip(SHOWN).all(|(a, b)| a.abs_diff(b) <= 3)).count()
 }
 
+/// A daemon on `p`'s `scene` (continuous, up to `max_fps`) and its window,
+/// on the daemon's own device, driven by egui_kittest.
+struct Window {
+    harness: Harness<'static, Viewer>,
+    shared: Arc<Shared>,
+    stop: tokio::sync::oneshot::Sender<()>,
+    http: std::thread::JoinHandle<Result<(), loupe::serve::ServeError>>,
+}
+
+impl Window {
+    /// `editor`: the command problems open in.
+    fn open(p: &Project, scene: &str, max_fps: f64, editor: Option<String>, size: egui::Vec2) -> Window {
+        let gpu = loupe::gpu::open().unwrap_or_else(|e| panic!("needs a device (lavapipe will do): {e}"));
+        let display = Display::new(gpu.device.clone());
+        let opts = ServeOptions {
+            root: p.root.clone(),
+            scene: p.path(scene),
+            bind: std::net::Ipv4Addr::LOCALHOST.into(),
+            port: 0,
+            mode: RenderMode::Continuous,
+            max_fps,
+            debug_api: false,
+        };
+        let setup = viewer::window_device(&gpu);
+        let running = loupe::serve::start(opts, Some(Attached { gpu, display: display.clone() })).expect("the daemon starts");
+        let shared = running.shared().clone();
+        let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+        let http = std::thread::spawn(move || {
+            running.serve(async {
+                let _ = stopped.await;
+            })
+        });
+        let render =
+            egui_kittest::wgpu::create_render_state(egui_wgpu::WgpuSetup::Existing(setup), egui_wgpu::RendererOptions::PREDICTABLE);
+        let viewer = Viewer::new(Box::new(InProcess::new(shared.clone(), display)), editor);
+        let r = render.clone();
+        let harness = Harness::builder()
+            .with_size(size)
+            .renderer(WgpuTestRenderer::from_render_state(render))
+            .build_ui_state(move |ui, viewer: &mut Viewer| viewer.ui(ui, Some(&r)), viewer);
+        Window { harness, shared, stop, http }
+    }
+
+    fn close(self) {
+        drop(self.harness);
+        let _ = self.stop.send(());
+        self.http.join().expect("the HTTP thread").expect("the daemon stops cleanly");
+    }
+}
+
+/// The minimal scene at 64×36, plus `extra` TOML.
+fn small_minimal_scene(p: &Project, extra: &str) {
+    let scene = p.read("scenes/minimal.toml").replace("width = 640\nheight = 360", "width = 64\nheight = 36");
+    p.write("scenes/minimal.toml", format!("{scene}{extra}"));
+}
+
+const LIMIT: Duration = Duration::from_secs(120);
+
 #[test]
 fn the_window_shows_the_daemons_passes_frame_and_problems() {
     let p = Project::copy_of_repo("view-window");
-    let scene = p.read("scenes/minimal.toml").replace("width = 640\nheight = 360", "width = 64\nheight = 36");
-    p.write("scenes/minimal.toml", scene);
+    small_minimal_scene(&p, "");
     let good = constant_colour(&p.read(TONEMAP), COLOUR);
     p.write(TONEMAP, &good);
     // An "editor" that records how it was called: named `vim`, so it gets
     // vim's `+LINE FILE`.
     p.write("bin/vim", format!("#!/bin/sh\necho \"$@\" > {}\n", p.path("opened").display()));
     std::process::Command::new("chmod").arg("+x").arg(p.path("bin/vim")).status().expect("chmod");
-
-    let gpu = loupe::gpu::open().unwrap_or_else(|e| panic!("needs a device (lavapipe will do): {e}"));
-    let display = Display::new(gpu.device.clone());
-    let opts = ServeOptions {
-        root: p.root.clone(),
-        scene: p.path("scenes/minimal.toml"),
-        bind: std::net::Ipv4Addr::LOCALHOST.into(),
-        port: 0,
-        mode: RenderMode::Continuous,
-        max_fps: 30.0,
-        debug_api: false,
-    };
-    let setup = viewer::window_device(&gpu);
-    let running = loupe::serve::start(opts, Some(Attached { gpu, display: display.clone() })).expect("the daemon starts");
-    let shared = running.shared().clone();
-    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
-    let http = std::thread::spawn(move || {
-        running.serve(async {
-            let _ = stopped.await;
-        })
-    });
-
-    let render = egui_kittest::wgpu::create_render_state(egui_wgpu::WgpuSetup::Existing(setup), egui_wgpu::RendererOptions::PREDICTABLE);
-    let viewer = Viewer::new(Box::new(InProcess::new(shared.clone(), display)), Some(p.path("bin/vim").display().to_string()));
-    let r = render.clone();
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(640.0, 480.0))
-        .renderer(WgpuTestRenderer::from_render_state(render))
-        .build_ui_state(move |ui, viewer: &mut Viewer| viewer.ui(ui, Some(&r)), viewer);
+    let editor = Some(p.path("bin/vim").display().to_string());
+    let mut w = Window::open(&p, "scenes/minimal.toml", 30.0, editor, egui::vec2(640.0, 480.0));
+    let harness = &mut w.harness;
 
     // The pass list: every pass the daemon reports, by name.
-    let limit = Duration::from_secs(120);
-    step_until(&mut harness, "a frame", limit, |h| h.state().model().frame.is_some());
-    let passes = loupe::serve::shared::read(&shared.passes);
+    step_until(harness, "a frame", LIMIT, |h| h.state().model().frame.is_some());
+    let passes = loupe::serve::shared::read(&w.shared.passes);
     assert!(passes.len() > 3, "the minimal scene has its passes: {passes:?}");
     for pass in &passes {
         assert!(harness.query_by_label(&pass.name).is_some(), "the Passes panel lists `{}`", pass.name);
     }
     // The frame, on screen: the shader's colour fills the Frame panel.
-    step_until(&mut harness, "the frame", limit, |h| frame_pixels(&h.render().expect("renders")) > 10_000);
+    step_until(harness, "the frame", LIMIT, |h| frame_pixels(&h.render().expect("renders")) > 10_000);
 
     // A broken shader: its error in Problems, at its line.
     let bad = broken(&good);
     let line = bad.lines().position(|l| l.contains("mux(")).expect("the broken line") + 1;
     p.write(TONEMAP, &bad);
     let place = format!("shaders/post/tonemap.wgsl:{line}:");
-    step_until(&mut harness, "the error", limit, |h| h.query_by_label_contains(&place).is_some());
+    step_until(harness, "the error", LIMIT, |h| h.query_by_label_contains(&place).is_some());
     assert!(harness.query_by_label_contains(&format!("{line} |     let c = mux(")).is_some(), "the excerpt shows the broken line");
     // Clicking it (as assistive technology clicks: a pointer click at the
     // wrapped link's centre did not register in kittest) opens the editor
     // at that line, without waiting for it.
     harness.get_by_label_contains(&place).click_accesskit();
-    step_until(&mut harness, "the editor's start", limit, |_| std::fs::read_to_string(p.path("opened")).is_ok_and(|s| s.ends_with('\n')));
+    step_until(harness, "the editor's start", LIMIT, |_| std::fs::read_to_string(p.path("opened")).is_ok_and(|s| s.ends_with('\n')));
     let opened = std::fs::read_to_string(p.path("opened")).expect("the editor ran");
     assert!(opened.starts_with(&format!("+{line} ")) && opened.trim_end().ends_with("tonemap.wgsl"), "{opened}");
 
     // Fixed: the problem goes.
     p.write(TONEMAP, &good);
-    step_until(&mut harness, "the fix", limit, |h| h.query_by_label_contains("tonemap.wgsl:").is_none());
+    step_until(harness, "the fix", LIMIT, |h| h.query_by_label_contains("tonemap.wgsl:").is_none());
+    w.close();
+}
 
-    drop(harness);
-    let _ = stop.send(());
-    http.join().expect("the HTTP thread").expect("the daemon stops cleanly");
+/// The Frame panel's pixels as the window draws them (the frame image's
+/// rectangle in the rendered window).
+fn shown_frame(harness: &mut Harness<'_, Viewer>) -> image::RgbaImage {
+    let rect = harness.get_by_role(Role::Image).rect();
+    let window = harness.render().expect("renders");
+    let scale = window.width() as f32 / harness.ctx.content_rect().width();
+    let (x, y) = ((rect.min.x * scale).ceil() as u32, (rect.min.y * scale).ceil() as u32);
+    let (w, h) = ((rect.width() * scale).floor() as u32 - 1, (rect.height() * scale).floor() as u32 - 1);
+    image::imageops::crop_imm(&window, x, y, w, h).to_image()
+}
+
+/// The mean of every channel but alpha.
+fn mean(image: &image::RgbaImage) -> f64 {
+    let sum: u64 = image.pixels().flat_map(|p| p.0[..3].iter().map(|v| u64::from(*v))).sum();
+    sum as f64 / (image.width() * image.height() * 3) as f64
+}
+
+/// The Scene panel's controls drive the daemon: an exposure typed into the
+/// window brightens the frame it shows, the renderer switch path traces
+/// and shows the samples, and "Reset history" starts them over. The
+/// Timings tab plots the passes the frames ran.
+#[test]
+fn the_scene_panel_drives_the_daemon_and_the_timings_tab_plots_the_passes() {
+    let p = Project::copy_of_repo("view-scene");
+    small_minimal_scene(&p, "\n[quality]\npath_spp = 8\n");
+    let mut w = Window::open(&p, "scenes/minimal.toml", 10.0, None, egui::vec2(800.0, 600.0));
+    let harness = &mut w.harness;
+    step_until(harness, "a frame", LIMIT, |h| h.state().model().frame.is_some() && h.query_by_role(Role::Image).is_some());
+
+    // Timings: each pass the frames ran and timed has its line, named in
+    // the legend (the Passes tab, which names them too, is hidden).
+    harness.get_by_label("Timings").click();
+    let timed: Vec<String> =
+        loupe::serve::shared::read(&w.shared.passes).into_iter().filter(|p| p.time.time_ms.is_some()).map(|p| p.name).collect();
+    assert!(timed.len() > 3, "the minimal scene's frames time their passes: {timed:?}");
+    step_until(harness, "the timings plot", LIMIT, |h| timed.iter().all(|name| h.query_by_label(name).is_some()));
+
+    // Scene: an exposure set exactly in the entry beside its slider.
+    harness.get_by_label("Scene").click();
+    harness.step();
+    let before = shown_frame(harness);
+    let exposure = harness.get(by().role(Role::SpinButton).label_contains("Exposure"));
+    exposure.set_value_accesskit(2.0);
+    step_until(harness, "the override", LIMIT, |h| h.state().model().controls.overrides.get("post.exposure_ev") == Some(&2.0.into()));
+    step_until(harness, "a brighter frame", LIMIT, |h| mean(&shown_frame(h)) > mean(&before) + 10.0);
+    assert!(harness.query_by_label_contains("1 unsaved").is_some(), "the override is counted");
+
+    // The renderer switch: path traced, its samples shown up to the target.
+    harness.get_by_label("path").click();
+    step_until(harness, "the samples converged", LIMIT, |h| h.query_by_label("8 / 8 samples · converged").is_some());
+    // Reset history: the samples start over.
+    harness.get_by_label("Reset history").click();
+    step_until(harness, "the samples restarted", LIMIT, |h| h.state().model().samples.is_some_and(|s| s < 8));
+    let restarted = harness.state().model().samples.expect("samples");
+    assert!(harness.query_by_label(&format!("{restarted} / 8 samples")).is_some(), "the panel shows {restarted} samples");
+    w.close();
 }
 
 /// The real binary's window under Xvfb: it opens, renders frames, and a

@@ -9,10 +9,21 @@ use crate::link::{Command, Link};
 use crate::model::{Location, Model, Problem};
 use crate::panels::{self, frame::FrameTexture};
 
+/// What the right-hand panel shows.
+#[derive(Clone, Copy, Default, PartialEq, Eq)]
+enum RightTab {
+    #[default]
+    Passes,
+    Scene,
+    Timings,
+}
+
 pub struct Viewer {
     link: Box<dyn Link>,
     model: Model,
     frame: FrameTexture,
+    tab: RightTab,
+    scene: panels::scene::Edits,
     /// Source texts for excerpts, read once per file while the problems
     /// stay the same.
     sources: HashMap<String, Option<String>>,
@@ -23,7 +34,16 @@ pub struct Viewer {
 impl Viewer {
     /// `editor`: the command problems open in (`editor::from_env()`).
     pub fn new(link: Box<dyn Link>, editor: Option<String>) -> Self {
-        Viewer { link, model: Model::default(), frame: FrameTexture::default(), sources: HashMap::new(), sources_for: Vec::new(), editor }
+        Viewer {
+            link,
+            model: Model::default(),
+            frame: FrameTexture::default(),
+            tab: RightTab::default(),
+            scene: panels::scene::Edits::default(),
+            sources: HashMap::new(),
+            sources_for: Vec::new(),
+            editor,
+        }
     }
 
     pub fn model(&self) -> &Model {
@@ -68,11 +88,33 @@ impl Viewer {
                 panels::problems::show(ui, &self.model.problems, |loc| excerpt(link.as_ref(), sources, loc))
             })
             .inner;
-        egui::Panel::right("passes")
+        let asked = egui::Panel::right("passes")
             .default_size(width * 0.35)
             .max_size(width * 0.6)
             .resizable(true)
-            .show(ui, |ui| panels::passes::show(ui, &self.model.passes));
+            .show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    for (tab, name) in [(RightTab::Passes, "Passes"), (RightTab::Scene, "Scene"), (RightTab::Timings, "Timings")] {
+                        ui.selectable_value(&mut self.tab, tab, name);
+                    }
+                });
+                ui.separator();
+                match self.tab {
+                    RightTab::Passes => {
+                        panels::passes::show(ui, &self.model.passes);
+                        Vec::new()
+                    }
+                    RightTab::Scene => panels::scene::show(ui, &self.model, &mut self.scene),
+                    RightTab::Timings => {
+                        panels::timings::show(ui, &self.model.times);
+                        Vec::new()
+                    }
+                }
+            })
+            .inner;
+        for command in asked {
+            self.send(command);
+        }
         let shown = egui::CentralPanel::default().show(ui, |ui| self.frame.show(ui, image.as_ref())).inner;
         self.link.set_shown(shown);
         if let Some(loc) = clicked {
@@ -87,6 +129,9 @@ impl Viewer {
             if ui.button("Recompile all").clicked() {
                 self.send(Command::Rebuild);
             }
+            if ui.button("Reset history").on_hover_text("temporal passes and the path tracer's samples start over").clicked() {
+                self.send(Command::ResetHistory);
+            }
             if let Some((frame, ms)) = self.model.frame {
                 ui.label(format!("frame {frame}, {ms:.1} ms"));
             }
@@ -99,8 +144,15 @@ impl Viewer {
     }
 
     fn send(&mut self, command: Command) {
+        let set = match &command {
+            Command::SetOverride { path, .. } => Some(path.clone()),
+            _ => None,
+        };
         if let Err(e) = self.link.send(command) {
             self.model.notice = Some(e);
+            if let Some(path) = set {
+                self.scene.refused(&path);
+            }
         }
     }
 

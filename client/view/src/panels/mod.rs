@@ -4,3 +4,5 @@
 pub mod frame;
 pub mod passes;
 pub mod problems;
+pub mod scene;
+pub mod timings;

@@ -4,7 +4,6 @@
 use crate::model::Pass;
 
 pub fn show(ui: &mut egui::Ui, passes: &[Pass]) {
-    ui.heading("Passes");
     if passes.is_empty() {
         ui.label("no passes yet");
         return;
