@@ -213,6 +213,9 @@ pub enum ServerEvent {
         reloads: Vec<u64>,
         /// Tile classification's counts (`null`: nothing classified).
         tiles: Option<crate::render::passes::classify::Statistics>,
+        /// Samples per pixel the path tracer holds after this frame
+        /// (`null`: it did not run).
+        samples: Option<u32>,
     },
     Passes {
         passes: Vec<PassInfo>,
@@ -447,6 +450,9 @@ pub enum ClientMessage {
     /// Write the overrides into the scene file, keeping its comments and
     /// layout, and clear them.
     SaveScene {},
+    /// Forget every history resource (temporal passes, the path tracer's
+    /// accumulation) and render a frame that starts over.
+    ResetHistory {},
     /// Start (`on: true`) or stop receiving `quads` events: the daemon
     /// computes quad statistics while any client wants them.
     QuadStatistics { on: bool },

@@ -549,14 +549,22 @@ fn quad_statistics_stream_while_asked_and_follow_a_vertex_stage_edit() {
 }
 
 /// The per-pixel sample count of each `path_trace/samples` capture that
-/// arrives, in order, until `until` returns true.
+/// arrives, in order, until `until` returns true. Each is the `samples`
+/// of its frame's `frame` event (which arrives before its images).
 fn sample_counts(ws: &mut loupe_tests::ws::Ws, mut until: impl FnMut(&[f32]) -> bool) -> Vec<f32> {
     let mut seen = Vec::new();
+    let mut announced = std::collections::BTreeMap::new();
     ws.until("path_trace/samples captures", LIMIT, |m| match m {
+        Msg::Event(e) if e["type"] == "frame" => {
+            announced.insert(e["frame"].as_u64().unwrap(), e["samples"].clone());
+            None
+        }
         Msg::Image(h, d) if h["kind"] == "capture" && h["pass"] == "path_trace" => {
             let values: Vec<f32> = d.chunks_exact(16).map(|px| f32::from_le_bytes(px[..4].try_into().unwrap())).collect();
             let first = values[0];
             assert!(values.iter().all(|v| *v == first), "every pixel holds the same count: {first}");
+            let frame = h["frame"].as_u64().unwrap();
+            assert_eq!(announced.get(&frame), Some(&serde_json::json!(first as u32)), "frame {frame}'s event says its samples");
             seen.push(first);
             until(&seen).then_some(())
         }
@@ -566,8 +574,9 @@ fn sample_counts(ws: &mut loupe_tests::ws::Ws, mut until: impl FnMut(&[f32]) -> 
 }
 
 /// `serve` accumulates the path tracer one sample a frame up to
-/// `quality.path_spp`, on-change mode included, and starts over when a
-/// setting or the shader changes.
+/// `quality.path_spp`, on-change mode included, says so in each `frame`
+/// event, and starts over on `reset_history` and when a setting or the
+/// shader changes.
 #[test]
 fn the_path_tracer_accumulates_to_its_samples_and_restarts_on_a_change() {
     let p = Project::copy_of_repo("serve-path");
@@ -583,6 +592,11 @@ fn the_path_tracer_accumulates_to_its_samples_and_restarts_on_a_change() {
     let frame = frame_of(&s);
     std::thread::sleep(Duration::from_millis(1500));
     assert_eq!(frame_of(&s), frame, "no frames once the samples are reached");
+
+    // A history reset: the accumulation starts over from one sample.
+    ws.send(serde_json::json!({ "type": "reset_history" }));
+    let counts = sample_counts(&mut ws, |c| c.last() == Some(&6.0));
+    assert_eq!(counts[0], 1.0, "restarted after the reset: {counts:?}");
 
     // A setting changes: accumulation starts over.
     ws.send(serde_json::json!({ "type": "set_override", "path": "lights[0].intensity", "value": 20.0 }));

@@ -10,6 +10,7 @@
 
 pub mod editor;
 pub mod excerpt;
+pub mod frame_times;
 pub mod link;
 pub mod model;
 mod panels;

@@ -6,6 +6,16 @@
 pub enum Command {
     /// Rebuild every pipeline from the current sources ("Recompile all").
     Rebuild,
+    /// Set a scene value live, as the WebSocket `set_override`: `value`
+    /// is a number, a boolean or an option's name.
+    SetOverride { path: String, value: serde_json::Value },
+    /// Drop every override: back to the scene file's values.
+    ClearOverrides,
+    /// Write the overrides into the scene file.
+    SaveScene,
+    /// Forget every history resource (temporal passes, the path tracer's
+    /// accumulation): the next frame starts over.
+    ResetHistory,
 }
 
 /// The newest finished frame, as an `Rgba8Unorm` texture holding sRGB

@@ -3,7 +3,11 @@
 //! a remote link feed it alike. Unknown events and fields are ignored, as
 //! the browser ignores them.
 
+use std::collections::BTreeMap;
+
 use serde::Deserialize;
+
+use crate::frame_times::FrameTimes;
 
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 pub struct Pass {
@@ -83,6 +87,45 @@ pub struct Status {
     pub cpu_adapter: bool,
 }
 
+/// The scene's live controls and the overrides set on top of the file
+/// (a `controls` event, as `GET /api/controls`).
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+pub struct Controls {
+    pub scene: String,
+    pub controls: Vec<Control>,
+    /// Values set from clients, not yet saved, by path.
+    pub overrides: BTreeMap<String, serde_json::Value>,
+}
+
+impl Controls {
+    pub fn get(&self, path: &str) -> Option<&Control> {
+        self.controls.iter().find(|c| c.path == path)
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub struct Control {
+    /// The scene value it sets, as the file names it (`post.exposure_ev`).
+    pub path: String,
+    pub label: String,
+    #[serde(flatten)]
+    pub kind: ControlKind,
+    /// A number, a boolean or an option's name, overrides applied.
+    pub value: serde_json::Value,
+    /// The passes whose output it changes.
+    pub affects: Vec<String>,
+}
+
+/// What kind of control a scene value takes; the keys of the other kinds
+/// (`null` in the protocol) are ignored.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum ControlKind {
+    Slider { min: f64, max: f64, step: f64 },
+    Toggle,
+    Choice { options: Vec<String> },
+}
+
 /// One `frame` event's pass time.
 #[derive(Deserialize)]
 struct Timing {
@@ -100,13 +143,38 @@ struct NanReport {
 #[derive(Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 enum Event {
-    Hello { status: Status },
-    Passes { passes: Vec<Pass> },
-    Frame { frame: u64, passes: Vec<Timing>, frame_ms: f64 },
-    Diagnostics { diagnostics: Vec<Problem> },
-    DeviceLost { message: String, recovered: bool },
-    Error { message: String },
-    Nan { report: Option<NanReport> },
+    Hello {
+        status: Status,
+    },
+    Passes {
+        passes: Vec<Pass>,
+    },
+    Frame {
+        frame: u64,
+        passes: Vec<Timing>,
+        frame_ms: f64,
+        // A daemon older than the field sends none.
+        #[serde(default)]
+        samples: Option<u32>,
+    },
+    Diagnostics {
+        diagnostics: Vec<Problem>,
+    },
+    DeviceLost {
+        message: String,
+        recovered: bool,
+    },
+    Error {
+        message: String,
+    },
+    Controls(Controls),
+    SceneSaved {
+        file: String,
+        error: Option<String>,
+    },
+    Nan {
+        report: Option<NanReport>,
+    },
 }
 
 #[derive(Debug, Default)]
@@ -116,11 +184,21 @@ pub struct Model {
     pub problems: Vec<Problem>,
     /// The newest frame's number and time, once one was shown.
     pub frame: Option<(u64, f64)>,
-    /// The newest notice worth a line (device lost, a refused command).
+    /// The newest notice worth a line (device lost, a refused command, a
+    /// scene saved or not).
     pub notice: Option<String>,
     /// Where the newest traced frame's NaN/Inf came from, while a frame
     /// holds one.
     pub nan: Option<NanOrigin>,
+    pub controls: Controls,
+    /// How many `controls` events arrived: a new one replaces what the
+    /// Scene panel showed while waiting for it.
+    pub controls_seen: u64,
+    /// Samples per pixel the path tracer held after the newest frame;
+    /// `None` when it did not run.
+    pub samples: Option<u32>,
+    /// The newest frames' pass times, for the Timings plot.
+    pub times: FrameTimes,
 }
 
 impl Model {
@@ -130,8 +208,10 @@ impl Model {
         match event {
             Event::Hello { status } => self.status = status,
             Event::Passes { passes } => self.passes = passes,
-            Event::Frame { frame, passes, frame_ms } => {
+            Event::Frame { frame, passes, frame_ms, samples } => {
                 self.frame = Some((frame, frame_ms));
+                self.samples = samples;
+                self.times.push(frame, frame_ms, passes.iter().filter_map(|t| Some((t.name.as_str(), t.time_ms?))));
                 for t in passes {
                     if let Some(p) = self.passes.iter_mut().find(|p| p.name == t.name) {
                         (p.time_ms, p.timing, p.timing_reason) = (t.time_ms, t.timing, t.timing_reason);
@@ -145,6 +225,16 @@ impl Model {
             }
             Event::Error { message } => self.notice = Some(message),
             Event::Nan { report } => self.nan = report.and_then(|r| r.origin),
+            Event::Controls(controls) => {
+                self.controls = controls;
+                self.controls_seen += 1;
+            }
+            Event::SceneSaved { file, error } => {
+                self.notice = Some(match error {
+                    None => format!("saved to {file}"),
+                    Some(e) => format!("could not save {file}: {e}"),
+                });
+            }
         }
     }
 
@@ -171,6 +261,44 @@ mod tests {
         assert_eq!(m.passes[0].time_ms, Some(1.25));
         assert_eq!(m.passes[0].timing.as_deref(), Some("gpu"));
         assert_eq!(m.passes[1].reason.as_deref(), Some("rastering"));
+    }
+
+    #[test]
+    fn controls_take_their_kind_and_saves_say_where_they_went() {
+        let mut m = Model::default();
+        m.apply(json!({"type": "controls", "scene": "scenes/a.toml", "overrides": {"post.exposure_ev": 0.5}, "controls": [
+            {"path": "post.exposure_ev", "label": "Exposure", "kind": "slider", "min": -24.0, "max": 24.0, "step": 0.1, "options": null, "value": 0.5, "affects": ["exposure"]},
+            {"path": "quality.shadows", "label": "Shadows", "kind": "toggle", "min": null, "max": null, "step": null, "options": null, "value": true, "affects": []},
+            {"path": "post.tonemap", "label": "Tonemap", "kind": "choice", "min": null, "max": null, "step": null, "options": ["aces", "reinhard"], "value": "aces", "affects": ["tonemap"]},
+        ]}));
+        assert_eq!(m.controls_seen, 1);
+        let kinds: Vec<&ControlKind> = m.controls.controls.iter().map(|c| &c.kind).collect();
+        assert_eq!(
+            kinds,
+            [
+                &ControlKind::Slider { min: -24.0, max: 24.0, step: 0.1 },
+                &ControlKind::Toggle,
+                &ControlKind::Choice { options: vec!["aces".into(), "reinhard".into()] },
+            ]
+        );
+        assert_eq!(m.controls.overrides["post.exposure_ev"], json!(0.5));
+        m.apply(json!({"type": "scene_saved", "file": "scenes/a.toml", "error": "read-only"}));
+        assert_eq!(m.notice.as_deref(), Some("could not save scenes/a.toml: read-only"));
+    }
+
+    #[test]
+    fn frames_carry_the_path_tracers_samples_and_feed_the_timings() {
+        let mut m = Model::default();
+        m.apply(json!({"type": "frame", "frame": 1, "frame_ms": 3.0, "samples": 4, "passes": [
+            {"name": "path_trace", "time_ms": 2.0, "timing": "gpu", "timing_reason": null},
+            {"name": "denoise", "time_ms": null, "timing": null, "timing_reason": "n/a"},
+        ]}));
+        assert_eq!(m.samples, Some(4));
+        let series = m.times.passes();
+        assert_eq!(series.len(), 1, "a pass without a time has no point: {series:?}");
+        assert_eq!(series[0].runs, [vec![[1.0, 2.0]]]);
+        m.apply(json!({"type": "frame", "frame": 2, "frame_ms": 3.0, "samples": null, "passes": []}));
+        assert_eq!(m.samples, None);
     }
 
     #[test]

@@ -17,12 +17,23 @@ pub enum Centre {
     Inspector,
 }
 
+/// What the right-hand panel shows.
+#[derive(Clone, Copy, Default, PartialEq, Eq)]
+enum RightTab {
+    #[default]
+    Passes,
+    Scene,
+    Timings,
+}
+
 pub struct Viewer {
     link: Box<dyn Link>,
     model: Model,
     frame: FrameTexture,
     centre: Centre,
     inspector: Inspector,
+    tab: RightTab,
+    scene: panels::scene::Edits,
     /// Source texts for excerpts, read once per file while the problems
     /// stay the same.
     sources: HashMap<String, Option<String>>,
@@ -39,6 +50,8 @@ impl Viewer {
             frame: FrameTexture::new(wgpu::FilterMode::Linear),
             centre: Centre::Frame,
             inspector: Inspector::default(),
+            tab: RightTab::default(),
+            scene: panels::scene::Edits::default(),
             sources: HashMap::new(),
             sources_for: Vec::new(),
             editor,
@@ -104,12 +117,30 @@ impl Viewer {
                 panels::problems::show(ui, &self.model.problems, |loc| excerpt(link.as_ref(), sources, loc))
             })
             .inner;
-        let picked = egui::Panel::right("passes")
+        let (asked, picked) = egui::Panel::right("passes")
             .default_size(width * 0.35)
             .max_size(width * 0.6)
             .resizable(true)
-            .show(ui, |ui| panels::passes::show(ui, &self.model.passes, self.inspector.selected()))
+            .show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    for (tab, name) in [(RightTab::Passes, "Passes"), (RightTab::Scene, "Scene"), (RightTab::Timings, "Timings")] {
+                        ui.selectable_value(&mut self.tab, tab, name);
+                    }
+                });
+                ui.separator();
+                match self.tab {
+                    RightTab::Passes => (Vec::new(), panels::passes::show(ui, &self.model.passes, self.inspector.selected())),
+                    RightTab::Scene => (panels::scene::show(ui, &self.model, &mut self.scene), None),
+                    RightTab::Timings => {
+                        panels::timings::show(ui, &self.model.times);
+                        (Vec::new(), None)
+                    }
+                }
+            })
             .inner;
+        for command in asked {
+            self.send(command);
+        }
         if let Some(pass) = picked
             && let Some(asks) = self.inspector.select_pass(&self.model, &pass)
         {
@@ -147,6 +178,9 @@ impl Viewer {
             if ui.button("Recompile all").clicked() {
                 self.send(Command::Rebuild);
             }
+            if ui.button("Reset history").on_hover_text("temporal passes and the path tracer's samples start over").clicked() {
+                self.send(Command::ResetHistory);
+            }
             if let Some((frame, ms)) = self.model.frame {
                 ui.label(format!("frame {frame}, {ms:.1} ms"));
             }
@@ -167,8 +201,15 @@ impl Viewer {
     }
 
     fn send(&mut self, command: Command) {
+        let set = match &command {
+            Command::SetOverride { path, .. } => Some(path.clone()),
+            _ => None,
+        };
         if let Err(e) = self.link.send(command) {
             self.model.notice = Some(e);
+            if let Some(path) = set {
+                self.scene.refused(&path);
+            }
         }
     }
 

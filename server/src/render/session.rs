@@ -509,10 +509,18 @@ impl Session {
         self.accumulated = 0;
     }
 
+    /// Samples per pixel the path tracer holds after the newest submitted
+    /// frame, when the graph path traces: the frames since its history was
+    /// last forgotten, up to `quality.path_spp` (where it stops adding).
+    pub fn path_samples(&self) -> Option<u32> {
+        let traced = self.graph.passes.iter().any(|p| p.name == "path_trace");
+        traced.then(|| self.accumulated.min(self.scene.quality.path_spp))
+    }
+
     /// Whether frames still change with nothing else changing: the path
     /// tracer has not reached `quality.path_spp` samples per pixel.
     pub fn converging(&self) -> bool {
-        self.graph.passes.iter().any(|p| p.name == "path_trace") && self.accumulated < self.scene.quality.path_spp
+        self.path_samples().is_some_and(|s| s < self.scene.quality.path_spp)
     }
 
     /// Errors wgpu reported outside any error scope since the last call.

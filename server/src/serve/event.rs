@@ -30,6 +30,9 @@ pub enum Event {
     /// which device it was (the daemon's count of resets when it was
     /// opened), so a late report about a replaced device is ignored.
     DeviceLost { device: u32, reason: wgpu::DeviceLostReason, message: String },
+    /// Forget every history resource (temporal passes, the path tracer's
+    /// accumulation) and render: the WebSocket `reset_history` message.
+    ResetHistory,
     /// Debug API only (`--debug-api`): destroy the device for real, to
     /// exercise recovery.
     LoseDevice,

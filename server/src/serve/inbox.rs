@@ -3,9 +3,9 @@
 //! Client requests reach the render thread through the channel the
 //! watcher's and compile workers' events take (so the daemon waits on one
 //! receiver), but nothing a client does can grow it without bound:
-//! - commands (rebuild, scene overrides and saves, lose-device, previews) count
-//!   against [`COMMAND_QUEUE`] while they wait; one more is refused with
-//!   [`Refused::Busy`];
+//! - commands (rebuild, scene overrides and saves, history resets,
+//!   lose-device, previews) count against [`COMMAND_QUEUE`] while they
+//!   wait; one more is refused with [`Refused::Busy`];
 //! - subscriptions are "latest wins" per client: a client's newest set
 //!   waits in a map, and the channel holds one marker per client whose set
 //!   waits; the [`Inbox`] hands the daemon the newest set when it reads the
@@ -34,6 +34,7 @@ pub const COMMAND_QUEUE: usize = 64;
 pub enum Command {
     Rebuild,
     Scene(SceneCommand),
+    ResetHistory,
     LoseDevice,
     Trace,
     Preview(super::preview::Request),
@@ -44,6 +45,7 @@ impl Command {
         match self {
             Command::Rebuild => Event::Rebuild,
             Command::Scene(c) => Event::Scene(c),
+            Command::ResetHistory => Event::ResetHistory,
             Command::LoseDevice => Event::LoseDevice,
             Command::Trace => Event::Trace,
             Command::Preview(r) => Event::Preview(r),
@@ -53,7 +55,7 @@ impl Command {
 
 /// The events [`Command::into_event`] makes: counted while they wait.
 fn is_command(event: &Event) -> bool {
-    matches!(event, Event::Rebuild | Event::Scene(_) | Event::LoseDevice | Event::Trace | Event::Preview(_))
+    matches!(event, Event::Rebuild | Event::Scene(_) | Event::ResetHistory | Event::LoseDevice | Event::Trace | Event::Preview(_))
 }
 
 #[derive(Debug, thiserror::Error)]

@@ -117,6 +117,23 @@ impl Shared {
         })
     }
 
+    /// The first event a client gets: the protocol version and the status.
+    pub fn hello(&self) -> ServerEvent {
+        ServerEvent::Hello { protocol: crate::protocol::VERSION, status: read(&self.status) }
+    }
+
+    /// The state a client that keeps no HTTP snapshots starts from, or
+    /// rebuilds after it lost events: the pass list, the diagnostics, the
+    /// scene's controls and the NaN report, as events.
+    pub fn state_events(&self) -> [ServerEvent; 4] {
+        [
+            ServerEvent::Passes { passes: read(&self.passes) },
+            ServerEvent::Diagnostics { diagnostics: read(&self.diagnostics) },
+            ServerEvent::Controls(read(&self.controls)),
+            ServerEvent::Nan { report: read(&self.nan) },
+        ]
+    }
+
     /// Sends an event to every connected client; none connected is fine.
     pub fn publish(&self, event: ServerEvent) {
         let _ = self.events.send(event);

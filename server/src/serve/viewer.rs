@@ -11,10 +11,11 @@ use loupe_view::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed,
 use tokio::sync::broadcast::{self, error::TryRecvError};
 
 use super::display::Display;
+use super::event::SceneCommand;
 use super::inbox;
-use super::shared::{Shared, read};
+use super::shared::Shared;
 use super::{Attached, ServeError, ServeOptions};
-use crate::protocol::{ServerEvent, VERSION};
+use crate::protocol::ServerEvent;
 
 #[derive(Debug, thiserror::Error)]
 pub enum ViewError {
@@ -83,12 +84,8 @@ impl InProcess {
         // Subscribed before the snapshot is read, as a WebSocket client,
         // so nothing after it is missed.
         let events = shared.events.subscribe();
-        let snapshot = vec![
-            ServerEvent::Hello { protocol: VERSION, status: read(&shared.status) },
-            ServerEvent::Passes { passes: read(&shared.passes) },
-            ServerEvent::Diagnostics { diagnostics: read(&shared.diagnostics) },
-            ServerEvent::Nan { report: read(&shared.nan) },
-        ];
+        let mut snapshot = vec![shared.hello()];
+        snapshot.extend(shared.state_events());
         InProcess { shared, events, snapshot, display, stopped: Arc::new(AtomicBool::new(false)) }
     }
 }
@@ -101,10 +98,7 @@ impl Link for InProcess {
                 Ok(e) => out.push(e),
                 // Fell behind the event ring: what the panels show is
                 // rebuilt from the snapshots instead.
-                Err(TryRecvError::Lagged(_)) => {
-                    out.push(ServerEvent::Passes { passes: read(&self.shared.passes) });
-                    out.push(ServerEvent::Diagnostics { diagnostics: read(&self.shared.diagnostics) });
-                }
+                Err(TryRecvError::Lagged(_)) => out.extend(self.shared.state_events()),
                 Err(TryRecvError::Empty | TryRecvError::Closed) => break,
             }
         }
@@ -114,6 +108,14 @@ impl Link for InProcess {
     fn send(&self, command: Command) -> Result<(), String> {
         let command = match command {
             Command::Rebuild => inbox::Command::Rebuild,
+            Command::SetOverride { path, value } => {
+                // The WebSocket `set_override`'s value, read the same way.
+                let value = serde_json::from_value(value).map_err(|e| format!("`{path}`: not a scene value: {e}"))?;
+                inbox::Command::Scene(SceneCommand::Set { path, value })
+            }
+            Command::ClearOverrides => inbox::Command::Scene(SceneCommand::Clear),
+            Command::SaveScene => inbox::Command::Scene(SceneCommand::Save),
+            Command::ResetHistory => inbox::Command::ResetHistory,
         };
         self.shared.clients.command(command).map_err(|e| e.to_string())
     }

@@ -10,7 +10,7 @@ use loupe_view::egui;
 use loupe_view::presets::Channel;
 use loupe_view::viewer::Centre;
 
-use super::{Window, small_minimal};
+use super::{Window, open_small, small_minimal};
 
 /// The whole text of the first label holding `part` (a wrapped label's
 /// lines are nodes of their own too).
@@ -58,8 +58,8 @@ fn value_under(w: &mut Window, at: egui::Pos2) -> ([u32; 2], Vec<f32>, [f32; 4])
 
 #[test]
 fn a_pass_output_shows_with_the_exact_value_under_the_cursor() {
-    let p = small_minimal("view-inspector");
-    let mut w = Window::open(&p, "scenes/minimal.toml", None);
+    let p = small_minimal("view-inspector", "");
+    let mut w = open_small(&p, None);
     w.step_until("a frame", |h| h.state().model().frame.is_some());
 
     // Clicking a pass opens its output in the Inspector, with its preset.
@@ -107,8 +107,8 @@ fn a_pass_output_shows_with_the_exact_value_under_the_cursor() {
 
 #[test]
 fn depth_opens_linearised_and_fitted_to_its_values() {
-    let p = small_minimal("view-inspector-depth");
-    let mut w = Window::open(&p, "scenes/minimal.toml", None);
+    let p = small_minimal("view-inspector-depth", "");
+    let mut w = open_small(&p, None);
     w.step_until("a frame", |h| h.state().model().frame.is_some());
     let depth = w
         .harness

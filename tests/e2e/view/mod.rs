@@ -7,7 +7,7 @@ mod inspector;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{Queryable, by};
 use egui_kittest::{Harness, wgpu::WgpuTestRenderer};
 use loupe::serve::display::Display;
 use loupe::serve::shared::Shared;
@@ -15,6 +15,7 @@ use loupe::serve::viewer::{self, InProcess};
 use loupe::serve::{Attached, ServeOptions, daemon::RenderMode};
 use loupe_tests::reload::{TONEMAP, broken, constant_colour};
 use loupe_tests::{Project, Server, loupe_bin, loupe_with_env, repo};
+use loupe_view::egui::accesskit::Role;
 use loupe_view::{Viewer, egui, egui_wgpu};
 
 #[test]
@@ -46,9 +47,9 @@ pub struct Window {
 }
 
 impl Window {
-    /// Opens `scene` of `p` in a 640×480 window; `editor`: what problems
-    /// open in.
-    pub fn open(p: &Project, scene: &str, editor: Option<String>) -> Window {
+    /// Opens `scene` of `p` rendering up to `max_fps` in a window of
+    /// `size`; `editor`: what problems open in.
+    pub fn open(p: &Project, scene: &str, max_fps: f64, editor: Option<String>, size: egui::Vec2) -> Window {
         let gpu = loupe::gpu::open().unwrap_or_else(|e| panic!("needs a device (lavapipe will do): {e}"));
         let display = Display::new(gpu.device.clone());
         let opts = ServeOptions {
@@ -57,7 +58,7 @@ impl Window {
             bind: std::net::Ipv4Addr::LOCALHOST.into(),
             port: 0,
             mode: RenderMode::Continuous,
-            max_fps: 30.0,
+            max_fps,
             debug_api: false,
         };
         let setup = viewer::window_device(&gpu);
@@ -74,7 +75,7 @@ impl Window {
         let viewer = Viewer::new(Box::new(InProcess::new(shared.clone(), display)), editor);
         let r = render.clone();
         let harness = Harness::builder()
-            .with_size(egui::vec2(640.0, 480.0))
+            .with_size(size)
             // Screens are compared at the pointer: it is not drawn.
             .with_render_cursor(false)
             .renderer(WgpuTestRenderer::from_render_state(render))
@@ -104,24 +105,30 @@ impl Window {
     }
 }
 
-/// `scenes/minimal.toml` at 64×36: cheap on lavapipe.
-pub fn small_minimal(name: &str) -> Project {
+/// A copy of the repository whose `scenes/minimal.toml` renders at 64×36
+/// (cheap on lavapipe), plus `extra` TOML.
+pub fn small_minimal(name: &str, extra: &str) -> Project {
     let p = Project::copy_of_repo(name);
     let scene = p.read("scenes/minimal.toml").replace("width = 640\nheight = 360", "width = 64\nheight = 36");
-    p.write("scenes/minimal.toml", scene);
+    p.write("scenes/minimal.toml", format!("{scene}{extra}"));
     p
+}
+
+/// The window of the tests that need no more: 640×480 at 30 fps.
+pub fn open_small(p: &Project, editor: Option<String>) -> Window {
+    Window::open(p, "scenes/minimal.toml", 30.0, editor, egui::vec2(640.0, 480.0))
 }
 
 #[test]
 fn the_window_shows_the_daemons_passes_frame_and_problems() {
-    let p = small_minimal("view-window");
+    let p = small_minimal("view-window", "");
     let good = constant_colour(&p.read(TONEMAP), COLOUR);
     p.write(TONEMAP, &good);
     // An "editor" that records how it was called: named `vim`, so it gets
     // vim's `+LINE FILE`.
     p.write("bin/vim", format!("#!/bin/sh\necho \"$@\" > {}\n", p.path("opened").display()));
     std::process::Command::new("chmod").arg("+x").arg(p.path("bin/vim")).status().expect("chmod");
-    let mut w = Window::open(&p, "scenes/minimal.toml", Some(p.path("bin/vim").display().to_string()));
+    let mut w = open_small(&p, Some(p.path("bin/vim").display().to_string()));
 
     // The pass list: every pass the daemon reports, by name.
     w.step_until("a frame", |h| h.state().model().frame.is_some());
@@ -154,11 +161,67 @@ fn the_window_shows_the_daemons_passes_frame_and_problems() {
     w.close();
 }
 
+/// The Frame panel's pixels as the window draws them (the frame image's
+/// rectangle in the rendered window).
+fn shown_frame(harness: &mut Harness<'_, Viewer>) -> image::RgbaImage {
+    let rect = harness.get_by_role(Role::Image).rect();
+    let window = harness.render().expect("renders");
+    let scale = window.width() as f32 / harness.ctx.content_rect().width();
+    let (x, y) = ((rect.min.x * scale).ceil() as u32, (rect.min.y * scale).ceil() as u32);
+    let (w, h) = ((rect.width() * scale).floor() as u32 - 1, (rect.height() * scale).floor() as u32 - 1);
+    image::imageops::crop_imm(&window, x, y, w, h).to_image()
+}
+
+/// The mean of every channel but alpha.
+fn mean(image: &image::RgbaImage) -> f64 {
+    let sum: u64 = image.pixels().flat_map(|p| p.0[..3].iter().map(|v| u64::from(*v))).sum();
+    sum as f64 / (image.width() * image.height() * 3) as f64
+}
+
+/// The Scene panel's controls drive the daemon: an exposure typed into the
+/// window brightens the frame it shows, the renderer switch path traces
+/// and shows the samples, and "Reset history" starts them over. The
+/// Timings tab plots the passes the frames ran.
+#[test]
+fn the_scene_panel_drives_the_daemon_and_the_timings_tab_plots_the_passes() {
+    let p = small_minimal("view-scene", "\n[quality]\npath_spp = 8\n");
+    let mut w = Window::open(&p, "scenes/minimal.toml", 10.0, None, egui::vec2(800.0, 600.0));
+    w.step_until("a frame", |h| h.state().model().frame.is_some() && h.query_by_role(Role::Image).is_some());
+
+    // Timings: each pass the frames ran and timed has its line, named in
+    // the legend (the Passes tab, which names them too, is hidden).
+    w.harness.get_by_label("Timings").click();
+    let timed: Vec<String> =
+        loupe::serve::shared::read(&w.shared.passes).into_iter().filter(|p| p.time.time_ms.is_some()).map(|p| p.name).collect();
+    assert!(timed.len() > 3, "the minimal scene's frames time their passes: {timed:?}");
+    w.step_until("the timings plot", |h| timed.iter().all(|name| h.query_by_label(name).is_some()));
+
+    // Scene: an exposure set exactly in the entry beside its slider.
+    w.harness.get_by_label("Scene").click();
+    w.harness.step();
+    let before = shown_frame(&mut w.harness);
+    let exposure = w.harness.get(by().role(Role::SpinButton).label_contains("Exposure"));
+    exposure.set_value_accesskit(2.0);
+    w.step_until("the override", |h| h.state().model().controls.overrides.get("post.exposure_ev") == Some(&2.0.into()));
+    w.step_until("a brighter frame", |h| mean(&shown_frame(h)) > mean(&before) + 10.0);
+    assert!(w.harness.query_by_label_contains("1 unsaved").is_some(), "the override is counted");
+
+    // The renderer switch: path traced, its samples shown up to the target.
+    w.harness.get_by_label("path").click();
+    w.step_until("the samples converged", |h| h.query_by_label("8 / 8 samples · converged").is_some());
+    // Reset history: the samples start over.
+    w.harness.get_by_label("Reset history").click();
+    w.step_until("the samples restarted", |h| h.state().model().samples.is_some_and(|s| s < 8));
+    let restarted = w.harness.state().model().samples.expect("samples");
+    assert!(w.harness.query_by_label(&format!("{restarted} / 8 samples")).is_some(), "the panel shows {restarted} samples");
+    w.close();
+}
+
 /// The real binary's window under Xvfb: it opens, renders frames, and a
 /// screenshot of the screen shows more than a blank window.
 #[test]
 fn the_real_window_shows_frames_under_xvfb() {
-    let p = small_minimal("view-xvfb");
+    let p = small_minimal("view-xvfb", "");
     // A display number of this process's own, so parallel runs do not meet.
     let display = format!(":{}", 100 + std::process::id() % 800);
     let _xvfb = Stopped(

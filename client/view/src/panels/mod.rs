@@ -5,4 +5,6 @@ pub mod frame;
 pub mod inspector;
 pub mod passes;
 pub mod problems;
+pub mod scene;
+pub mod timings;
 pub mod zoom;

@@ -6,7 +6,6 @@ use crate::model::Pass;
 
 /// Draws the passes; returns the one the user clicked.
 pub fn show(ui: &mut egui::Ui, passes: &[Pass], inspected: Option<&str>) -> Option<String> {
-    ui.heading("Passes");
     if passes.is_empty() {
         ui.label("no passes yet");
         return None;

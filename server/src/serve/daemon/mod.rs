@@ -86,6 +86,9 @@ struct InFlight {
     replaced: BTreeSet<String>,
     /// Why this frame captured every output, when it did.
     trace: Option<&'static str>,
+    /// Samples per pixel the path tracer holds after this frame, when the
+    /// graph path traces.
+    samples: Option<u32>,
 }
 
 pub struct Daemon {
@@ -303,6 +306,10 @@ impl Daemon {
                 }
             }
             Event::Tick => self.dirty = true,
+            Event::ResetHistory => {
+                self.session.reset_history();
+                self.dirty = true;
+            }
             Event::DeviceLost { device, reason, message } => self.device_lost(device, reason, message),
             Event::LoseDevice => {
                 log::warn!("destroying the device on request (debug API)");
@@ -596,6 +603,7 @@ impl Daemon {
             clean,
             replaced,
             trace,
+            samples: self.session.path_samples(),
         });
     }
 

@@ -51,7 +51,7 @@ impl Daemon {
     }
 
     pub(super) fn publish_frame(&mut self, done: InFlight, result: FrameResult) {
-        let InFlight { results: _, reloads, started, final_key, clean, replaced, trace } = done;
+        let InFlight { results: _, reloads, started, final_key, clean, replaced, trace, samples } = done;
         if clean {
             self.follow_nan(&result, trace);
         }
@@ -64,6 +64,8 @@ impl Daemon {
             self.session.set_serial(true);
         }
         let tiles = crate::render::passes::classify::Statistics::of_frame(&result.tensors);
+        // A path tracer whose pipeline never built drew nothing.
+        let samples = samples.filter(|_| !result.skipped.iter().any(|p| p == "path_trace"));
         let mut images = None;
         if clean {
             let mut captures = (*shared::read(&self.shared.captures)).clone();
@@ -103,6 +105,7 @@ impl Daemon {
             reload: ids.last().copied(),
             reloads: ids,
             tiles,
+            samples,
         });
         let mut status = shared::read(&self.shared.status);
         status.frame = result.frame;

@@ -16,10 +16,10 @@ use tokio::sync::broadcast::error::RecvError;
 
 use super::AppState;
 use super::guard::error;
-use crate::protocol::{ClientMessage, Encoding, QUAD_STATISTICS, ServerEvent, VERSION};
+use crate::protocol::{ClientMessage, Encoding, QUAD_STATISTICS, ServerEvent};
 use crate::serve::event::SceneCommand;
 use crate::serve::inbox::{Client, Command, MAX_CONNECTIONS, Refused};
-use crate::serve::shared::{FrameImages, Shared, read};
+use crate::serve::shared::{FrameImages, Shared};
 
 /// The largest message a WebSocket client may send.
 const MAX_CLIENT_MESSAGE: usize = 1024 * 1024;
@@ -180,6 +180,7 @@ fn client_message(
         ClientMessage::SetOverride { path, value } => ("set_override", Command::Scene(SceneCommand::Set { path, value })),
         ClientMessage::ClearOverrides {} => ("clear_overrides", Command::Scene(SceneCommand::Clear)),
         ClientMessage::SaveScene {} => ("save_scene", Command::Scene(SceneCommand::Save)),
+        ClientMessage::ResetHistory {} => ("reset_history", Command::ResetHistory),
     };
     match shared.clients.command(command) {
         Err(busy @ Refused::Busy) => Err(format!("`{kind}` refused: {busy}")),
@@ -217,8 +218,7 @@ async fn client_loop(st: Arc<AppState>, mut socket: WebSocket, mut client: Clien
     if *stop.borrow_and_update() {
         return;
     }
-    let hello = ServerEvent::Hello { protocol: VERSION, status: read(&shared.status) };
-    let Some(m) = event_message(&hello) else { return };
+    let Some(m) = event_message(&shared.hello()) else { return };
     if socket.send(m).await.is_err() {
         return;
     }

@@ -8,6 +8,7 @@ use tokio_tungstenite::tungstenite;
 
 use super::super::testing::{Ws, connect, daemon_event_async, frame_images, next_json, next_message, start};
 use super::*;
+use crate::protocol::VERSION;
 use crate::scene::settings::Value;
 use crate::serve::event::Event;
 use crate::serve::inbox::COMMAND_QUEUE;
@@ -315,6 +316,10 @@ async fn a_flood_of_commands_fills_the_queue_to_its_bound_and_the_rest_is_refuse
         assert!(message.starts_with("`set_override` refused: the daemon is busy"), "{message}");
     }
     let mut sink = flood.await.unwrap();
+    // A history reset counts like the other commands.
+    sink.send(tungstenite::Message::text(r#"{"type":"reset_history"}"#)).await.unwrap();
+    let e = next().await;
+    assert!(e["message"].as_str().unwrap().starts_with("`reset_history` refused: the daemon is busy"), "{e}");
 
     // The first COMMAND_QUEUE wait for the daemon, in order; no more.
     for i in 0..COMMAND_QUEUE {
@@ -326,9 +331,9 @@ async fn a_flood_of_commands_fills_the_queue_to_its_bound_and_the_rest_is_refuse
     assert!(s.daemon.recv_timeout(Duration::ZERO).is_err(), "more than COMMAND_QUEUE commands waited");
 
     // Read, they make room.
-    sink.send(tungstenite::Message::text(r#"{"type":"rebuild"}"#)).await.unwrap();
+    sink.send(tungstenite::Message::text(r#"{"type":"reset_history"}"#)).await.unwrap();
     let (e, _s) = daemon_event_async(s).await;
-    assert!(matches!(e, Some(Event::Rebuild)));
+    assert!(matches!(e, Some(Event::ResetHistory)));
 }
 
 /// A text frame that is not UTF-8, and a message over the limit: an
