@@ -86,6 +86,9 @@ pub trait Link {
     /// Whether the frame is on screen: the daemon skips its display copy
     /// while it is not (a minimised or zero-sized window).
     fn set_shown(&self, shown: bool);
+    /// Whether the window is minimised: the daemon then renders
+    /// continuously only while a browser is connected.
+    fn set_minimised(&self, minimised: bool);
     /// Shows `inspect` from the next frame on (`None`: nothing is
     /// inspected, and the display pass does not run). The newest wins.
     fn inspect(&self, inspect: Option<Inspect>);

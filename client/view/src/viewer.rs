@@ -83,6 +83,7 @@ impl Viewer {
 
     /// The window is minimised: nothing of the frame is on screen.
     pub fn hidden(&mut self) {
+        self.link.set_minimised(true);
         self.link.set_shown(false);
         self.ask(Asks::default());
     }
@@ -90,6 +91,7 @@ impl Viewer {
     /// One frame of the window. `render`: the renderer the frame texture is
     /// registered with (none: the frame is not shown).
     pub fn ui(&mut self, ui: &mut egui::Ui, render: Option<&egui_wgpu::RenderState>) {
+        self.link.set_minimised(false);
         for event in self.link.poll() {
             self.model.apply(event);
         }

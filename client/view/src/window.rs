@@ -44,14 +44,16 @@ impl eframe::App for App {
         if self.viewer.closed() {
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);
         }
-        // eframe draws nothing while minimised: the daemon's display copy
-        // stops until the window shows again.
-        if ctx.input(|i| i.viewport().minimized == Some(true)) {
-            self.viewer.hidden();
-        }
     }
 
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
+        // eframe paints nothing while minimised: the daemon stops its
+        // display work, and renders continuously only for a browser,
+        // until the window shows again.
+        if ui.ctx().input(|i| i.viewport().minimized == Some(true)) {
+            self.viewer.hidden();
+            return;
+        }
         self.viewer.ui(ui, frame.wgpu_render_state());
     }
 }

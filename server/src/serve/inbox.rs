@@ -155,6 +155,12 @@ impl Clients {
         })
     }
 
+    /// How many WebSocket clients hold a slot (connected, or left but not
+    /// yet read as gone by the daemon).
+    pub fn connected(&self) -> usize {
+        MAX_CONNECTIONS - self.0.slots.available_permits()
+    }
+
     /// A slot for a new WebSocket client, or `None` when
     /// [`MAX_CONNECTIONS`] are taken.
     pub fn join(&self) -> Option<Client> {

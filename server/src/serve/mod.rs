@@ -137,6 +137,11 @@ impl Running {
         &self.shared
     }
 
+    /// The address the port is bound on.
+    pub fn local(&self) -> SocketAddr {
+        self.local
+    }
+
     /// Serves HTTP until `shutdown` completes (or serving fails), then
     /// stops the render thread.
     pub fn serve(self, shutdown: impl std::future::Future<Output = ()> + Send + 'static) -> Result<(), ServeError> {

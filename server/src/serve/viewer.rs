@@ -133,6 +133,10 @@ impl Link for InProcess {
         self.display.set_shown(shown);
     }
 
+    fn set_minimised(&self, minimised: bool) {
+        self.display.set_minimised(minimised);
+    }
+
     fn inspect(&self, inspect: Option<Inspect>) {
         self.display.inspect(inspect);
     }

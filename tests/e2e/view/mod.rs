@@ -42,6 +42,8 @@ fn frame_pixels(image: &image::RgbaImage) -> usize {
 pub struct Window {
     pub harness: Harness<'static, Viewer>,
     pub shared: Arc<Shared>,
+    /// Where the daemon's port is bound.
+    pub addr: std::net::SocketAddr,
     stop: Option<tokio::sync::oneshot::Sender<()>>,
     http: Option<std::thread::JoinHandle<Result<(), loupe::serve::ServeError>>>,
 }
@@ -63,7 +65,7 @@ impl Window {
         };
         let setup = viewer::window_device(&gpu);
         let running = loupe::serve::start(opts, Some(Attached { gpu, display: display.clone() })).expect("the daemon starts");
-        let shared = running.shared().clone();
+        let (shared, addr) = (running.shared().clone(), running.local());
         let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
         let http = std::thread::spawn(move || {
             running.serve(async {
@@ -80,7 +82,7 @@ impl Window {
             .with_render_cursor(false)
             .renderer(WgpuTestRenderer::from_render_state(render))
             .build_ui_state(move |ui, viewer: &mut Viewer| viewer.ui(ui, Some(&r)), viewer);
-        Window { harness, shared, stop: Some(stop), http: Some(http) }
+        Window { harness, shared, addr, stop: Some(stop), http: Some(http) }
     }
 
     /// Steps the window until `done` holds, for at most two minutes
@@ -214,6 +216,47 @@ fn the_scene_panel_drives_the_daemon_and_the_timings_tab_plots_the_passes() {
     w.step_until("the samples restarted", |h| h.state().model().samples.is_some_and(|s| s < 8));
     let restarted = w.harness.state().model().samples.expect("samples");
     assert!(w.harness.query_by_label(&format!("{restarted} / 8 samples")).is_some(), "the panel shows {restarted} samples");
+    w.close();
+}
+
+/// The newest frame the daemon rendered.
+fn frame_of(shared: &Shared) -> u64 {
+    loupe::serve::shared::read(&shared.status).frame
+}
+
+/// Steps the window for `time` and returns how many frames the daemon
+/// rendered meanwhile.
+fn frames_over(w: &mut Window, time: Duration, minimised: bool) -> u64 {
+    let start = frame_of(&w.shared);
+    let until = Instant::now() + time;
+    while Instant::now() < until {
+        if minimised {
+            w.harness.state_mut().hidden();
+        } else {
+            w.harness.step();
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    frame_of(&w.shared) - start
+}
+
+/// A minimised window with no browser connected stops the continuous
+/// frames; a browser connecting, or the window showing again, starts them.
+#[test]
+fn a_minimised_window_renders_only_for_a_browser() {
+    let p = small_minimal("view-minimised", "");
+    let mut w = open_small(&p, None);
+    w.step_until("a frame", |h| h.state().model().frame.is_some());
+    assert!(frames_over(&mut w, Duration::from_secs(1), false) > 3, "a shown window renders continuously");
+    // Minimised: the frames in flight land, then none.
+    frames_over(&mut w, Duration::from_millis(500), true);
+    assert_eq!(frames_over(&mut w, Duration::from_secs(1), true), 0, "a minimised window with no browser renders nothing");
+    let browser = loupe_tests::ws::Ws::connect(&w.addr.to_string()).expect("a WebSocket client connects");
+    assert!(frames_over(&mut w, Duration::from_secs(1), true) > 3, "a browser sees the frames");
+    drop(browser);
+    frames_over(&mut w, Duration::from_millis(500), true);
+    assert_eq!(frames_over(&mut w, Duration::from_secs(1), true), 0, "the browser gone, the frames stop again");
+    assert!(frames_over(&mut w, Duration::from_secs(1), false) > 3, "shown again, the window renders");
     w.close();
 }
 

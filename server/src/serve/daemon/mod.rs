@@ -261,7 +261,14 @@ impl Daemon {
     }
 
     fn wants_frame(&self) -> bool {
-        self.config.mode == RenderMode::Continuous || self.dirty || self.reloads.waiting() || self.session.converging()
+        let continuous = self.config.mode == RenderMode::Continuous && !self.unseen();
+        continuous || self.dirty || self.reloads.waiting() || self.session.converging()
+    }
+
+    /// Nobody would see a frame: `loupe view`'s window is minimised and no
+    /// browser is connected. Frames then render only for changes.
+    fn unseen(&self) -> bool {
+        self.config.display.as_ref().is_some_and(|d| d.minimised()) && self.shared.clients.connected() == 0
     }
 
     /// How long until the next frame is due: at once when a reload is

@@ -55,6 +55,9 @@ pub struct Display {
     device: wgpu::Device,
     frame: Mutex<Option<Target>>,
     shown: AtomicBool,
+    /// The window is minimised: the daemon renders continuously only
+    /// while a browser is connected (it still renders what changes).
+    minimised: AtomicBool,
     state: Mutex<State>,
     /// The render thread's own: pipelines and readbacks in flight.
     work: Mutex<Work>,
@@ -112,6 +115,7 @@ impl Display {
             device,
             frame: Mutex::new(None),
             shown: AtomicBool::new(true),
+            minimised: AtomicBool::new(false),
             state: Default::default(),
             work: Default::default(),
         })
@@ -124,6 +128,14 @@ impl Display {
 
     pub fn set_shown(&self, shown: bool) {
         self.shown.store(shown, Ordering::Relaxed);
+    }
+
+    pub fn set_minimised(&self, minimised: bool) {
+        self.minimised.store(minimised, Ordering::Relaxed);
+    }
+
+    pub fn minimised(&self) -> bool {
+        self.minimised.load(Ordering::Relaxed)
     }
 
     pub fn inspect(&self, inspect: Option<Inspect>) {
