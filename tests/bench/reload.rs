@@ -28,11 +28,10 @@
 //! otherwise `cargo build --release -p loupe` is run first. Exits 1 when a
 //! check fails.
 
-use std::path::PathBuf;
-use std::process::{Command, ExitCode};
+use std::process::ExitCode;
 
 use loupe_tests::reload::{self, Driver, Split};
-use loupe_tests::{Project, Server, machine, repo};
+use loupe_tests::{Project, Server, machine, release_bin};
 
 struct Options {
     latency: bool,
@@ -63,21 +62,6 @@ fn parse() -> Result<Options, String> {
         }
     }
     Ok(o)
-}
-
-/// `LOUPE_BIN`, else the release build (built now if needed).
-fn release_binary() -> PathBuf {
-    if let Some(p) = std::env::var_os("LOUPE_BIN") {
-        return p.into();
-    }
-    let status = Command::new(env!("CARGO"))
-        .args(["build", "--release", "-p", "loupe", "--bin", "loupe"])
-        .current_dir(repo())
-        .status()
-        .expect("cargo runs");
-    assert!(status.success(), "building the release loupe failed");
-    let target = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| repo().join("target"));
-    target.join("release/loupe")
 }
 
 fn start(bin: &std::path::Path, name: &str, extra: &[&str]) -> (Project, Server) {
@@ -222,7 +206,7 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let bin = release_binary();
+    let bin = release_bin();
     let mut ok = true;
     if o.latency {
         ok &= latency(&bin, &o);

@@ -2,11 +2,13 @@
 //! user would and, on any failed expectation, prints the command line, exit
 //! code, stdout and stderr. `ws` is a blocking WebSocket client for `/ws`;
 //! `reload` drives edits and measures them (shared by the e2e tests and the
-//! `bench-reload` benchmark); `protocol` reads PROTOCOL.md's key table.
+//! `bench-reload` benchmark); `protocol` reads PROTOCOL.md's key table;
+//! `xvfb` runs a virtual display for `loupe view` and screenshots it.
 
 pub mod protocol;
 pub mod reload;
 pub mod ws;
+pub mod xvfb;
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -33,6 +35,22 @@ pub fn machine() -> String {
     let model = cpuinfo.lines().find_map(|l| l.strip_prefix("model name")).map(|m| m.trim_start_matches([' ', '\t', ':']).to_owned());
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(0);
     format!("{} ({cores} cores)", model.unwrap_or_else(|| "unknown CPU".into()))
+}
+
+/// For benchmarks: `LOUPE_BIN`, else the release build (built now if
+/// needed).
+pub fn release_bin() -> PathBuf {
+    if let Some(p) = std::env::var_os("LOUPE_BIN") {
+        return p.into();
+    }
+    let status = Command::new(env!("CARGO"))
+        .args(["build", "--release", "-p", "loupe", "--bin", "loupe"])
+        .current_dir(repo())
+        .status()
+        .expect("cargo runs");
+    assert!(status.success(), "building the release loupe failed");
+    let target = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| repo().join("target"));
+    target.join("release/loupe")
 }
 
 /// The built binary: `LOUPE_BIN`, else the workspace's debug build.

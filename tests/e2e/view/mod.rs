@@ -14,6 +14,7 @@ use loupe::serve::shared::Shared;
 use loupe::serve::viewer::{self, InProcess};
 use loupe::serve::{Attached, ServeOptions, daemon::RenderMode};
 use loupe_tests::reload::{TONEMAP, broken, constant_colour};
+use loupe_tests::xvfb::Xvfb;
 use loupe_tests::{Project, Server, loupe_bin, loupe_with_env, repo};
 use loupe_view::egui::accesskit::Role;
 use loupe_view::{Viewer, egui, egui_wgpu};
@@ -261,53 +262,22 @@ fn a_minimised_window_renders_only_for_a_browser() {
 }
 
 /// The real binary's window under Xvfb: it opens, renders frames, and a
-/// screenshot of the screen shows more than a blank window.
+/// screenshot of the screen shows the window and, in it, the frame.
 #[test]
 fn the_real_window_shows_frames_under_xvfb() {
     let p = small_minimal("view-xvfb", "");
-    // A display number of this process's own, so parallel runs do not meet.
-    let display = format!(":{}", 100 + std::process::id() % 800);
-    let _xvfb = Stopped(
-        std::process::Command::new("Xvfb")
-            .args([display.as_str(), "-screen", "0", "640x480x24", "-nolisten", "tcp"])
-            .spawn()
-            .expect("Xvfb (tests/run installs xvfb)"),
-    );
-    let socket = std::path::PathBuf::from(format!("/tmp/.X11-unix/X{}", &display[1..]));
-    let start = Instant::now();
-    while !socket.exists() {
-        assert!(start.elapsed() < Duration::from_secs(30), "Xvfb did not start");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let s = Server::start_command(&loupe_bin(), &p.root, "view", 0, &["--scene", "scenes/minimal.toml"], &[("DISPLAY", &display)]);
+    p.write(TONEMAP, constant_colour(&p.read(TONEMAP), COLOUR));
+    let xvfb = Xvfb::start(640, 480);
+    let s = Server::start_command(&loupe_bin(), &p.root, "view", 0, &["--scene", "scenes/minimal.toml"], &[("DISPLAY", &xvfb.display)]);
     s.wait_for("frames", Duration::from_secs(120), || (s.get_json("/api/status")["frame"].as_u64()? >= 5).then_some(()));
     // The window draws what the daemon finished: give it a moment to.
     std::thread::sleep(Duration::from_secs(2));
-    let shot = std::process::Command::new("xwd").args(["-root", "-silent", "-display", &display]).output().expect("xwd (x11-apps)");
+    let shot = xvfb.screenshot();
     s.kill();
-    assert!(shot.status.success(), "xwd failed");
-    let colours = xwd_colours(&shot.stdout);
+    let colours = shot.pixels().map(|p| p.0).collect::<std::collections::BTreeSet<_>>().len();
     // A blank or unrendered screen has one or two colours; the window's
     // text, panels and lit frame have hundreds.
     assert!(colours > 100, "the screenshot has {colours} colours");
-}
-
-/// A child process killed when the test ends, however it ends.
-struct Stopped(std::process::Child);
-
-impl Drop for Stopped {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-/// How many distinct pixel values a 32-bit ZPixmap XWD dump holds.
-fn xwd_colours(xwd: &[u8]) -> usize {
-    let word = |i: usize| u32::from_be_bytes(xwd[i * 4..i * 4 + 4].try_into().expect("four bytes")) as usize;
-    let (header, width, height, bits, ncolors) = (word(0), word(4), word(5), word(11), word(19));
-    assert_eq!(bits, 32, "32 bits per pixel");
-    let pixels = &xwd[header + ncolors * 12..];
-    let pixels = &pixels[..(width * height * 4).min(pixels.len())];
-    pixels.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect::<std::collections::BTreeSet<_>>().len()
+    let frame = frame_pixels(&shot);
+    assert!(frame > 10_000, "the frame's colour covers {frame} pixels of the screen");
 }
