@@ -3,6 +3,7 @@
 //! and the README's screenshot. `tests/run` installs xvfb and x11-apps.
 
 use std::process::{Child, Command};
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 /// A running Xvfb, stopped when dropped.
@@ -14,10 +15,11 @@ pub struct Xvfb {
 
 impl Xvfb {
     /// Starts a screen of `width`×`height` at 24 bits on a display number
-    /// of this process's own (parallel runs do not meet), and waits for
-    /// its socket.
+    /// of its own (neither parallel processes nor tests in one process
+    /// meet), and waits for its socket.
     pub fn start(width: u32, height: u32) -> Xvfb {
-        let display = format!(":{}", 100 + std::process::id() % 800);
+        static STARTED: AtomicU32 = AtomicU32::new(0);
+        let display = format!(":{}", 100 + (std::process::id() % 200) * 4 + STARTED.fetch_add(1, Ordering::Relaxed) % 4);
         let screen = format!("{width}x{height}x24");
         let child = Command::new("Xvfb")
             .args([display.as_str(), "-screen", "0", &screen, "-nolisten", "tcp"])

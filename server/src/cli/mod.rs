@@ -20,6 +20,7 @@ use clap::{Parser, Subcommand};
 use loupe::check::format;
 use loupe::offline::OfflineError;
 use loupe::scene::settings::Value;
+use loupe::serve::{ServeOptions, daemon::RenderMode};
 
 /// Exit codes, the same for every subcommand.
 pub mod exit {
@@ -54,9 +55,10 @@ pub enum Command {
     /// Exit codes: 0 after Ctrl-C; 2 bad usage; 3 no GPU adapter.
     Serve(serve::Args),
     /// Run the daemon of `serve` (the browser inspector stays on the port)
-    /// and open a native window on its GPU device: the live frame, the
-    /// passes, and the problems (click one to open $VISUAL or $EDITOR at
-    /// its line).
+    /// and open a native window on its GPU device: the live frame, any
+    /// pass output with the value under the cursor, the passes, the scene's
+    /// controls, the pass times, and the problems (click one to open
+    /// $VISUAL or $EDITOR at its line).
     ///
     /// Exit codes: 0 after the window closes or Ctrl-C; 2 bad usage or no
     /// display (`loupe serve` is the headless alternative); 3 no GPU adapter.
@@ -130,15 +132,36 @@ pub fn under_root(root: &Path, path: &Path) -> PathBuf {
     if path.is_absolute() { path.to_owned() } else { root.join(path) }
 }
 
-/// The daemon's `--scene` under `root`, or the usage exit after saying
-/// that it does not exist (`command`: whose message it is).
-pub fn daemon_scene(command: &str, root: &Path, scene: &Path) -> Result<PathBuf, ExitCode> {
-    let scene = under_root(root, scene);
-    if scene.is_file() {
-        return Ok(scene);
+/// What `loupe serve` and `loupe view` both take: the daemon's project,
+/// scene and port.
+#[derive(clap::Args)]
+pub struct DaemonArgs {
+    /// The scene to render.
+    #[arg(long, default_value = "scenes/showcase.toml")]
+    scene: PathBuf,
+    /// Port of the browser inspector and the API (0 picks a free one).
+    #[arg(long, default_value_t = 7878)]
+    port: u16,
+    /// Project root: where shaders/ and scenes/ are.
+    #[arg(long, default_value = ".")]
+    root: PathBuf,
+    /// Enable the debug API for tests: `POST /api/debug/lose-device`
+    /// destroys the GPU device to exercise recovery.
+    #[arg(long)]
+    debug_api: bool,
+}
+
+impl DaemonArgs {
+    /// The daemon's options, or the usage exit after saying that the scene
+    /// does not exist under the root (`command`: whose message it is).
+    pub fn options(self, command: &str, bind: std::net::IpAddr, mode: RenderMode, max_fps: f64) -> Result<ServeOptions, ExitCode> {
+        let scene = under_root(&self.root, &self.scene);
+        if !scene.is_file() {
+            eprintln!("loupe {command}: scene `{}` does not exist", scene.display());
+            return Err(ExitCode::from(exit::USAGE));
+        }
+        Ok(ServeOptions { root: self.root, scene, bind, port: self.port, mode, max_fps, debug_api: self.debug_api })
     }
-    eprintln!("loupe {command}: scene `{}` does not exist", scene.display());
-    Err(ExitCode::from(exit::USAGE))
 }
 
 /// Logs at `warn` unless RUST_LOG says otherwise.

@@ -6,6 +6,7 @@
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 use loupe_view::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed, Range, egui_wgpu, window};
 use tokio::sync::broadcast::{self, error::TryRecvError};
@@ -31,13 +32,13 @@ pub enum ViewError {
 pub fn run(opts: ServeOptions) -> Result<(), ViewError> {
     window::check_display()?;
     let gpu = crate::gpu::open().map_err(ServeError::NoDevice)?;
-    let device = window_device(&gpu);
-    let display = Display::new(gpu.device.clone());
+    let display = Display::new(&gpu);
     let running = super::start(opts, Some(Attached { gpu, display: display.clone() }))?;
-    let link = InProcess::new(running.shared().clone(), display);
-    let stopped = link.stopped.clone();
+    let shared = running.shared().clone();
+    let stopped = Arc::new(AtomicBool::new(false));
     let (close_tx, close_rx) = tokio::sync::oneshot::channel::<()>();
     // HTTP on a thread of its own: the window needs the main thread.
+    let stop = stopped.clone();
     let http = std::thread::Builder::new()
         .name("loupe-http".into())
         .spawn(move || {
@@ -47,16 +48,61 @@ pub fn run(opts: ServeOptions) -> Result<(), ViewError> {
                     _ = close_rx => {}
                 }
             });
-            stopped.store(true, Ordering::Relaxed);
+            stop.store(true, Ordering::Relaxed);
             result
         })
         .map_err(|e| ServeError::Other(format!("cannot start the HTTP thread: {e}")))?;
-    let shown = window::run("loupe view", device, Box::new(link));
+    let shown = windows(&shared, &display, &stopped);
     let _ = close_tx.send(());
     let served = http.join().unwrap_or_else(|_| Err(ServeError::Other("the HTTP thread panicked".into())));
     shown?;
     Ok(served?)
 }
+
+/// Runs the window until it is closed. When the device is lost under it,
+/// egui's renderer fails on it (panics): the window then reopens on the
+/// device the daemon recovered with, and says so.
+fn windows(shared: &Arc<Shared>, display: &Arc<Display>, stopped: &Arc<AtomicBool>) -> Result<(), window::WindowError> {
+    // Why the window reopens, and how often it failed at once since.
+    let mut reopened: Option<(String, u32)> = None;
+    loop {
+        let replaced = display.replaced();
+        let mut link = InProcess::new(shared.clone(), display.clone(), stopped.clone());
+        if let Some((message, _)) = &reopened {
+            link.snapshot.push(ServerEvent::DeviceLost { message: message.clone(), recovered: true });
+        }
+        let device = window_device(&display.gpu());
+        let shown = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| window::run("loupe view", device, Box::new(link))));
+        let panic = match shown {
+            Ok(result) => return result,
+            Err(panic) => panic,
+        };
+        // The daemon learns of a loss on its own thread: give it a moment.
+        let since = Instant::now();
+        while display.replaced() == replaced && since.elapsed() < REPLACEMENT_WAIT {
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        reopened = match reopened {
+            _ if display.replaced() != replaced => {
+                eprintln!("loupe view: the window's device was lost; reopening on the daemon's new device");
+                Some(("the window's device was lost; it reopened on the daemon's new device".to_owned(), 0))
+            }
+            // On lavapipe the first window on the new device can fail to
+            // configure its surface while the old one is torn down.
+            Some((message, failed)) if failed < REOPEN_TRIES => Some((message, failed + 1)),
+            _ => std::panic::resume_unwind(panic),
+        };
+        let _ = display.gpu().device.poll(wgpu::PollType::wait_indefinitely());
+        std::thread::sleep(REOPEN_PAUSE);
+    }
+}
+
+/// How long a window that failed waits for the daemon to replace a lost
+/// device, how often a reopened window may fail at once, and the pause
+/// before each reopening.
+const REPLACEMENT_WAIT: Duration = Duration::from_secs(10);
+const REOPEN_TRIES: u32 = 3;
+const REOPEN_PAUSE: Duration = Duration::from_millis(500);
 
 /// The daemon's device as egui's renderer takes it: the window draws on
 /// it, so the display texture needs no copy between devices.
@@ -80,13 +126,14 @@ pub struct InProcess {
 }
 
 impl InProcess {
-    pub fn new(shared: Arc<Shared>, display: Arc<Display>) -> Self {
+    /// `stopped`: set once the daemon stopped.
+    pub fn new(shared: Arc<Shared>, display: Arc<Display>, stopped: Arc<AtomicBool>) -> Self {
         // Subscribed before the snapshot is read, as a WebSocket client,
         // so nothing after it is missed.
         let events = shared.events.subscribe();
         let mut snapshot = vec![shared.hello()];
         snapshot.extend(shared.state_events());
-        InProcess { shared, events, snapshot, display, stopped: Arc::new(AtomicBool::new(false)) }
+        InProcess { shared, events, snapshot, display, stopped }
     }
 }
 

@@ -54,7 +54,7 @@ impl Window {
     /// `size`; `editor`: what problems open in.
     pub fn open(p: &Project, scene: &str, max_fps: f64, editor: Option<String>, size: egui::Vec2) -> Window {
         let gpu = loupe::gpu::open().unwrap_or_else(|e| panic!("needs a device (lavapipe will do): {e}"));
-        let display = Display::new(gpu.device.clone());
+        let display = Display::new(&gpu);
         let opts = ServeOptions {
             root: p.root.clone(),
             scene: p.path(scene),
@@ -75,7 +75,8 @@ impl Window {
         });
         let render =
             egui_kittest::wgpu::create_render_state(egui_wgpu::WgpuSetup::Existing(setup), egui_wgpu::RendererOptions::PREDICTABLE);
-        let viewer = Viewer::new(Box::new(InProcess::new(shared.clone(), display)), editor);
+        let stopped = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let viewer = Viewer::new(Box::new(InProcess::new(shared.clone(), display, stopped)), editor);
         let r = render.clone();
         let harness = Harness::builder()
             .with_size(size)
@@ -280,4 +281,31 @@ fn the_real_window_shows_frames_under_xvfb() {
     assert!(colours > 100, "the screenshot has {colours} colours");
     let frame = frame_pixels(&shot);
     assert!(frame > 10_000, "the frame's colour covers {frame} pixels of the screen");
+}
+
+/// The real window when the GPU device is lost: the daemon recovers on a
+/// new device, and the window reopens on it and shows its frames.
+#[test]
+fn the_real_window_reopens_on_the_device_the_daemon_recovers_with() {
+    let p = small_minimal("view-lost", "");
+    p.write(TONEMAP, constant_colour(&p.read(TONEMAP), COLOUR));
+    let xvfb = Xvfb::start(640, 480);
+    let args = ["--scene", "scenes/minimal.toml", "--debug-api"];
+    let s = Server::start_command(&loupe_bin(), &p.root, "view", 0, &args, &[("DISPLAY", &xvfb.display)]);
+    let frames = || s.get_json("/api/status")["frame"].as_u64();
+    s.wait_for("frames", Duration::from_secs(120), || (frames()? >= 5).then_some(()));
+    assert_eq!(s.post("/api/debug/lose-device").0, 202);
+    s.wait_for("the window to reopen", Duration::from_secs(60), || s.log().contains("reopening on the daemon's new device").then_some(()));
+    let after = frames().expect("the daemon answers");
+    s.wait_for("frames on the new device", Duration::from_secs(60), || (frames()? >= after + 5).then_some(()));
+    let start = Instant::now();
+    loop {
+        let shown = frame_pixels(&xvfb.screenshot());
+        if shown > 10_000 {
+            break;
+        }
+        assert!(start.elapsed() < Duration::from_secs(60), "the reopened window shows {shown} pixels of the frame; the log:\n{}", s.log());
+        std::thread::sleep(Duration::from_millis(500));
+    }
+    s.kill();
 }

@@ -41,6 +41,9 @@ impl Daemon {
             Ok(g) => {
                 let problems = self.session.replace_device(g);
                 self.device_resets += 1;
+                if let Some(display) = &self.config.display {
+                    display.replace(self.session.gpu());
+                }
                 // Frames of the old device never come back; the reloads
                 // they were to announce go with the next frame instead.
                 let lost: Vec<Succeeded> = self.in_flight.drain(..).flat_map(|f| f.reloads).collect();

@@ -19,7 +19,7 @@
 
 mod pass;
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use loupe_view::{DisplayImage, Inspect, Inspected, Probe, Probed, Range};
@@ -50,9 +50,11 @@ impl<'a> Source<'a> {
 /// The window's textures and requests, shared by the render thread and
 /// the window.
 pub struct Display {
-    /// The device the window renders with: frames of any other (a device
-    /// replaced after a loss) are not shown.
-    device: wgpu::Device,
+    /// The device the window renders with: frames of any other are not
+    /// shown. After a loss, the daemon's new one (the window reopens on it).
+    window: Mutex<Gpu>,
+    /// How many times the device was replaced.
+    replaced: AtomicU64,
     frame: Mutex<Option<Target>>,
     shown: AtomicBool,
     /// The window is minimised: the daemon renders continuously only
@@ -110,15 +112,39 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 }
 
 impl Display {
-    pub fn new(device: wgpu::Device) -> Arc<Self> {
+    pub fn new(gpu: &Gpu) -> Arc<Self> {
         Arc::new(Display {
-            device,
+            window: Mutex::new(gpu.clone()),
+            replaced: AtomicU64::new(0),
             frame: Mutex::new(None),
             shown: AtomicBool::new(true),
             minimised: AtomicBool::new(false),
             state: Default::default(),
             work: Default::default(),
         })
+    }
+
+    /// The device the window renders with (after a loss, the one it
+    /// reopens on).
+    pub fn gpu(&self) -> Gpu {
+        lock(&self.window).clone()
+    }
+
+    /// How many times the device was replaced.
+    pub fn replaced(&self) -> u64 {
+        self.replaced.load(Ordering::SeqCst)
+    }
+
+    /// The daemon replaced its lost device with `gpu`: everything made on
+    /// the old one is dropped, and the window reopens on the new one.
+    pub fn replace(&self, gpu: &Gpu) {
+        *lock(&self.window) = gpu.clone();
+        *lock(&self.frame) = None;
+        *lock(&self.work) = Work::default();
+        let mut state = lock(&self.state);
+        (state.inspected, state.probed, state.measured) = (None, None, None);
+        drop(state);
+        self.replaced.fetch_add(1, Ordering::SeqCst);
     }
 
     /// The newest copied frame's texture.
@@ -173,7 +199,7 @@ impl Display {
         output: impl Fn(&str) -> Option<Source<'a>>,
     ) {
         let (device, queue) = (&gpu.device, &gpu.queue);
-        if *device != self.device {
+        if *device != lock(&self.window).device {
             return;
         }
         let mut work = lock(&self.work);
