@@ -1,0 +1,239 @@
+//! Snapshot tests of the window's main panels: the default view (Frame,
+//! Passes, Problems), the Scene and Timings tabs, and the Inspector with a
+//! texel hovered, each compared with its PNG in `snapshots/`
+//! (`UPDATE_SNAPSHOTS=1` rewrites them: README, "Tests").
+//!
+//! A live daemon's pixels vary (frame numbers, times, lavapipe's pace), so
+//! the window here reads a fixed input: [`Replay`], a link replaying events
+//! recorded once from a real daemon, with a fixed gradient as the frame and
+//! the inspected image. It is an input for the layout, not a stand-in for
+//! the daemon: the other view tests drive a real one.
+
+use std::sync::{Arc, Mutex};
+
+use egui_kittest::kittest::Queryable;
+use egui_kittest::{Harness, SnapshotOptions, wgpu::WgpuTestRenderer};
+use loupe_tests::reload::srgb;
+use loupe_view::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed, Range, Viewer, egui, egui_wgpu};
+
+/// `loupe serve --scene scenes/minimal.toml` on lavapipe, on a copy of the
+/// repository, as a WebSocket client of `/ws` read it: the `hello`, then
+/// the state a link starts from (`GET /api/passes`, `/api/controls` and
+/// `/api/nan` as the `passes`, `controls` and `nan` events
+/// `Shared::state_events` sends), eight frames; then
+/// `shaders/post/tonemap.wgsl` saved with line 16's `max(` made `mux(`:
+/// the reload's events, its diagnostics (located in the repository's own
+/// file, so the excerpt shows its line 16), the pass list with `tonemap`
+/// stale, and four more frames. One event a line.
+const EVENTS: &str = include_str!("snapshot_events.json");
+
+/// The recorded frame's size (the minimal scene's output): the fixed image
+/// is the frame and the inspected `tonemap/color` alike.
+const IMAGE: [u32; 2] = [640, 360];
+
+/// One window size for every snapshot.
+const WINDOW: egui::Vec2 = egui::vec2(1024.0, 640.0);
+
+/// How a snapshot may differ from its PNG and still pass (docs/view.md,
+/// "Tests", has the measurements).
+///
+/// `threshold` is per pixel, in dify's weighted squared YIQ distance of
+/// 8-bit values: a step of 1 in R, G and B together is 0.5, of 2 is 2.0;
+/// text or a panel edge against the background is thousands. lavapipe
+/// rounds filtering and blending by the CPU features it finds: held to
+/// AVX, SSE4.1, SSSE3, SSE2 or no SIMD (`GALLIUM_OVERRIDE_CPU_CAPS`), up
+/// to 671 pixels changed here, every one by under 0.6. 2.0 leaves a margin
+/// over that.
+///
+/// `max_failed_pixels`: none. Nothing measured exceeds the threshold, and
+/// the smallest change tried, one digit of a button's label ("1:1" made
+/// "1:2"), is only 12 pixels, over the threshold at any setting: an
+/// allowance of pixels would hide such changes first.
+fn options() -> SnapshotOptions {
+    SnapshotOptions::new()
+        .threshold(2.0)
+        .max_failed_pixels(0)
+        .output_path(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("e2e/view/snapshots"))
+}
+
+/// The linear value of the fixed image at a texel: red rising to the
+/// right, green downward, blue a checker of 40-texel squares, opaque.
+fn texel(x: u32, y: u32) -> [f32; 4] {
+    let blue = if (x / 40 + y / 40).is_multiple_of(2) { 0.2 } else { 0.7 };
+    [x as f32 / (IMAGE[0] - 1) as f32, y as f32 / (IMAGE[1] - 1) as f32, blue, 1.0]
+}
+
+/// The fixed image as the display pass writes one: `Rgba8Unorm` holding
+/// sRGB-encoded values, on the window's device.
+fn fixed_image(render: &egui_wgpu::RenderState) -> DisplayImage {
+    let size = wgpu::Extent3d { width: IMAGE[0], height: IMAGE[1], depth_or_array_layers: 1 };
+    let texture = render.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("snapshot image"),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let encode = |v: f32| (srgb(v) * 255.0).round() as u8;
+    let bytes: Vec<u8> = (0..IMAGE[1]).flat_map(|y| (0..IMAGE[0]).flat_map(move |x| texel(x, y).map(encode))).collect();
+    let layout = wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * IMAGE[0]), rows_per_image: None };
+    render.queue.write_texture(texture.as_image_copy(), &bytes, layout, size);
+    DisplayImage { view: texture.create_view(&wgpu::TextureViewDescriptor::default()), size: IMAGE, generation: 1 }
+}
+
+/// The link the snapshots read: the recorded events on the first poll,
+/// the fixed image as the frame and as whatever is inspected, the fixed
+/// image's value at any texel probed and its range when measured, all
+/// "after" the last recorded frame. Commands are recorded, not carried out.
+struct Replay {
+    events: Vec<serde_json::Value>,
+    frame: u64,
+    image: DisplayImage,
+    sent: Arc<Mutex<Vec<Command>>>,
+    inspect: Mutex<Option<Inspect>>,
+    probe: Mutex<Option<Probe>>,
+    measure: Mutex<Option<Inspect>>,
+}
+
+impl Replay {
+    fn new(image: DisplayImage, sent: Arc<Mutex<Vec<Command>>>) -> Replay {
+        let events: Vec<serde_json::Value> = serde_json::from_str(EVENTS).expect("the recorded events are JSON");
+        let frame = events.iter().filter(|e| e["type"] == "frame").filter_map(|e| e["frame"].as_u64()).next_back();
+        let frame = frame.expect("the recording has frames");
+        Replay { events, frame, image, sent, inspect: Mutex::default(), probe: Mutex::default(), measure: Mutex::default() }
+    }
+}
+
+impl Link for Replay {
+    fn poll(&mut self) -> Vec<serde_json::Value> {
+        std::mem::take(&mut self.events)
+    }
+
+    fn send(&self, command: Command) -> Result<(), String> {
+        self.sent.lock().expect("the command log").push(command);
+        Ok(())
+    }
+
+    fn source(&self, file: &str) -> Option<String> {
+        std::fs::read_to_string(loupe_tests::repo().join(file)).ok()
+    }
+
+    fn display(&self) -> Option<DisplayImage> {
+        Some(self.image.clone())
+    }
+
+    // The fixed image needs no copy to be shown, and nothing renders.
+    fn set_shown(&self, _: bool) {}
+
+    fn set_minimised(&self, _: bool) {}
+
+    fn inspect(&self, inspect: Option<Inspect>) {
+        *self.inspect.lock().expect("inspect") = inspect;
+    }
+
+    fn inspected(&self) -> Option<Inspected> {
+        let inspect = self.inspect.lock().expect("inspect").clone()?;
+        Some(Inspected { image: self.image.clone(), inspect, frame: self.frame })
+    }
+
+    fn probe(&self, probe: Option<Probe>) {
+        *self.probe.lock().expect("probe") = probe;
+    }
+
+    fn probed(&self) -> Option<Probed> {
+        let probe = self.probe.lock().expect("probe").clone()?;
+        let value = texel(probe.x, probe.y);
+        Some(Probed { probe, frame: self.frame, value })
+    }
+
+    fn measure(&self, inspect: Inspect) {
+        *self.measure.lock().expect("measure") = Some(inspect);
+    }
+
+    fn measured(&self) -> Option<Range> {
+        let output = self.measure.lock().expect("measure").as_ref()?.output.clone();
+        // Red and green span 0…1, blue the checker's two values; opaque;
+        // luminance (Rec. 709) from the darkest corner to the brightest.
+        let luminance = |[r, g, b, _]: [f32; 4]| 0.2126 * r + 0.7152 * g + 0.0722 * b;
+        let (dark, bright) = (texel(0, 0), texel(IMAGE[0] - 1, IMAGE[1] - 1));
+        let channels = [Some((0.0, 1.0)), Some((0.0, 1.0)), Some((0.2, 0.7)), Some((1.0, 1.0)), Some((luminance(dark), luminance(bright)))];
+        Some(Range { output, frame: self.frame, channels })
+    }
+
+    fn closed(&self) -> bool {
+        false
+    }
+}
+
+/// The window over [`Replay`], settled, and the log of what it sent.
+fn open() -> (Harness<'static, Viewer>, Arc<Mutex<Vec<Command>>>) {
+    // kittest's own adapter choice: a CPU one (lavapipe) wherever there is
+    // one, so a machine's GPU does not change the pixels.
+    let render = egui_kittest::wgpu::create_render_state(egui_kittest::wgpu::default_wgpu_setup(), egui_wgpu::RendererOptions::PREDICTABLE);
+    let sent = Arc::new(Mutex::new(Vec::new()));
+    let viewer = Viewer::new(Box::new(Replay::new(fixed_image(&render), sent.clone())), None);
+    let r = render.clone();
+    let mut harness = Harness::builder()
+        .with_size(WINDOW)
+        .with_render_cursor(false)
+        .renderer(WgpuTestRenderer::from_render_state(render))
+        .build_ui_state(move |ui, viewer: &mut Viewer| viewer.ui(ui, Some(&r)), viewer);
+    settle(&mut harness);
+    (harness, sent)
+}
+
+/// Steps until the layout is stable: the viewer asks for a repaint every
+/// frame (the daemon's frames arrive at their own rate), so `run` would
+/// never settle; panels and grids size themselves in their first frames.
+fn settle(harness: &mut Harness<'static, Viewer>) {
+    harness.run_steps(4);
+}
+
+/// Compares the window with its snapshot `name`; the panels showed, and
+/// sent nothing to the daemon.
+fn snapshot(harness: &mut Harness<'static, Viewer>, sent: &Mutex<Vec<Command>>, name: &str) {
+    if let Err(e) = harness.try_snapshot_options(name, &options()) {
+        panic!("{e}");
+    }
+    let sent = sent.lock().expect("the command log");
+    assert!(sent.is_empty(), "showing the panels sends nothing: {sent:?}");
+}
+
+#[test]
+fn snapshots_the_default_view() {
+    let (mut harness, sent) = open();
+    assert!(harness.query_by_label_contains("shaders/post/tonemap.wgsl:16:13").is_some(), "the recorded error is shown");
+    snapshot(&mut harness, &sent, "default");
+}
+
+/// Snapshot `name`: the window with the right-hand panel's `tab` open.
+fn snapshot_tab(tab: &str, name: &str) {
+    let (mut harness, sent) = open();
+    harness.get_by_label(tab).click();
+    settle(&mut harness);
+    snapshot(&mut harness, &sent, name);
+}
+
+#[test]
+fn snapshots_the_scene_tab() {
+    snapshot_tab("Scene", "scene");
+}
+
+#[test]
+fn snapshots_the_timings_tab() {
+    snapshot_tab("Timings", "timings");
+}
+
+#[test]
+fn snapshots_the_inspector_with_a_texel_hovered() {
+    let (mut harness, sent) = open();
+    harness.get_by_label("tonemap").click();
+    settle(&mut harness);
+    harness.hover_at(egui::pos2(300.0, 250.0));
+    settle(&mut harness);
+    assert!(harness.query_by_label_contains("· frame 42").is_some(), "the readout names the hovered texel's value");
+    snapshot(&mut harness, &sent, "inspector");
+}
