@@ -68,6 +68,9 @@ impl Window {
         let setup = viewer::window_device(&gpu);
         let running = loupe::serve::start(opts, Some(Attached { gpu, display: display.clone() })).expect("the daemon starts");
         let (shared, addr) = (running.shared().clone(), running.local());
+        // The link made at once, as `loupe view` makes it: what it starts
+        // from is what the daemon published before it listened.
+        let link = InProcess::new(shared.clone(), display, Arc::new(std::sync::atomic::AtomicBool::new(false)));
         let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
         let http = std::thread::spawn(move || {
             running.serve(async {
@@ -76,8 +79,7 @@ impl Window {
         });
         let render =
             egui_kittest::wgpu::create_render_state(egui_wgpu::WgpuSetup::Existing(setup), egui_wgpu::RendererOptions::PREDICTABLE);
-        let stopped = Arc::new(std::sync::atomic::AtomicBool::new(false));
-        let viewer = Viewer::new(Box::new(InProcess::new(shared.clone(), display, stopped)), editor);
+        let viewer = Viewer::new(Box::new(link), editor);
         let r = render.clone();
         let harness = Harness::builder()
             .with_size(size)
@@ -137,6 +139,8 @@ fn the_window_shows_the_daemons_passes_frame_and_problems() {
 
     // The pass list: every pass the daemon reports, by name.
     w.step_until("a frame", |h| h.state().model().frame.is_some());
+    let status = &w.harness.state().model().status;
+    assert!(status.scene.ends_with("minimal.toml") && !status.adapter.is_empty(), "the toolbar names the scene and adapter: {status:?}");
     let passes = loupe::serve::shared::read(&w.shared.passes);
     assert!(passes.len() > 3, "the minimal scene has its passes: {passes:?}");
     for pass in &passes {

@@ -183,7 +183,7 @@ impl Daemon {
             Session::new(gpu, &config.shader_root, lib, &loaded).with_options(FrameOptions { nan_watch: true, ..FrameOptions::default() });
         session.set_serial(wall_clock);
         let previews = super::preview::Previews::start(&config.shader_root);
-        let daemon = Daemon {
+        let mut daemon = Daemon {
             loaded: Arc::new(loaded.clone()),
             stale_inputs: BTreeSet::new(),
             previews,
@@ -219,8 +219,11 @@ impl Daemon {
             nan_report: None,
         };
         // Before the server listens (it waits for `new`): a client's first
-        // `/api/tradeoffs` is judged against this scene, not an empty one.
+        // `/api/tradeoffs` is judged against this scene, not an empty one,
+        // and its first status (`loupe view`'s window reads it at once)
+        // names the scene and the adapter.
         daemon.publish_measured();
+        daemon.publish_state();
         daemon
     }
 
