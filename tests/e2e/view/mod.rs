@@ -3,6 +3,7 @@
 //! project, rendering on the daemon's own device (lavapipe here).
 
 mod inspector;
+mod tensors;
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
