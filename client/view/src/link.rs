@@ -1,6 +1,9 @@
 //! The viewer's one dependency on a daemon: events in, commands out, and
 //! the newest frame as a texture on the device the window renders with.
 
+use std::collections::BTreeSet;
+use std::sync::Arc;
+
 /// What the window asks of the daemon: the daemon's own inbox commands.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Command {
@@ -72,6 +75,39 @@ pub struct Range {
     pub channels: [Option<(f32, f32)>; 5],
 }
 
+/// A buffer a frame captured, read as the tensor its layout describes
+/// (what `GET /api/tensors/{pass}/{output}` and its `.f32` serve).
+#[derive(Clone)]
+pub struct Tensor {
+    /// `pass/output`.
+    pub name: String,
+    pub frame: u64,
+    /// `(name, size)` per dimension, outermost first, channels last.
+    pub dims: Vec<(String, u32)>,
+    /// Every element in layout order, as f32: shared with the capture,
+    /// not copied for each look.
+    pub values: Arc<dyn AsRef<[f32]> + Send + Sync>,
+    /// The daemon's statistics per channel (the innermost dimension),
+    /// over finite values only: 0 for a channel without one.
+    pub min: Vec<f32>,
+    pub max: Vec<f32>,
+    /// How many values are NaN, and how many infinite.
+    pub nan: u64,
+    pub inf: u64,
+}
+
+impl Tensor {
+    pub fn values(&self) -> &[f32] {
+        (*self.values).as_ref()
+    }
+}
+
+impl std::fmt::Debug for Tensor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Tensor").field("name", &self.name).field("frame", &self.frame).field("dims", &self.dims).finish_non_exhaustive()
+    }
+}
+
 pub trait Link {
     /// Protocol events (PROTOCOL.md, "WebSocket text messages") received
     /// since the last call, oldest first. Never blocks.
@@ -105,6 +141,12 @@ pub trait Link {
     fn measure(&self, inspect: Inspect);
     /// The newest range measured.
     fn measured(&self) -> Option<Range>;
+    /// Captures these buffers (`pass/output`) from the next frame on, and
+    /// no others for the window: the newest set wins, an empty one asks
+    /// for none. The error says why the daemon refused.
+    fn tensors(&self, wanted: BTreeSet<String>) -> Result<(), String>;
+    /// The newest capture of a buffer as a tensor, once a frame captured it.
+    fn tensor(&self, name: &str) -> Option<Tensor>;
     /// The daemon stopped (Ctrl-C, or it died): the window closes.
     fn closed(&self) -> bool;
 }

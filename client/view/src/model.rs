@@ -37,6 +37,19 @@ pub struct Output {
     pub height: u32,
     pub meaning: Option<String>,
     pub depth: Option<DepthPlanes>,
+    /// A buffer's dimensions, outermost first, as `(name, size)`; `None`
+    /// for a texture.
+    pub shape: Option<Vec<(String, u32)>>,
+}
+
+/// `[height, width, channels]` of a tensor laid out as an image, `[y, x,
+/// channel]` (the denoiser's): what the browser shows as images
+/// (`tensor_image.js` `isImage`).
+pub fn image_shape(dims: &[(String, u32)]) -> Option<[u32; 3]> {
+    match dims {
+        [(y, h), (x, w), (c, n)] if (y.as_str(), x.as_str(), c.as_str()) == ("y", "x", "channel") => Some([*h, *w, *n]),
+        _ => None,
+    }
 }
 
 /// `writes[].depth`: the planes are `null` for a light's depth.
@@ -242,6 +255,18 @@ impl Model {
     pub fn textures(&self) -> impl Iterator<Item = (String, &Output)> {
         self.passes.iter().flat_map(|p| p.writes.iter().filter(|w| w.kind == "texture").map(move |w| (format!("{}/{}", p.name, w.name), w)))
     }
+
+    /// Every image-shaped buffer of the passes that run, in graph order
+    /// (for the denoiser, the network's), as `(pass/output, [height,
+    /// width, channels])`: the tensors the browser lists.
+    pub fn image_tensors(&self) -> impl Iterator<Item = (String, [u32; 3])> {
+        self.passes.iter().filter(|p| p.status != "culled").flat_map(|p| {
+            p.writes
+                .iter()
+                .filter(|w| w.kind == "buffer")
+                .filter_map(move |w| Some((format!("{}/{}", p.name, w.name), image_shape(w.shape.as_deref()?)?)))
+        })
+    }
 }
 
 #[cfg(test)]
@@ -299,6 +324,20 @@ mod tests {
         assert_eq!(series[0].runs, [vec![[1.0, 2.0]]]);
         m.apply(json!({"type": "frame", "frame": 2, "frame_ms": 3.0, "samples": null, "passes": []}));
         assert_eq!(m.samples, None);
+    }
+
+    #[test]
+    fn image_shaped_buffers_of_running_passes_are_the_tensors() {
+        let mut m = Model::default();
+        let buffer = |name: &str, shape: serde_json::Value| json!({"name": name, "kind": "buffer", "format": "f32", "width": 1, "height": 1, "meaning": "data", "depth": null, "shape": shape});
+        let image = json!([["y", 48], ["x", 64], ["channel", 32]]);
+        m.apply(json!({"type": "passes", "passes": [
+            {"name": "denoise.enc_conv0", "status": "ok", "writes": [buffer("tensor", image.clone()), buffer("overflow", json!([["count", 1]]))]},
+            {"name": "exposure_histogram", "status": "ok", "writes": [buffer("histogram", json!([["bin", 256]]))]},
+            {"name": "denoise.concat1", "status": "culled", "reason": "fused", "writes": [buffer("tensor", image)]},
+            {"name": "tonemap", "status": "ok", "writes": [{"name": "color", "kind": "texture", "format": "Rgba8UnormSrgb", "width": 64, "height": 48, "shape": null}]},
+        ]}));
+        assert_eq!(m.image_tensors().collect::<Vec<_>>(), [("denoise.enc_conv0/tensor".to_owned(), [48, 64, 32])]);
     }
 
     #[test]

@@ -178,6 +178,13 @@ pub fn viridis() -> &'static [[f64; 3]] {
     &table().viridis
 }
 
+/// `t` (0 … 1) through the false-colour map as 8-bit RGB, as the
+/// browser's tensor view paints it (`presets.js` `viridis`).
+pub fn viridis_rgb(t: f64) -> [u8; 3] {
+    let c = viridis();
+    std::array::from_fn(|k| (c.iter().rev().fold(0.0, |v, p| v * t + p[k]) * 255.0).round().clamp(0.0, 255.0) as u8)
+}
+
 #[derive(Deserialize)]
 struct Table {
     meanings: BTreeMap<String, Entry>,
@@ -244,6 +251,15 @@ mod tests {
         assert_eq!(labels("Rg16Float"), ["RG", "R", "G"]);
         assert_eq!(labels("Rgba8UnormSrgb"), ["RGB", "R", "G", "B", "A", "luminance"]);
         assert_eq!(format_info("Rg11b10Ufloat").names, ["R", "G", "B"]);
+    }
+
+    #[test]
+    fn viridis_runs_from_purple_to_yellow() {
+        // matplotlib's viridis at its ends is #440154 and #fde725; the
+        // polynomial is within a few levels of both.
+        let near = |a: [u8; 3], b: [u8; 3]| a.iter().zip(b).all(|(a, b)| a.abs_diff(b) <= 4);
+        assert!(near(viridis_rgb(0.0), [0x44, 0x01, 0x54]), "{:?}", viridis_rgb(0.0));
+        assert!(near(viridis_rgb(1.0), [0xfd, 0xe7, 0x25]), "{:?}", viridis_rgb(1.0));
     }
 
     #[test]

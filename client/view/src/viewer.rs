@@ -3,11 +3,12 @@
 //! waits on the daemon: the link's calls return at once, and the frame
 //! shown is whichever the daemon finished last.
 
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
 
 use crate::link::{Command, Link};
 use crate::model::{Location, Model, Problem};
 use crate::panels::inspector::{Asks, Inspector};
+use crate::panels::tensors::Tensors;
 use crate::panels::{self, frame::FrameTexture};
 
 /// What the centre of the window shows.
@@ -15,6 +16,7 @@ use crate::panels::{self, frame::FrameTexture};
 pub enum Centre {
     Frame,
     Inspector,
+    Tensors,
 }
 
 /// What the right-hand panel shows.
@@ -32,6 +34,7 @@ pub struct Viewer {
     frame: FrameTexture,
     centre: Centre,
     inspector: Inspector,
+    tensors: Tensors,
     tab: RightTab,
     scene: panels::scene::Edits,
     /// Source texts for excerpts, read once per file while the problems
@@ -50,6 +53,7 @@ impl Viewer {
             frame: FrameTexture::new(wgpu::FilterMode::Linear),
             centre: Centre::Frame,
             inspector: Inspector::default(),
+            tensors: Tensors::default(),
             tab: RightTab::default(),
             scene: panels::scene::Edits::default(),
             sources: HashMap::new(),
@@ -86,6 +90,7 @@ impl Viewer {
         self.link.set_minimised(true);
         self.link.set_shown(false);
         self.ask(Asks::default());
+        self.want_tensors(BTreeSet::new());
     }
 
     /// One frame of the window. `render`: the renderer the frame texture is
@@ -153,20 +158,30 @@ impl Viewer {
             ui.horizontal(|ui| {
                 ui.selectable_value(&mut self.centre, Centre::Frame, "Frame");
                 ui.selectable_value(&mut self.centre, Centre::Inspector, "Inspector");
+                ui.selectable_value(&mut self.centre, Centre::Tensors, "Tensors");
             });
-            // Only what is on screen is drawn by the daemon.
-            match self.centre {
+            // Only what is on screen is drawn, or captured, by the daemon.
+            let wanted = match self.centre {
                 Centre::Frame => {
                     let shown = self.frame.show(ui, image.as_ref());
                     self.link.set_shown(shown);
                     self.ask(Asks::default());
+                    BTreeSet::new()
                 }
                 Centre::Inspector => {
                     self.link.set_shown(false);
                     let asks = self.inspector.show(ui, &self.model, inspected.as_ref());
                     self.ask(asks);
+                    BTreeSet::new()
                 }
-            }
+                Centre::Tensors => {
+                    self.link.set_shown(false);
+                    self.ask(Asks::default());
+                    let current = self.tensors.selected().and_then(|name| self.link.tensor(name));
+                    self.tensors.show(ui, &self.model, current)
+                }
+            };
+            self.want_tensors(wanted);
         });
         if let Some(loc) = clicked {
             self.open(&loc);
@@ -199,6 +214,12 @@ impl Viewer {
         self.link.probe(asks.probe);
         if let Some(measure) = asks.measure {
             self.link.measure(measure);
+        }
+    }
+
+    fn want_tensors(&mut self, wanted: BTreeSet<String>) {
+        if let Err(e) = self.link.tensors(wanted) {
+            self.model.notice = Some(e);
         }
     }
 

@@ -1,22 +1,26 @@
 //! `loupe view`: the daemon of `loupe serve` with a native window on its
 //! own device. The window (`loupe_view`) reads the daemon through
 //! [`InProcess`], the in-process [`Link`]: the events every WebSocket
-//! client gets, the inbox commands they send, and the display texture the
-//! render thread copies each frame into (`display`).
+//! client gets, the inbox commands they send, the display texture the
+//! render thread copies each frame into (`display`), and the buffers it
+//! captures while the window subscribes to them, as a client does.
 
-use std::sync::Arc;
+use std::collections::BTreeSet;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use loupe_view::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed, Range, egui_wgpu, window};
+use loupe_view::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed, Range, Tensor, egui_wgpu, window};
 use tokio::sync::broadcast::{self, error::TryRecvError};
 
 use super::display::Display;
 use super::event::SceneCommand;
-use super::inbox;
-use super::shared::Shared;
+use super::http::MAX_SUBSCRIPTIONS;
+use super::inbox::{self, Client, MAX_CONNECTIONS};
+use super::shared::{self, Shared};
 use super::{Attached, ServeError, ServeOptions};
 use crate::protocol::ServerEvent;
+use crate::render::capture::CapturedTensor;
 
 #[derive(Debug, thiserror::Error)]
 pub enum ViewError {
@@ -123,6 +127,24 @@ pub struct InProcess {
     snapshot: Vec<ServerEvent>,
     display: Arc<Display>,
     stopped: Arc<AtomicBool>,
+    tensors: Mutex<Subscribed>,
+}
+
+/// The buffers the window asked the daemon to capture, through a client
+/// slot of its own, held only while it asks for some.
+#[derive(Default)]
+struct Subscribed {
+    client: Option<Client>,
+    wanted: BTreeSet<String>,
+}
+
+/// A capture's values, lent to the window without a copy.
+struct Values(Arc<CapturedTensor>);
+
+impl AsRef<[f32]> for Values {
+    fn as_ref(&self) -> &[f32] {
+        &self.0.data
+    }
 }
 
 impl InProcess {
@@ -133,7 +155,7 @@ impl InProcess {
         let events = shared.events.subscribe();
         let mut snapshot = vec![shared.hello()];
         snapshot.extend(shared.state_events());
-        InProcess { shared, events, snapshot, display, stopped }
+        InProcess { shared, events, snapshot, display, stopped, tensors: Mutex::default() }
     }
 }
 
@@ -206,6 +228,48 @@ impl Link for InProcess {
 
     fn measured(&self) -> Option<Range> {
         self.display.measured()
+    }
+
+    fn tensors(&self, wanted: BTreeSet<String>) -> Result<(), String> {
+        let mut s = self.tensors.lock().unwrap_or_else(|e| e.into_inner());
+        // Asked every frame: the daemon hears of a change only.
+        if s.wanted == wanted {
+            return Ok(());
+        }
+        if wanted.len() > MAX_SUBSCRIPTIONS {
+            return Err(format!("{} tensors refused: a client may subscribe to at most {MAX_SUBSCRIPTIONS} outputs", wanted.len()));
+        }
+        if wanted.is_empty() {
+            // Dropped, the client tells the daemon it wants nothing more.
+            s.client = None;
+        } else {
+            let client = match &mut s.client {
+                Some(client) => client,
+                empty => empty.insert(
+                    self.shared
+                        .clients
+                        .join()
+                        .ok_or_else(|| format!("tensors cannot be captured now: {MAX_CONNECTIONS} clients are connected to the daemon"))?,
+                ),
+            };
+            client.subscribe(wanted.clone());
+        }
+        s.wanted = wanted;
+        Ok(())
+    }
+
+    fn tensor(&self, name: &str) -> Option<Tensor> {
+        let t = shared::read(&self.shared.tensors).get(name)?.clone();
+        Some(Tensor {
+            name: t.key(),
+            frame: t.frame,
+            dims: t.layout.dims.iter().map(|(n, size)| ((*n).to_owned(), *size)).collect(),
+            min: t.stats.min.clone(),
+            max: t.stats.max.clone(),
+            nan: t.stats.nan,
+            inf: t.stats.inf,
+            values: Arc::new(Values(t)),
+        })
     }
 
     fn closed(&self) -> bool {

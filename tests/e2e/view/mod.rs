@@ -4,6 +4,7 @@
 
 mod inspector;
 mod snapshots;
+mod tensors;
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};

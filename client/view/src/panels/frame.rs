@@ -58,7 +58,7 @@ impl FrameTexture {
 }
 
 /// The largest size of `image`'s aspect inside `space`.
-fn fit(space: egui::Vec2, image: [u32; 2]) -> egui::Vec2 {
+pub fn fit(space: egui::Vec2, image: [u32; 2]) -> egui::Vec2 {
     let (w, h) = (image[0].max(1) as f32, image[1].max(1) as f32);
     let scale = (space.x / w).min(space.y / h).max(0.0);
     egui::vec2(w * scale, h * scale)

@@ -6,5 +6,6 @@ pub mod inspector;
 pub mod passes;
 pub mod problems;
 pub mod scene;
+pub mod tensors;
 pub mod timings;
 pub mod zoom;

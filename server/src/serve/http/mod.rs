@@ -40,6 +40,8 @@ mod tradeoffs;
 mod ui;
 mod ws;
 
+pub use ws::MAX_SUBSCRIPTIONS;
+
 use std::future::Future;
 use std::io;
 use std::net::SocketAddr;
