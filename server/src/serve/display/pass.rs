@@ -215,18 +215,8 @@ impl Variant {
         ];
         let textures =
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("display: show"), entries: &entries });
-        let with_storage = |binding: u32, label: &str| {
-            let storage = wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: false },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            };
-            let entries = [entries[0], entries[1], storage];
+        let with_storage = |binding: u32, label: &'static str| {
+            let entries = [entries[0], entries[1], crate::gpu::pipeline::storage_rw(label, binding).entry];
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
         };
         let measures = with_storage(2, "display: measure");
