@@ -149,4 +149,8 @@ pub trait Link {
     fn tensor(&self, name: &str) -> Option<Tensor>;
     /// The daemon stopped (Ctrl-C, or it died): the window closes.
     fn closed(&self) -> bool;
+    /// Calls `wake` from any thread whenever something new arrives (an
+    /// event; each finished frame sends one), so the window repaints when
+    /// there is something to show rather than at a fixed rate.
+    fn wake_with(&mut self, wake: Box<dyn Fn() + Send + Sync>);
 }

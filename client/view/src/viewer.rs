@@ -11,6 +11,9 @@ use crate::panels::inspector::{Asks, Inspector};
 use crate::panels::tensors::Tensors;
 use crate::panels::{self, frame::FrameTexture};
 
+/// The longest the window goes without repainting while nothing wakes it.
+const FALLBACK_REPAINT: std::time::Duration = std::time::Duration::from_millis(250);
+
 /// What the centre of the window shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Centre {
@@ -34,6 +37,8 @@ pub struct Viewer {
     frame: FrameTexture,
     centre: Centre,
     inspector: Inspector,
+    /// Whether the link wakes the window yet.
+    woken: bool,
     tensors: Tensors,
     tab: RightTab,
     scene: panels::scene::Edits,
@@ -53,6 +58,7 @@ impl Viewer {
             frame: FrameTexture::new(wgpu::FilterMode::Linear),
             centre: Centre::Frame,
             inspector: Inspector::default(),
+            woken: false,
             tensors: Tensors::default(),
             tab: RightTab::default(),
             scene: panels::scene::Edits::default(),
@@ -96,6 +102,11 @@ impl Viewer {
     /// One frame of the window. `render`: the renderer the frame texture is
     /// registered with (none: the frame is not shown).
     pub fn ui(&mut self, ui: &mut egui::Ui, render: Option<&egui_wgpu::RenderState>) {
+        if !self.woken {
+            let ctx = ui.ctx().clone();
+            self.link.wake_with(Box::new(move || ctx.request_repaint()));
+            self.woken = true;
+        }
         self.link.set_minimised(false);
         for event in self.link.poll() {
             self.model.apply(event);
@@ -186,8 +197,10 @@ impl Viewer {
         if let Some(loc) = clicked {
             self.open(&loc);
         }
-        // The frame changes at the renderer's rate: repaint at the display's.
-        ui.ctx().request_repaint();
+        // The window repaints when the link wakes it (a frame finished, an
+        // event came) and on input; the fallback catches what arrives
+        // without an event (a texel read back after the newest frame).
+        ui.ctx().request_repaint_after(FALLBACK_REPAINT);
     }
 
     fn toolbar(&mut self, ui: &mut egui::Ui) {

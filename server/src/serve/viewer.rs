@@ -127,6 +127,8 @@ pub struct InProcess {
     snapshot: Vec<ServerEvent>,
     display: Arc<Display>,
     stopped: Arc<AtomicBool>,
+    /// Held while the link lives: its wake thread ends once it is gone.
+    alive: Arc<()>,
     tensors: Mutex<Subscribed>,
 }
 
@@ -155,7 +157,7 @@ impl InProcess {
         let events = shared.events.subscribe();
         let mut snapshot = vec![shared.hello()];
         snapshot.extend(shared.state_events());
-        InProcess { shared, events, snapshot, display, stopped, tensors: Mutex::default() }
+        InProcess { shared, events, snapshot, display, stopped, tensors: Mutex::default(), alive: Arc::new(()) }
     }
 }
 
@@ -270,6 +272,24 @@ impl Link for InProcess {
             inf: t.stats.inf,
             values: Arc::new(Values(t)),
         })
+    }
+
+    fn wake_with(&mut self, wake: Box<dyn Fn() + Send + Sync>) {
+        // A thread of its own waits for the daemon's events; it ends at the
+        // first event after this link is dropped (or when the daemon is).
+        let mut events = self.shared.events.subscribe();
+        let alive = Arc::downgrade(&self.alive);
+        let spawned = std::thread::Builder::new().name("loupe-view-wake".into()).spawn(move || {
+            while alive.strong_count() > 0 {
+                match events.blocking_recv() {
+                    Ok(_) | Err(broadcast::error::RecvError::Lagged(_)) => wake(),
+                    Err(broadcast::error::RecvError::Closed) => break,
+                }
+            }
+        });
+        if let Err(e) = spawned {
+            log::warn!("loupe view repaints without being woken: {e}");
+        }
     }
 
     fn closed(&self) -> bool {

@@ -130,6 +130,9 @@ impl Link for Replay {
 
     fn set_minimised(&self, _: bool) {}
 
+    // The harness steps the window itself.
+    fn wake_with(&mut self, _: Box<dyn Fn() + Send + Sync>) {}
+
     // The snapshots show no tensor.
     fn tensors(&self, _: std::collections::BTreeSet<String>) -> Result<(), String> {
         Ok(())
