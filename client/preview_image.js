@@ -2,6 +2,9 @@
 // figure with its caption: at most one request in flight and the newest
 // waiting, so a slider dragged never floods the daemon (whose preview
 // queue is bounded); a failed render keeps the last image and says why.
+// A preview refused because the queue is full (503) is asked again after
+// a pause, a few times, unless a newer request is waiting: the budget
+// comparison alone asks for four at once, and the queue holds four.
 // Used by preview.js (as the scene renders) and budget_preview.js (full
 // against a budget).
 //
@@ -11,6 +14,9 @@
 // landed so far).
 
 import { el } from './util.js';
+
+/** Pauses before asking again for a preview the full queue refused. */
+export const BUSY_RETRIES_MS = [250, 500, 1000, 2000, 4000];
 
 /** One preview image: `query` (a URL's query string) of a material, at most
  * one request in flight and the newest waiting. `landed(image)` runs after
@@ -39,7 +45,7 @@ export class PreviewImage {
     this.figure.dataset.state = 'rendering';
     this.caption.textContent = `${this.label}: rendering…`;
     try {
-      const r = await fetch(`/api/materials/${index}/preview?${query}`);
+      const r = await fetchPreview(`/api/materials/${index}/preview?${query}`, () => this.waiting !== null);
       if (!r.ok) throw new Error(await failure(r));
       const blob = await r.blob();
       const url = URL.createObjectURL(blob);
@@ -68,6 +74,18 @@ export class PreviewImage {
       }
     }
   }
+}
+
+/** `fetch(url)`, asked again after each pause of BUSY_RETRIES_MS while
+ * the answer is 503 (the preview queue full) and `superseded()` is false. */
+export async function fetchPreview(url, superseded, pause = (ms) => new Promise((done) => setTimeout(done, ms))) {
+  let r = await fetch(url);
+  for (const ms of BUSY_RETRIES_MS) {
+    if (r.status !== 503 || superseded()) break;
+    await pause(ms);
+    r = await fetch(url);
+  }
+  return r;
 }
 
 /** What a refused preview says: its first diagnostic at file:line:col,
