@@ -589,6 +589,10 @@ $('rebuild').addEventListener('click', async () => {
   }
 });
 
+// Temporal passes and the path tracer's accumulation start over
+// (`reset_history`, a daemon command like `rebuild`).
+$('reset-history').addEventListener('click', () => conn.send({ type: 'reset_history' }));
+
 // ---- quad statistics -----------------------------------------------------
 
 const quadView = new QuadView(

@@ -736,6 +736,19 @@ async fn the_renderer_switch_counts_samples_and_measures_path_against_raster() {
         "document.querySelector('#renderer-path').getAttribute('aria-pressed') === 'true'",
     )
     .await;
+    // Converged again (in a frame after the switch: the capture of an
+    // earlier one stays), "reset history" starts the samples over: a later
+    // frame counts fewer than the target, which a converged, unchanged
+    // scene never does by itself.
+    let switched = s.get_json("/api/status")["frame"].as_u64().unwrap();
+    let samples = || {
+        let served = s.get_json("/api/captures");
+        let c = served.as_array()?.iter().find(|c| c["pass"] == "path_trace" && c["output"] == "samples")?.clone();
+        Some((c["frame"].as_u64()?, c["stats"]["min"][0].as_f64()?))
+    };
+    let converged = s.wait_for("convergence again", LIMIT, || samples().filter(|&(f, n)| f > switched && n == 8.0).map(|(f, _)| f));
+    c.find(Locator::Css("#reset-history")).await.unwrap().click().await.unwrap();
+    s.wait_for("the samples started over", LIMIT, || samples().filter(|&(f, n)| f > converged && n < 8.0));
     c.close().await.unwrap();
 }
 
