@@ -41,8 +41,7 @@ pub struct Source<'a> {
 
 impl<'a> Source<'a> {
     pub fn new(texture: &'a wgpu::Texture, meaning: crate::render::resource::Meaning) -> Self {
-        // loupe's depth runs from 0 at near to 1 at far, cleared to 1.
-        let clear = matches!(meaning, crate::render::resource::Meaning::Depth(_)).then_some(1.0);
+        let clear = matches!(meaning, crate::render::resource::Meaning::Depth(_)).then_some(crate::render::context::DEPTH_CLEAR);
         Source { texture, clear }
     }
 }
@@ -214,11 +213,15 @@ impl Display {
             (s.inspect.clone(), s.probe.clone(), s.measure.clone())
         };
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("display") });
+        // Whether anything was recorded, and the readbacks recorded now:
+        // only those are mapped (one still in flight is mapped already).
+        let (mut drawn, mut probed, mut measured) = (false, false, false);
         if let Some(inspect) = inspect
             && let Some(source) = output(&inspect.output)
             && let Some(image) = work.show(gpu, &mut encoder, &inspect, &source)
         {
             lock(&self.state).inspected = Some(Inspected { image, inspect, frame });
+            drawn = true;
         }
         if let Some(probe) = probe
             && work.probe.is_none()
@@ -228,6 +231,7 @@ impl Display {
             && let Some((read, readback)) = work.probe(gpu, &mut encoder, &probe, &source)
         {
             work.probe = Some((probe, frame, read, readback));
+            probed = true;
         }
         if let Some(measure) = measure
             && work.measure.is_none()
@@ -236,12 +240,16 @@ impl Display {
         {
             lock(&self.state).measure = None;
             work.measure = Some((measure, frame, readback));
+            measured = true;
+        }
+        if !(drawn || probed || measured) {
+            return;
         }
         queue.submit([encoder.finish()]);
-        if let Some((.., r)) = &work.probe {
+        if let (true, Some((.., r))) = (probed, &work.probe) {
             r.map();
         }
-        if let Some((.., r)) = &work.measure {
+        if let (true, Some((.., r))) = (measured, &work.measure) {
             r.map();
         }
     }
