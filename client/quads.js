@@ -8,36 +8,19 @@
 // helper), each with its legend; under the cursor (or the pinned pixel)
 // the inspector reads the map's own count (`countAt`, `countText`).
 //
-// The maps' colours are steps of matplotlib's plasma ramp: saturated,
-// lightness rising with the count, no white, grey or black step, so a
-// count never reads as a plain albedo (a white ball, a grey floor). The
-// top step ("5+", "3+") is hatched, plasma's two ends in diagonal stripes:
-// no flat surface looks like it. The same count has the same colour in
-// both maps.
+// The maps' colours, the same in both maps and in `loupe view`, are
+// presets.json's `quad_maps`: solid steps for low counts and, from a map's
+// top count up, diagonal stripes no flat surface looks like.
 //
 // Test hooks: #quad-stats (toggle), #quad-panel[data-pass] with
 // table#quad-table tr[data-draw] cells td[data-key] (td[data-key=cull_mode]
 // states each draw's culling), #quad-overlay (none|overdraw|helpers),
 // #quad-legend .legend-item[data-hatched], #passes li .pass-quads.
 
+import TABLE from './presets.json' with { type: 'json' };
 import { el } from './util.js';
 
-/** Solid steps for counts 1, 2, 3, 4: plasma at 1/8, 3/8, 5/8 and 7/8. */
-const STEPS = [
-  [76, 2, 161],
-  [169, 35, 149],
-  [230, 108, 92],
-  [253, 197, 39],
-];
-/** The top step's stripes: plasma at 1 and at 0. */
-const HATCH = [
-  [240, 249, 33],
-  [13, 8, 135],
-];
-/** Steps per map: counts below the last are solid, the last is "n+". */
-const STEP_COUNT = { overdraw: 5, helpers: 3 };
-/** Width of a hatch stripe, in image pixels. */
-const STRIPE = 2;
+const { steps: STEPS, hatch: HATCH, top: STEP_COUNT, stripe: STRIPE, alpha: ALPHA } = TABLE.quad_maps;
 const KEYS = ['triangles', 'culled_triangles', 'pixels', 'quads', 'helper_lanes', 'quad_efficiency'];
 
 /** A figure as the table shows it: efficiency in percent, counts grouped. */
@@ -63,7 +46,7 @@ export function paintMap({ values, width }, kind) {
     const n = values[i];
     if (!(n >= 1)) continue; // 0 (and nothing) stays transparent
     const c = countColor(n, kind, i % width, Math.floor(i / width));
-    rgba.set([c[0], c[1], c[2], 190], i * 4);
+    rgba.set([c[0], c[1], c[2], ALPHA], i * 4);
   }
   const top = STEP_COUNT[kind];
   const rgb = (c) => `rgb(${c.join(',')})`;

@@ -21,6 +21,6 @@ pub mod window;
 // The versions the panels are drawn with, for hosts and tests.
 pub use {egui, egui_wgpu};
 
-pub use link::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed, Range, Tensor};
+pub use link::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed, QuadMap, Range, Tensor};
 pub use model::Model;
 pub use viewer::Viewer;

@@ -108,6 +108,34 @@ impl std::fmt::Debug for Tensor {
     }
 }
 
+/// A raster pass's quad statistics maps for its first render target
+/// (layer 0, what the Inspector shows), from frame `frame`.
+#[derive(Clone, Debug)]
+pub struct QuadMap {
+    pub pass: String,
+    pub frame: u64,
+    pub width: u32,
+    pub height: u32,
+    /// Quads launched over each pixel's 2×2 block, rows top first.
+    pub overdraw: Vec<f32>,
+    /// Times each pixel ran as a helper lane.
+    pub helpers: Vec<f32>,
+}
+
+impl QuadMap {
+    pub fn values(&self, overlay: crate::presets::QuadOverlay) -> &[f32] {
+        match overlay {
+            crate::presets::QuadOverlay::Overdraw => &self.overdraw,
+            crate::presets::QuadOverlay::Helpers => &self.helpers,
+        }
+    }
+
+    /// The count at pixel (x, y), or `None` outside the map.
+    pub fn at(&self, overlay: crate::presets::QuadOverlay, x: u32, y: u32) -> Option<f32> {
+        (x < self.width && y < self.height).then(|| self.values(overlay)[(y * self.width + x) as usize])
+    }
+}
+
 pub trait Link {
     /// Protocol events (PROTOCOL.md, "WebSocket text messages") received
     /// since the last call, oldest first. Never blocks.
@@ -147,6 +175,12 @@ pub trait Link {
     fn tensors(&self, wanted: BTreeSet<String>) -> Result<(), String>;
     /// The newest capture of a buffer as a tensor, once a frame captured it.
     fn tensor(&self, name: &str) -> Option<Tensor>;
+    /// Asks for quad statistics with every frame (a `quads` event) while
+    /// `on`, as the WebSocket `quad_statistics` does. The error says why the
+    /// daemon refused.
+    fn quad_statistics(&self, on: bool) -> Result<(), String>;
+    /// The newest quad maps of a raster pass, while quad statistics are on.
+    fn quad_map(&self, pass: &str) -> Option<QuadMap>;
     /// The daemon stopped (Ctrl-C, or it died): the window closes.
     fn closed(&self) -> bool;
     /// Calls `wake` from any thread whenever something new arrives (an

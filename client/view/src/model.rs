@@ -24,6 +24,27 @@ pub struct Pass {
     /// What it writes (`writes` of `GET /api/passes`).
     #[serde(default)]
     pub writes: Vec<Output>,
+    /// Its draws' quad statistics summed, from the newest `quads` event
+    /// that held the pass (raster passes, while quad statistics are on).
+    #[serde(skip)]
+    pub quads: Option<QuadTotals>,
+}
+
+/// A raster pass's quad statistics summed over its draws (`quads` of a
+/// `GET /api/quads` pass).
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+pub struct QuadTotals {
+    pub pixels: u64,
+    pub quads: u64,
+    pub helper_lanes: u64,
+    /// pixels ÷ 4·quads; `None` without quads.
+    pub quad_efficiency: Option<f64>,
+}
+
+#[derive(Deserialize)]
+struct PassQuads {
+    pass: String,
+    quads: QuadTotals,
 }
 
 /// One output a pass writes.
@@ -188,6 +209,10 @@ enum Event {
     Nan {
         report: Option<NanReport>,
     },
+    Quads {
+        frame: u64,
+        passes: Vec<PassQuads>,
+    },
 }
 
 #[derive(Debug, Default)]
@@ -212,6 +237,8 @@ pub struct Model {
     pub samples: Option<u32>,
     /// The newest frames' pass times, for the Timings plot.
     pub times: FrameTimes,
+    /// The frame of the newest quad statistics, while they are asked for.
+    pub quads_frame: Option<u64>,
 }
 
 impl Model {
@@ -242,12 +269,26 @@ impl Model {
                 self.controls = controls;
                 self.controls_seen += 1;
             }
+            Event::Quads { frame, passes } => {
+                self.quads_frame = Some(frame);
+                for p in &mut self.passes {
+                    p.quads = passes.iter().find(|q| q.pass == p.name).map(|q| q.quads.clone());
+                }
+            }
             Event::SceneSaved { file, error } => {
                 self.notice = Some(match error {
                     None => format!("saved to {file}"),
                     Some(e) => format!("could not save {file}: {e}"),
                 });
             }
+        }
+    }
+
+    /// Quad statistics were turned off: what they showed is gone.
+    pub fn forget_quads(&mut self) {
+        self.quads_frame = None;
+        for p in &mut self.passes {
+            p.quads = None;
         }
     }
 
@@ -286,6 +327,24 @@ mod tests {
         assert_eq!(m.passes[0].time_ms, Some(1.25));
         assert_eq!(m.passes[0].timing.as_deref(), Some("gpu"));
         assert_eq!(m.passes[1].reason.as_deref(), Some("rastering"));
+    }
+
+    #[test]
+    fn quad_statistics_give_raster_passes_their_totals_until_forgotten() {
+        let mut m = Model::default();
+        m.apply(json!({"type": "passes", "passes": [
+            {"name": "gbuffer", "status": "ok", "reason": null, "time_ms": null, "timing": null, "timing_reason": null},
+            {"name": "lighting", "status": "ok", "reason": null, "time_ms": null, "timing": null, "timing_reason": null},
+        ]}));
+        let totals = json!({"name": "total", "cull_mode": null, "triangles": 12, "culled_triangles": 2, "pixels": 300,
+            "quads": 100, "helper_lanes": 100, "quad_efficiency": 0.75, "rasterized": null});
+        m.apply(json!({"type": "quads", "frame": 4, "adapter": "llvmpipe", "passes": [
+            {"pass": "gbuffer", "draws": [], "quads": totals, "what_if": null, "fragment_invocations": 400}]}));
+        assert_eq!(m.quads_frame, Some(4));
+        assert_eq!(m.passes[0].quads, Some(QuadTotals { pixels: 300, quads: 100, helper_lanes: 100, quad_efficiency: Some(0.75) }));
+        assert_eq!(m.passes[1].quads, None, "a pass the event does not hold has no totals");
+        m.forget_quads();
+        assert_eq!((m.quads_frame, &m.passes[0].quads), (None, &None));
     }
 
     #[test]
@@ -347,7 +406,7 @@ mod tests {
             "location": {"file": "shaders/a.wgsl", "line": 3, "column": 9, "end_line": 3, "end_column": 10}});
         m.apply(json!({"type": "diagnostics", "diagnostics": [diag]}));
         assert_eq!(m.problems[0].location, Some(Location { file: "shaders/a.wgsl".into(), line: 3, column: 9 }));
-        m.apply(json!({"type": "quads", "frame": 1}));
+        m.apply(json!({"type": "tiles", "frame": 1}));
         m.apply(json!({"not": "an event"}));
         assert_eq!(m.problems.len(), 1);
         m.apply(json!({"type": "diagnostics", "diagnostics": []}));

@@ -185,12 +185,81 @@ pub fn viridis_rgb(t: f64) -> [u8; 3] {
     std::array::from_fn(|k| (c.iter().rev().fold(0.0, |v, p| v * t + p[k]) * 255.0).round().clamp(0.0, 255.0) as u8)
 }
 
+/// A quad statistics map laid over a raster pass's output.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum QuadOverlay {
+    /// Quads launched over each pixel's 2×2 block.
+    Overdraw,
+    /// Times each pixel ran as a helper lane.
+    Helpers,
+}
+
+impl QuadOverlay {
+    pub fn name(self) -> &'static str {
+        match self {
+            QuadOverlay::Overdraw => "quad overdraw",
+            QuadOverlay::Helpers => "helper lanes",
+        }
+    }
+
+    /// The count from which the map hatches ("5+").
+    pub fn top(self) -> u32 {
+        let top = &table().quad_maps.top;
+        match self {
+            QuadOverlay::Overdraw => top.overdraw,
+            QuadOverlay::Helpers => top.helpers,
+        }
+    }
+
+    /// The overlay's RGBA8 colour of count `n` at image pixel (x, y), as
+    /// the browser paints it (`quads.js` `paintMap`); `None` (transparent)
+    /// for 0 and what is not a count.
+    pub fn colour(self, n: f32, x: u32, y: u32) -> Option<[u8; 4]> {
+        let q = &table().quad_maps;
+        if n.is_nan() || n < 1.0 {
+            return None;
+        }
+        let [r, g, b] = if (n as u32) < self.top() { q.steps[n as usize - 1] } else { q.hatch[((x + y) / q.stripe) as usize % 2] };
+        Some([r, g, b, q.alpha])
+    }
+
+    pub fn legend(self) -> Legend {
+        let q = &table().quad_maps;
+        let steps = q.steps.iter().take(self.top() as usize - 1).enumerate().map(|(i, c)| (*c, (i + 1).to_string())).collect();
+        Legend { steps, hatch: q.hatch, top: format!("{}+", self.top()) }
+    }
+}
+
+/// A quad map's legend: each solid step's colour and count, then the
+/// hatch's two colours and its label ("5+").
+pub struct Legend {
+    pub steps: Vec<([u8; 3], String)>,
+    pub hatch: [[u8; 3]; 2],
+    pub top: String,
+}
+
 #[derive(Deserialize)]
 struct Table {
     meanings: BTreeMap<String, Entry>,
     unknown_meaning: String,
     integer: Integer,
     viridis: Vec<[f64; 3]>,
+    quad_maps: QuadMaps,
+}
+
+#[derive(Deserialize)]
+struct QuadMaps {
+    steps: Vec<[u8; 3]>,
+    hatch: [[u8; 3]; 2],
+    top: Tops,
+    stripe: u32,
+    alpha: u8,
+}
+
+#[derive(Deserialize)]
+struct Tops {
+    overdraw: u32,
+    helpers: u32,
 }
 
 #[derive(Deserialize)]
@@ -219,6 +288,24 @@ mod tests {
     use super::*;
 
     const CAMERA: Planes = Planes { near: 0.05, far: 200.0, reversed: false };
+
+    #[test]
+    fn quad_maps_step_through_plasma_and_hatch_from_their_top_count() {
+        let o = QuadOverlay::Overdraw;
+        assert_eq!(o.colour(0.0, 0, 0), None, "no quad: transparent");
+        assert_eq!(o.colour(f32::NAN, 0, 0), None);
+        assert_eq!(o.colour(1.0, 7, 3), Some([76, 2, 161, 190]));
+        assert_eq!(o.colour(4.0, 7, 3), Some([253, 197, 39, 190]));
+        // 5+ alternates stripes two pixels wide along x + y.
+        assert_eq!(o.colour(5.0, 0, 0), Some([240, 249, 33, 190]));
+        assert_eq!(o.colour(9.0, 1, 1), Some([13, 8, 135, 190]));
+        assert_eq!(o.colour(9.0, 3, 1), Some([240, 249, 33, 190]));
+        // Helper lanes hatch from 3; the same count has the same colour.
+        assert_eq!(QuadOverlay::Helpers.colour(2.0, 0, 0), o.colour(2.0, 0, 0));
+        assert_eq!(QuadOverlay::Helpers.colour(3.0, 0, 0), Some([240, 249, 33, 190]));
+        let legend = QuadOverlay::Helpers.legend();
+        assert_eq!((legend.steps.len(), legend.top.as_str()), (2, "3+"));
+    }
 
     #[test]
     fn each_meaning_opens_as_the_table_says() {

@@ -5,7 +5,7 @@
 
 use std::collections::{BTreeSet, HashMap};
 
-use crate::link::{Command, Link};
+use crate::link::{Command, Link, QuadMap};
 use crate::model::{Location, Model, Problem};
 use crate::panels::inspector::{Asks, Inspector};
 use crate::panels::tensors::Tensors;
@@ -40,6 +40,10 @@ pub struct Viewer {
     /// Whether the link wakes the window yet.
     woken: bool,
     tensors: Tensors,
+    /// Whether quad statistics are asked for (the Passes toggle), and the
+    /// inspected pass's newest maps while they are.
+    quads: bool,
+    quad_map: Option<QuadMap>,
     tab: RightTab,
     scene: panels::scene::Edits,
     /// Source texts for excerpts, read once per file while the problems
@@ -60,6 +64,8 @@ impl Viewer {
             inspector: Inspector::default(),
             woken: false,
             tensors: Tensors::default(),
+            quads: false,
+            quad_map: None,
             tab: RightTab::default(),
             scene: panels::scene::Edits::default(),
             sources: HashMap::new(),
@@ -86,6 +92,12 @@ impl Viewer {
         self.inspector.options()
     }
 
+    /// The quad statistics map laid over the Inspector's image, and the
+    /// maps it was painted from.
+    pub fn quad_overlay(&self) -> Option<(crate::presets::QuadOverlay, Option<&QuadMap>)> {
+        Some((self.inspector.quad_overlay()?, self.quad_map.as_ref()))
+    }
+
     /// The daemon stopped: the window should close.
     pub fn closed(&self) -> bool {
         self.link.closed()
@@ -97,6 +109,7 @@ impl Viewer {
         self.link.set_shown(false);
         self.ask(Asks::default());
         self.want_tensors(BTreeSet::new());
+        self.want_quads(false);
     }
 
     /// One frame of the window. `render`: the renderer the frame texture is
@@ -147,7 +160,9 @@ impl Viewer {
                 });
                 ui.separator();
                 match self.tab {
-                    RightTab::Passes => (Vec::new(), panels::passes::show(ui, &self.model.passes, self.inspector.selected())),
+                    RightTab::Passes => {
+                        (Vec::new(), panels::passes::show(ui, &self.model.passes, self.inspector.selected(), &mut self.quads))
+                    }
                     RightTab::Scene => (panels::scene::show(ui, &self.model, &mut self.scene), None),
                     RightTab::Timings => {
                         panels::timings::show(ui, &self.model.times);
@@ -159,6 +174,7 @@ impl Viewer {
         for command in asked {
             self.send(command);
         }
+        self.want_quads(self.quads);
         if let Some(pass) = picked
             && let Some(asks) = self.inspector.select_pass(&self.model, &pass)
         {
@@ -181,7 +197,8 @@ impl Viewer {
                 }
                 Centre::Inspector => {
                     self.link.set_shown(false);
-                    let asks = self.inspector.show(ui, &self.model, inspected.as_ref());
+                    self.refresh_quad_map();
+                    let asks = self.inspector.show(ui, &self.model, inspected.as_ref(), self.quad_map.as_ref());
                     self.ask(asks);
                     BTreeSet::new()
                 }
@@ -228,6 +245,31 @@ impl Viewer {
         if let Some(measure) = asks.measure {
             self.link.measure(measure);
         }
+    }
+
+    /// Asks for quad statistics, or stops asking; a refusal turns the
+    /// toggle off and says why.
+    fn want_quads(&mut self, on: bool) {
+        if let Err(e) = self.link.quad_statistics(on) {
+            self.model.notice = Some(e);
+            self.quads = false;
+        }
+        if !self.quads {
+            self.model.forget_quads();
+            self.quad_map = None;
+        }
+    }
+
+    /// Reads the inspected pass's maps again once newer statistics came.
+    fn refresh_quad_map(&mut self) {
+        let (Some(frame), Some(pass)) = (self.model.quads_frame, self.inspector.selected_pass()) else {
+            self.quad_map = None;
+            return;
+        };
+        if self.quad_map.as_ref().is_some_and(|m| m.pass == pass && m.frame >= frame) {
+            return;
+        }
+        self.quad_map = self.link.quad_map(pass);
     }
 
     fn want_tensors(&mut self, wanted: BTreeSet<String>) {

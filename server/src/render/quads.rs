@@ -216,16 +216,29 @@ impl PassQuads {
         let width = self.maps.first()?.size().0;
         let (mut height, mut quads, mut helpers) = (0, Vec::new(), Vec::new());
         for m in self.maps.iter().filter(|m| m.size().0 == width) {
-            let (w, h) = m.size();
-            let bw = m.blocks().0 as usize;
-            for y in 0..h as usize {
-                quads.extend((0..w as usize).map(|x| m.quads()[(y / 2) * bw + x / 2] as f32));
-            }
-            helpers.extend(m.helper_lanes().iter().map(|&n| n as f32));
+            let (_, h, q, l) = per_pixel(m);
+            quads.extend(q);
+            helpers.extend(l);
             height += h;
         }
         Some((width, height, quads, helpers))
     }
+
+    /// The first render target's maps alone (a shadow map's first layer),
+    /// as [`Self::stacked_maps`] lays each out.
+    pub fn first_maps(&self) -> Option<(u32, u32, Vec<f32>, Vec<f32>)> {
+        Some(per_pixel(self.maps.first()?))
+    }
+}
+
+/// One target's maps per pixel: (width, height, quads launched over the
+/// pixel's 2×2 block, helper-lane count).
+fn per_pixel(m: &QuadMaps) -> (u32, u32, Vec<f32>, Vec<f32>) {
+    let (w, h) = m.size();
+    let bw = m.blocks().0 as usize;
+    let quads = (0..h as usize).flat_map(|y| (0..w as usize).map(move |x| m.quads()[(y / 2) * bw + x / 2] as f32)).collect();
+    let helpers = m.helper_lanes().iter().map(|&n| n as f32).collect();
+    (w, h, quads, helpers)
 }
 
 /// Replays the recorded render passes of a frame: one entry per raster pass

@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use loupe_view::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed, Range, Tensor, egui_wgpu, window};
+use loupe_view::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed, QuadMap, Range, Tensor, egui_wgpu, window};
 use tokio::sync::broadcast::{self, error::TryRecvError};
 
 use super::display::Display;
@@ -19,7 +19,7 @@ use super::http::MAX_SUBSCRIPTIONS;
 use super::inbox::{self, Client, MAX_CONNECTIONS};
 use super::shared::{self, Shared};
 use super::{Attached, ServeError, ServeOptions};
-use crate::protocol::ServerEvent;
+use crate::protocol::{QUAD_STATISTICS, ServerEvent};
 use crate::render::capture::CapturedTensor;
 
 #[derive(Debug, thiserror::Error)]
@@ -129,15 +129,49 @@ pub struct InProcess {
     stopped: Arc<AtomicBool>,
     /// Held while the link lives: its wake thread ends once it is gone.
     alive: Arc<()>,
-    tensors: Mutex<Subscribed>,
+    subscribed: Mutex<Subscribed>,
 }
 
-/// The buffers the window asked the daemon to capture, through a client
-/// slot of its own, held only while it asks for some.
+/// What the window asked the daemon to capture (buffers, quad
+/// statistics), through a client slot of its own, held only while it asks
+/// for something.
 #[derive(Default)]
 struct Subscribed {
     client: Option<Client>,
-    wanted: BTreeSet<String>,
+    tensors: BTreeSet<String>,
+    quads: bool,
+}
+
+impl Subscribed {
+    /// Tells the daemon what the window wants now (as a WebSocket client's
+    /// subscriptions: `QUAD_STATISTICS` among the outputs), joining as a
+    /// client when it starts wanting something and leaving when it stops.
+    fn resubscribe(&mut self, shared: &Shared, tensors: BTreeSet<String>, quads: bool) -> Result<(), String> {
+        if (&tensors, quads) == (&self.tensors, self.quads) {
+            return Ok(());
+        }
+        if tensors.len() + usize::from(quads) > MAX_SUBSCRIPTIONS {
+            return Err(format!(
+                "a client may subscribe to at most {MAX_SUBSCRIPTIONS} outputs ({} asked)",
+                tensors.len() + usize::from(quads)
+            ));
+        }
+        let keys: BTreeSet<String> = tensors.iter().cloned().chain(quads.then(|| QUAD_STATISTICS.to_owned())).collect();
+        if keys.is_empty() {
+            // Dropped, the client tells the daemon it wants nothing more.
+            self.client = None;
+        } else {
+            let client = match &mut self.client {
+                Some(client) => client,
+                empty => empty.insert(
+                    shared.clients.join().ok_or_else(|| format!("the daemon is busy: {MAX_CONNECTIONS} clients are connected to it"))?,
+                ),
+            };
+            client.subscribe(keys);
+        }
+        (self.tensors, self.quads) = (tensors, quads);
+        Ok(())
+    }
 }
 
 /// A capture's values, lent to the window without a copy.
@@ -157,7 +191,7 @@ impl InProcess {
         let events = shared.events.subscribe();
         let mut snapshot = vec![shared.hello()];
         snapshot.extend(shared.state_events());
-        InProcess { shared, events, snapshot, display, stopped, tensors: Mutex::default(), alive: Arc::new(()) }
+        InProcess { shared, events, snapshot, display, stopped, subscribed: Mutex::default(), alive: Arc::new(()) }
     }
 }
 
@@ -233,31 +267,22 @@ impl Link for InProcess {
     }
 
     fn tensors(&self, wanted: BTreeSet<String>) -> Result<(), String> {
-        let mut s = self.tensors.lock().unwrap_or_else(|e| e.into_inner());
-        // Asked every frame: the daemon hears of a change only.
-        if s.wanted == wanted {
-            return Ok(());
-        }
-        if wanted.len() > MAX_SUBSCRIPTIONS {
-            return Err(format!("{} tensors refused: a client may subscribe to at most {MAX_SUBSCRIPTIONS} outputs", wanted.len()));
-        }
-        if wanted.is_empty() {
-            // Dropped, the client tells the daemon it wants nothing more.
-            s.client = None;
-        } else {
-            let client = match &mut s.client {
-                Some(client) => client,
-                empty => empty.insert(
-                    self.shared
-                        .clients
-                        .join()
-                        .ok_or_else(|| format!("tensors cannot be captured now: {MAX_CONNECTIONS} clients are connected to the daemon"))?,
-                ),
-            };
-            client.subscribe(wanted.clone());
-        }
-        s.wanted = wanted;
-        Ok(())
+        let mut s = self.subscribed.lock().unwrap_or_else(|e| e.into_inner());
+        let quads = s.quads;
+        s.resubscribe(&self.shared, wanted, quads).map_err(|e| format!("tensors cannot be captured now: {e}"))
+    }
+
+    fn quad_statistics(&self, on: bool) -> Result<(), String> {
+        let mut s = self.subscribed.lock().unwrap_or_else(|e| e.into_inner());
+        let tensors = s.tensors.clone();
+        s.resubscribe(&self.shared, tensors, on).map_err(|e| format!("quad statistics refused: {e}"))
+    }
+
+    fn quad_map(&self, pass: &str) -> Option<QuadMap> {
+        let report = shared::read(&self.shared.quads).clone()?;
+        let p = report.passes.iter().find(|p| p.quads.pass == pass)?;
+        let (width, height, overdraw, helpers) = p.quads.first_maps()?;
+        Some(QuadMap { pass: pass.to_owned(), frame: report.frame, width, height, overdraw, helpers })
     }
 
     fn tensor(&self, name: &str) -> Option<Tensor> {

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use egui_kittest::kittest::{By, NodeT, Queryable};
 use loupe::serve::shared::read;
 use loupe_view::egui;
-use loupe_view::presets::Channel;
+use loupe_view::presets::{Channel, QuadOverlay};
 use loupe_view::viewer::Centre;
 
 use super::{Window, open_small, small_minimal};
@@ -157,5 +157,116 @@ fn depth_opens_linearised_and_fitted_to_its_values() {
     };
     let distance: f32 = text.split("(distance ").nth(1).and_then(|r| r.split(')').next()).and_then(|d| d.parse().ok()).expect("a distance");
     assert!(o.min <= distance && distance <= o.max, "{distance} in {} … {}: {text}", o.min, o.max);
+    w.close();
+}
+
+/// The count line under the readout: `(map name, count)`.
+fn count_line(w: &Window) -> Option<(String, f32)> {
+    let text = text_with(w, " · quads launched over").or_else(|| text_with(w, " · times this pixel ran"))?;
+    let (head, _) = text.split_once(" · ")?;
+    let (name, n) = head.rsplit_once(' ')?;
+    Some((name.to_owned(), n.parse().ok()?))
+}
+
+/// Picks `item` of the combo box labelled `combo`.
+fn choose(w: &mut Window, combo: &str, item: &str) {
+    w.harness.get_by_label(combo).click();
+    w.harness.run_steps(3);
+    w.harness.get_by_label(item).click();
+    w.harness.run_steps(3);
+}
+
+#[test]
+fn quad_statistics_total_each_raster_pass_and_lay_its_maps_over_its_output() {
+    let p = small_minimal("view-inspector-quads", "");
+    // Room for the pass list with each raster pass's totals under it.
+    let mut w = Window::open(&p, "scenes/minimal.toml", 30.0, None, egui::vec2(1024.0, 768.0));
+    w.step_until("a frame", |h| h.state().model().frame.is_some());
+
+    // On, every raster pass of a frame's statistics states its totals as
+    // the daemon computed them.
+    w.harness.get_by_label("quad statistics").click();
+    w.step_until("the passes' quad totals", |h| h.state().model().passes.iter().any(|p| p.quads.is_some()));
+    let report = read(&w.shared.quads).clone().expect("the daemon computes quad statistics while the window asks");
+    let gbuffer = report.passes.iter().find(|p| p.quads.pass == "gbuffer").expect("the G-buffer is a raster pass");
+    // A static scene: every frame's statistics are the same.
+    let digits = gbuffer.quads.quads.shaded.quads.to_string();
+    let groups: Vec<&str> = digits.as_bytes().rchunks(3).rev().map(|c| std::str::from_utf8(c).expect("digits")).collect();
+    let stated = format!("{} quads · ", groups.join(","));
+    w.step_until("the G-buffer's quads", |h| h.query_by_label_contains(&stated).is_some());
+
+    // The G-buffer's output under its quad maps: the count under the
+    // cursor is the daemon's map at that texel, and the screen shows the
+    // count's colour over the image.
+    w.harness.get_by_label("gbuffer").click();
+    w.step_until("the Inspector", |h| h.state().inspected().is_some_and(|o| o.starts_with("gbuffer/")));
+    choose(&mut w, "quad map", "quad overdraw");
+    assert_eq!(w.harness.state().quad_overlay().map(|(o, _)| o), Some(QuadOverlay::Overdraw));
+    // The daemon's maps (a static scene: every frame's are the same).
+    let report = read(&w.shared.quads).clone().expect("statistics");
+    let (width, _, overdraw, helpers) =
+        report.passes.iter().find(|p| p.quads.pass == "gbuffer").and_then(|p| p.quads.first_maps()).expect("maps");
+    // The pointer sweeps the image until it is over a drawn texel whose
+    // two counts differ (so the maps cannot be told apart by accident),
+    // waiting at each place for its value; the knot lies in the middle.
+    let start = Instant::now();
+    let mut sweep = (0..).map(|i: u32| egui::pos2(200.0 + (i % 16) as f32 * 20.0, 300.0 + (i / 16 % 14) as f32 * 20.0));
+    let (at, texel, count) = loop {
+        let at = sweep.next().expect("endless");
+        let mut read = None;
+        for _ in 0..20 {
+            w.harness.hover_at(at);
+            w.harness.step();
+            read = readout(&w).zip(count_line(&w));
+            if read.is_some() {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        if let Some(((texel, _, _), (name, n))) = &read
+            && name == "quad overdraw"
+            && *n >= 1.0
+            && overdraw[(texel[1] * width + texel[0]) as usize] != helpers[(texel[1] * width + texel[0]) as usize]
+        {
+            break (at, *texel, *n);
+        }
+        assert!(start.elapsed() < Duration::from_secs(90), "no texel under a quad; the last readout: {read:?}");
+    };
+    let (overlay, map) = w.harness.state().quad_overlay().expect("shown");
+    let map = map.expect("the maps painted").clone();
+    assert_eq!(map.pass, "gbuffer");
+    let i = (texel[1] * width + texel[0]) as usize;
+    assert_eq!(count, overdraw[i], "the count at {texel:?} is the daemon's");
+    assert_eq!(map.overdraw[i], overdraw[i]);
+    assert_eq!(map.helpers, helpers);
+
+    let colour = overlay.colour(count, texel[0], texel[1]).expect("a colour for a count");
+    let distance = |px: [u8; 4]| (0..3).map(|c| i32::from(px[c]).abs_diff(i32::from(colour[c]))).sum::<u32>();
+    let shown = w.harness.render().expect("renders").get_pixel(at.x as u32, at.y as u32).0;
+    choose(&mut w, "quad map", "none");
+    assert!(w.harness.state().quad_overlay().is_none());
+    let bare = w.harness.render().expect("renders").get_pixel(at.x as u32, at.y as u32).0;
+    assert!(
+        distance(shown) + 60 < distance(bare),
+        "at {at:?} the overlay's colour {colour:?} shows: {shown:?} under it, {bare:?} without it"
+    );
+
+    // The helper-lane map reads its own counts.
+    choose(&mut w, "quad map", "helper lanes");
+    let start = Instant::now();
+    while readout(&w).is_none_or(|(t, _, _)| t != texel) {
+        w.harness.hover_at(at);
+        w.harness.step();
+        assert!(start.elapsed() < Duration::from_secs(30), "the texel's value never came back");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let (name, n) = count_line(&w).expect("the count line");
+    assert_eq!((name.as_str(), n), ("helper lanes", helpers[i]));
+
+    // Off, the totals and maps are gone and the daemon stops computing them.
+    w.harness.get_by_label("quad statistics").click();
+    w.step_until("no quad totals", |h| h.state().model().passes.iter().all(|p| p.quads.is_none()));
+    let shared = w.shared.clone();
+    w.step_until("the daemon to stop", |_| read(&shared.quads).is_none());
     w.close();
 }

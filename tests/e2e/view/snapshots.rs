@@ -1,6 +1,6 @@
 //! Snapshot tests of the window's main panels: the default view (Frame,
 //! Passes, Problems), the Scene and Timings tabs, and the Inspector with a
-//! texel hovered, each compared with its PNG in `snapshots/`
+//! texel hovered, bare and under the quad overdraw map, each compared with its PNG in `snapshots/`
 //! (`UPDATE_SNAPSHOTS=1` rewrites them: README, "Tests").
 //!
 //! A live daemon's pixels vary (frame numbers, times, lavapipe's pace), so
@@ -9,12 +9,13 @@
 //! the inspected image. It is an input for the layout, not a stand-in for
 //! the daemon: the other view tests drive a real one.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use egui_kittest::kittest::Queryable;
 use egui_kittest::{Harness, SnapshotOptions, wgpu::WgpuTestRenderer};
 use loupe_tests::reload::srgb;
-use loupe_view::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed, Range, Viewer, egui, egui_wgpu};
+use loupe_view::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed, QuadMap, Range, Viewer, egui, egui_wgpu};
 
 /// `loupe serve --scene scenes/minimal.toml` on lavapipe, on a copy of the
 /// repository, as a WebSocket client of `/ws` read it: the `hello`, then
@@ -63,6 +64,14 @@ fn texel(x: u32, y: u32) -> [f32; 4] {
     [x as f32 / (IMAGE[0] - 1) as f32, y as f32 / (IMAGE[1] - 1) as f32, blue, 1.0]
 }
 
+/// The fixed quad overdraw at a texel: bands of 1 to 6 quads, 60 texels
+/// wide, so every solid step and the hatch show; one helper lane a texel
+/// in every other band.
+fn quad_counts(x: u32, _: u32) -> (f32, f32) {
+    let band = x / 60 % 6;
+    ((band + 1) as f32, (band % 2) as f32)
+}
+
 /// The fixed image as the display pass writes one: `Rgba8Unorm` holding
 /// sRGB-encoded values, on the window's device.
 fn fixed_image(render: &egui_wgpu::RenderState) -> DisplayImage {
@@ -86,8 +95,10 @@ fn fixed_image(render: &egui_wgpu::RenderState) -> DisplayImage {
 
 /// The link the snapshots read: the recorded events on the first poll,
 /// the fixed image as the frame and as whatever is inspected, the fixed
-/// image's value at any texel probed and its range when measured, all
-/// "after" the last recorded frame. Commands are recorded, not carried out.
+/// image's value at any texel probed and its range when measured, and,
+/// while quad statistics are asked for, fixed ones for `tonemap` (a
+/// `quads` event and [`quad_counts`] as its maps), all "after" the last
+/// recorded frame. Commands are recorded, not carried out.
 struct Replay {
     events: Vec<serde_json::Value>,
     frame: u64,
@@ -96,6 +107,7 @@ struct Replay {
     inspect: Mutex<Option<Inspect>>,
     probe: Mutex<Option<Probe>>,
     measure: Mutex<Option<Inspect>>,
+    quads: AtomicBool,
 }
 
 impl Replay {
@@ -103,13 +115,21 @@ impl Replay {
         let events: Vec<serde_json::Value> = serde_json::from_str(EVENTS).expect("the recorded events are JSON");
         let frame = events.iter().filter(|e| e["type"] == "frame").filter_map(|e| e["frame"].as_u64()).next_back();
         let frame = frame.expect("the recording has frames");
-        Replay { events, frame, image, sent, inspect: Mutex::default(), probe: Mutex::default(), measure: Mutex::default() }
+        let (inspect, probe, measure) = (Mutex::default(), Mutex::default(), Mutex::default());
+        Replay { events, frame, image, sent, inspect, probe, measure, quads: AtomicBool::new(false) }
     }
 }
 
 impl Link for Replay {
     fn poll(&mut self) -> Vec<serde_json::Value> {
-        std::mem::take(&mut self.events)
+        let mut events = std::mem::take(&mut self.events);
+        if self.quads.load(Ordering::Relaxed) {
+            let totals = serde_json::json!({"name": "total", "cull_mode": "none", "triangles": 1, "culled_triangles": 0,
+                "pixels": 230400, "quads": 57840, "helper_lanes": 960, "quad_efficiency": 0.9959, "rasterized": null});
+            events.push(serde_json::json!({"type": "quads", "frame": self.frame, "adapter": "llvmpipe",
+                "passes": [{"pass": "tonemap", "draws": [], "quads": totals, "what_if": null, "fragment_invocations": null}]}));
+        }
+        events
     }
 
     fn send(&self, command: Command) -> Result<(), String> {
@@ -140,6 +160,20 @@ impl Link for Replay {
 
     fn tensor(&self, _: &str) -> Option<loupe_view::Tensor> {
         None
+    }
+
+    fn quad_statistics(&self, on: bool) -> Result<(), String> {
+        self.quads.store(on, Ordering::Relaxed);
+        Ok(())
+    }
+
+    fn quad_map(&self, pass: &str) -> Option<QuadMap> {
+        if pass != "tonemap" || !self.quads.load(Ordering::Relaxed) {
+            return None;
+        }
+        let counts: Vec<(f32, f32)> = (0..IMAGE[1]).flat_map(|y| (0..IMAGE[0]).map(move |x| quad_counts(x, y))).collect();
+        let (overdraw, helpers) = counts.into_iter().unzip();
+        Some(QuadMap { pass: pass.into(), frame: self.frame, width: IMAGE[0], height: IMAGE[1], overdraw, helpers })
     }
 
     fn inspect(&self, inspect: Option<Inspect>) {
@@ -248,4 +282,22 @@ fn snapshots_the_inspector_with_a_texel_hovered() {
     settle(&mut harness);
     assert!(harness.query_by_label_contains("· frame 42").is_some(), "the readout names the hovered texel's value");
     snapshot(&mut harness, &sent, "inspector");
+}
+
+#[test]
+fn snapshots_the_inspector_under_the_quad_overdraw_map() {
+    let (mut harness, sent) = open();
+    harness.get_by_label("quad statistics").click();
+    settle(&mut harness);
+    assert!(harness.query_by_label_contains("57,840 quads").is_some(), "the pass list states tonemap's quads");
+    harness.get_by_label("tonemap").click();
+    settle(&mut harness);
+    harness.get_by_label("quad map").click();
+    settle(&mut harness);
+    harness.get_by_label("quad overdraw").click();
+    settle(&mut harness);
+    harness.hover_at(egui::pos2(300.0, 250.0));
+    settle(&mut harness);
+    assert!(harness.query_by_label_contains("quads launched over this pixel's 2×2 block").is_some(), "the count under the cursor");
+    snapshot(&mut harness, &sent, "inspector_quads");
 }

@@ -3,11 +3,13 @@
 //! false colour, the NaN/Inf overlay) and shown zero-copy, with zoom and
 //! pan and the exact value of the texel under the cursor (the one texel
 //! read back). An output opens with its preset (`presets`), as in the
-//! browser.
+//! browser. Over a raster pass's output, a quad statistics map
+//! (`quad_overlay`).
 
-use crate::link::{Inspect, Inspected, Probe, Probed, Range};
+use crate::link::{Inspect, Inspected, Probe, Probed, QuadMap, Range};
 use crate::model::{Model, Output};
 use crate::panels::frame::FrameTexture;
+use crate::panels::quad_overlay::Overlay;
 use crate::panels::zoom::View;
 use crate::presets::{self, Channel, DisplayOptions, Planes};
 
@@ -32,6 +34,7 @@ pub struct Inspector {
     hovered: Option<[u32; 2]>,
     /// The newest value read back for the selected output.
     readout: Option<Probed>,
+    quads: Overlay,
 }
 
 impl Default for Inspector {
@@ -44,6 +47,7 @@ impl Default for Inspector {
             view: None,
             hovered: None,
             readout: None,
+            quads: Overlay::default(),
         }
     }
 }
@@ -55,6 +59,16 @@ impl Inspector {
 
     pub fn options(&self) -> Option<DisplayOptions> {
         self.options
+    }
+
+    /// The pass of the selected output.
+    pub fn selected_pass(&self) -> Option<&str> {
+        Some(self.selected.as_deref()?.split_once('/')?.0)
+    }
+
+    /// The quad statistics map laid over the image, if any.
+    pub fn quad_overlay(&self) -> Option<crate::presets::QuadOverlay> {
+        self.quads.shown()
     }
 
     /// Shows `output` (`pass/output`) with its preset.
@@ -107,8 +121,9 @@ impl Inspector {
         }
     }
 
-    /// Draws the panel; returns what to ask of the daemon.
-    pub fn show(&mut self, ui: &mut egui::Ui, model: &Model, inspected: Option<&Inspected>) -> Asks {
+    /// Draws the panel; returns what to ask of the daemon. `quads`: the
+    /// selected pass's quad maps, while quad statistics are on.
+    pub fn show(&mut self, ui: &mut egui::Ui, model: &Model, inspected: Option<&Inspected>, quads: Option<&QuadMap>) -> Asks {
         let mut asks = Asks::default();
         ui.horizontal_wrapped(|ui| {
             // The output chosen, and where to look in it.
@@ -144,11 +159,23 @@ impl Inspector {
         if self.controls(ui, &info) {
             asks.measure = self.request();
         }
-        let readout_height = ui.text_style_height(&egui::TextStyle::Monospace) + 8.0;
+        let quads = quads.filter(|m| self.selected_pass() == Some(m.pass.as_str()));
+        let has_quads = model.passes.iter().any(|p| Some(p.name.as_str()) == self.selected_pass() && p.quads.is_some());
+        let overlaid = has_quads && quads.is_some();
+        self.quads.controls(ui, overlaid);
+        // The count's line is kept while a map is shown, so the image does
+        // not move as the pointer enters and leaves it.
+        let count_line = overlaid && self.quads.shown().is_some();
+        let line = ui.text_style_height(&egui::TextStyle::Monospace) + 8.0;
+        let readout_height = if count_line { 2.0 * line } else { line };
         let room = ui.available_size() - egui::vec2(0.0, readout_height);
         let current = inspected.filter(|i| i.inspect.output == output);
-        let probe = self.image(ui, room, current, &info);
+        let probe = self.image(ui, room, current, &info, quads);
         ui.label(egui::RichText::new(self.readout_text(&info)).monospace());
+        if count_line {
+            let count = self.hovered.and_then(|t| self.quads.readout(quads, t));
+            ui.label(egui::RichText::new(count.unwrap_or_default()).monospace());
+        }
         asks.inspect = asks.inspect.or_else(|| self.request());
         asks.probe = probe;
         asks
@@ -198,7 +225,14 @@ impl Inspector {
 
     /// The image with zoom (scroll) and pan (drag); returns the texel to
     /// read back.
-    fn image(&mut self, ui: &mut egui::Ui, room: egui::Vec2, current: Option<&Inspected>, info: &Output) -> Option<Probe> {
+    fn image(
+        &mut self,
+        ui: &mut egui::Ui,
+        room: egui::Vec2,
+        current: Option<&Inspected>,
+        info: &Output,
+        quads: Option<&QuadMap>,
+    ) -> Option<Probe> {
         let (rect, response) = ui.allocate_exact_size(room.max(egui::Vec2::ZERO), egui::Sense::click_and_drag());
         let size = [info.width, info.height];
         let view = self.view.get_or_insert_with(|| View::fit(rect.size(), size));
@@ -221,6 +255,7 @@ impl Inspector {
             (Some(id), Some(_)) => {
                 let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
                 painter.image(id, view.image_rect(rect, size), uv, egui::Color32::WHITE);
+                self.quads.paint(ui.ctx(), &painter, view.image_rect(rect, size), quads, size);
             }
             _ => {
                 painter.text(

@@ -5,6 +5,7 @@ pub mod frame;
 pub mod inspector;
 pub mod passes;
 pub mod problems;
+pub mod quad_overlay;
 pub mod scene;
 pub mod tensors;
 pub mod timings;

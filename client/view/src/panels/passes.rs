@@ -1,11 +1,17 @@
 //! The Passes panel: every pass of the frame with its status, why it is
 //! culled or failed, and its time by the clock that measured it. A pass
-//! with a texture output is a link to it in the Inspector.
+//! with a texture output is a link to it in the Inspector. With quad
+//! statistics on, each raster pass's quad totals, as the browser's pass
+//! list states them.
 
-use crate::model::Pass;
+use crate::model::{Pass, QuadTotals};
 
-/// Draws the passes; returns the one the user clicked.
-pub fn show(ui: &mut egui::Ui, passes: &[Pass], inspected: Option<&str>) -> Option<String> {
+/// Draws the passes; returns the one the user clicked. `quads`: whether
+/// quad statistics are asked for (the toggle above the list).
+pub fn show(ui: &mut egui::Ui, passes: &[Pass], inspected: Option<&str>, quads: &mut bool) -> Option<String> {
+    ui.checkbox(quads, "quad statistics").on_hover_text(
+        "model every raster draw's 2×2 quads and helper lanes each frame: totals here, maps in the Inspector (costs frame time)",
+    );
     if passes.is_empty() {
         ui.label("no passes yet");
         return None;
@@ -23,7 +29,17 @@ pub fn show(ui: &mut egui::Ui, passes: &[Pass], inspected: Option<&str>) -> Opti
                     ui.label(&p.name);
                 }
                 ui.colored_label(status_color(&p.status), &p.status);
-                ui.label(detail(p));
+                match &p.quads {
+                    Some(q) => {
+                        ui.vertical(|ui| {
+                            ui.label(detail(p));
+                            ui.small(quad_text(q));
+                        });
+                    }
+                    None => {
+                        ui.label(detail(p));
+                    }
+                }
                 ui.end_row();
             }
         });
@@ -42,6 +58,27 @@ fn detail(p: &Pass) -> String {
         (Some(ms), None) => format!("{ms:.3} ms"),
         _ => p.timing_reason.clone().unwrap_or_default(),
     }
+}
+
+/// A pass's quad totals, in the browser's words.
+fn quad_text(q: &QuadTotals) -> String {
+    // Ties round up, as JavaScript's `toFixed` does (Rust's `{:.1}` rounds
+    // them to even).
+    let efficiency = q.quad_efficiency.map_or("—".to_owned(), |e| format!("{:.1} %", (e * 1000.0).round() / 10.0));
+    format!("{} quads · {} helper lanes · {efficiency} efficient", grouped(q.quads), grouped(q.helper_lanes))
+}
+
+/// `n` with its thousands separated by commas (`toLocaleString('en-US')`).
+fn grouped(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (i, d) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(d);
+    }
+    out
 }
 
 fn status_color(status: &str) -> egui::Color32 {
@@ -63,5 +100,14 @@ mod tests {
         assert_eq!(detail(&culled), "rastering");
         let timed = Pass { time_ms: Some(0.5), timing: Some("gpu".into()), ..Pass::default() };
         assert_eq!(detail(&timed), "0.500 ms (gpu)");
+    }
+
+    #[test]
+    fn quad_totals_read_as_in_the_browser() {
+        let q = QuadTotals { pixels: 3, quads: 1234567, helper_lanes: 999, quad_efficiency: Some(0.8125) };
+        assert_eq!(quad_text(&q), "1,234,567 quads · 999 helper lanes · 81.3 % efficient");
+        assert_eq!(quad_text(&QuadTotals { quad_efficiency: None, ..q }), "1,234,567 quads · 999 helper lanes · — efficient");
+        assert_eq!(grouped(1000), "1,000");
+        assert_eq!(grouped(0), "0");
     }
 }
