@@ -45,6 +45,8 @@ fn frame_pixels(image: &image::RgbaImage) -> usize {
 pub struct Window {
     pub harness: Harness<'static, Viewer>,
     pub shared: Arc<Shared>,
+    /// What the daemon draws for the window.
+    pub display: Arc<Display>,
     /// Where the daemon's port is bound.
     pub addr: std::net::SocketAddr,
     stop: Option<tokio::sync::oneshot::Sender<()>>,
@@ -71,7 +73,7 @@ impl Window {
         let (shared, addr) = (running.shared().clone(), running.local());
         // The link made at once, as `loupe view` makes it: what it starts
         // from is what the daemon published before it listened.
-        let link = InProcess::new(shared.clone(), display, Arc::new(std::sync::atomic::AtomicBool::new(false)));
+        let link = InProcess::new(shared.clone(), display.clone(), Arc::new(std::sync::atomic::AtomicBool::new(false)));
         let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
         let http = std::thread::spawn(move || {
             running.serve(async {
@@ -88,7 +90,7 @@ impl Window {
             .with_render_cursor(false)
             .renderer(WgpuTestRenderer::from_render_state(render))
             .build_ui_state(move |ui, viewer: &mut Viewer| viewer.ui(ui, Some(&r)), viewer);
-        Window { harness, shared, addr, stop: Some(stop), http: Some(http) }
+        Window { harness, shared, display, addr, stop: Some(stop), http: Some(http) }
     }
 
     /// Steps the window until `done` holds, for at most two minutes
@@ -265,6 +267,43 @@ fn a_minimised_window_renders_only_for_a_browser() {
     frames_over(&mut w, Duration::from_millis(500), true);
     assert_eq!(frames_over(&mut w, Duration::from_secs(1), true), 0, "the browser gone, the frames stop again");
     assert!(frames_over(&mut w, Duration::from_secs(1), false) > 3, "shown again, the window renders");
+    w.close();
+}
+
+/// A window resized to nothing shows nothing, so the daemon draws nothing
+/// for it: no frame copy, no display pass, and no error; resized back, it
+/// shows both again.
+#[test]
+fn a_window_resized_to_nothing_asks_the_daemon_for_nothing() {
+    let p = small_minimal("view-zero", "");
+    let mut w = open_small(&p, None);
+    w.step_until("a frame", |h| h.state().model().frame.is_some());
+    assert!(w.display.shown(), "the Frame tab shows the frame");
+    w.harness.set_size(egui::vec2(0.0, 0.0));
+    w.harness.run_steps(3);
+    assert!(!w.display.shown(), "nothing of the frame is on screen: no copy");
+
+    // The Inspector, from the same size: its output is drawn only once
+    // there is room for it.
+    w.harness.set_size(egui::vec2(640.0, 480.0));
+    w.harness.run_steps(3);
+    w.harness.get_by_label("tonemap").click();
+    let display = w.display.clone();
+    w.step_until("the display pass", |_| display.inspected().is_some());
+    w.harness.set_size(egui::vec2(0.0, 0.0));
+    w.harness.run_steps(3);
+    // Frames in flight land, then the display pass draws no more.
+    frames_over(&mut w, Duration::from_millis(500), false);
+    let drawn = w.display.inspected().expect("drawn before").frame;
+    let rendered = frames_over(&mut w, Duration::from_secs(1), false);
+    assert!(rendered > 3, "the daemon keeps rendering ({rendered} frames)");
+    assert_eq!(w.display.inspected().expect("drawn before").frame, drawn, "no display pass for an unseen Inspector");
+    w.harness.set_size(egui::vec2(640.0, 480.0));
+    w.step_until("the display pass again", |_| display.inspected().is_some_and(|i| i.frame > drawn));
+    // A wgpu validation error would be a problem (located where the daemon
+    // can) or a notice.
+    assert_eq!(w.harness.state().model().notice, None, "no error reached the window");
+    assert!(w.harness.state().model().problems.is_empty(), "no problem: {:?}", w.harness.state().model().problems);
     w.close();
 }
 

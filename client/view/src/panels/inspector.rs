@@ -170,14 +170,21 @@ impl Inspector {
         let readout_height = if count_line { 2.0 * line } else { line };
         let room = ui.available_size() - egui::vec2(0.0, readout_height);
         let current = inspected.filter(|i| i.inspect.output == output);
+        // An image with no room (a window resized to nothing) is not
+        // drawn, so the display pass is not asked to draw it either.
+        let visible = room.x >= 1.0 && room.y >= 1.0;
         let probe = self.image(ui, room, current, &info, quads);
         ui.label(egui::RichText::new(self.readout_text(&info)).monospace());
         if count_line {
             let count = self.hovered.and_then(|t| self.quads.readout(quads, t));
             ui.label(egui::RichText::new(count.unwrap_or_default()).monospace());
         }
-        asks.inspect = asks.inspect.or_else(|| self.request());
-        asks.probe = probe;
+        if visible {
+            asks.inspect = asks.inspect.or_else(|| self.request());
+            asks.probe = probe;
+        } else {
+            asks.inspect = None;
+        }
         asks
     }
 

@@ -155,6 +155,11 @@ impl Display {
         self.shown.store(shown, Ordering::Relaxed);
     }
 
+    /// Whether the frame is copied for the window.
+    pub fn shown(&self) -> bool {
+        self.shown.load(Ordering::Relaxed)
+    }
+
     pub fn set_minimised(&self, minimised: bool) {
         self.minimised.store(minimised, Ordering::Relaxed);
     }
@@ -204,7 +209,7 @@ impl Display {
         let mut work = lock(&self.work);
         self.harvest(&mut work);
         if let Some(source) = final_output
-            && self.shown.load(Ordering::Relaxed)
+            && self.shown()
         {
             self.copy_frame(device, queue, source);
         }
