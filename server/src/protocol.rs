@@ -175,6 +175,39 @@ pub struct ReloadTimings {
     pub render_ms: f64,
 }
 
+/// One file's change since its last good version (the `files` event).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FileDiff {
+    pub file: String,
+    /// The pipelines built from it that are not ok (stale: the last good
+    /// one still renders; failed: none does).
+    pub pipelines: Vec<String>,
+    pub hunks: Vec<Hunk>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Hunk {
+    /// First line of the hunk in the last good text and in the current
+    /// one, from 1.
+    pub old_start: usize,
+    pub new_start: usize,
+    pub lines: Vec<DiffLine>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DiffLine {
+    /// `" "` unchanged, `"-"` only in the last good text, `"+"` only in
+    /// the current one.
+    pub tag: &'static str,
+    /// Its line number in the last good text and in the current one.
+    pub old: Option<usize>,
+    pub new: Option<usize>,
+    /// Without its line ending.
+    pub text: String,
+    /// An error points at this line of the current text.
+    pub failing: bool,
+}
+
 /// WebSocket text messages, server → client.
 #[derive(Debug, Clone, Serialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
@@ -260,6 +293,11 @@ pub enum ServerEvent {
     /// /api/materials`), whenever the scene is (re)installed: a material
     /// file or scene edit, or an override.
     Materials(MaterialsReport),
+    /// Each source file that broke a pass since its last good version, with
+    /// the diff (also `GET /api/files`), whenever that list changes.
+    Files {
+        files: Vec<FileDiff>,
+    },
 }
 
 /// `GET /api/materials`: the scene's material instances, one per

@@ -76,10 +76,17 @@ fn every_documented_message_has_every_documented_key() {
     let (status, body) = s.get("/api/materials/0/preview");
     assert_eq!(status, 422, "{}", String::from_utf8_lossy(&body));
     seen.add("GET /api/materials/{index}/preview, 422", serde_json::from_slice(&body).expect("JSON"));
-    for (route, name) in [("/api/diagnostics", "GET /api/diagnostics"), ("/api/passes", "GET /api/passes")] {
+    seen.until(&mut ws, "files", |v| v["files"].as_array().is_some_and(|f| !f.is_empty()));
+    for (route, name) in
+        [("/api/diagnostics", "GET /api/diagnostics"), ("/api/passes", "GET /api/passes"), ("/api/files", "GET /api/files")]
+    {
         seen.add(name, s.get_json(route));
     }
-    p.write(reload::TONEMAP, &good);
+    // Mended by reverting to the last good text.
+    let (status, body) = s.post_json("/api/files/revert", &json!({ "file": reload::TONEMAP }), None);
+    assert_eq!(status, 200, "{}", String::from_utf8_lossy(&body));
+    seen.add("POST /api/files/revert", serde_json::from_slice(&body).expect("JSON"));
+    assert_eq!(p.read(reload::TONEMAP), good);
     seen.until(&mut ws, "reload_succeeded", |_| true);
 
     // A traced frame's report: `nan` event and `/api/nan`.

@@ -639,3 +639,77 @@ fn a_shader_whose_name_is_not_utf8_is_reported_not_ignored() {
     std::fs::remove_file(&later).expect("remove");
     s.wait_for("the warning to go with the file", LIMIT, || (!warned("shaders/na\\xEFve.wgsl")).then_some(()));
 }
+
+/// This machine's address on its first network interface (not loopback):
+/// where a client on another machine would reach a server bound to
+/// 0.0.0.0. Connecting a UDP socket sends nothing; it only picks the
+/// interface a route would use.
+fn outward_address() -> std::net::IpAddr {
+    let socket = std::net::UdpSocket::bind("0.0.0.0:0").expect("a UDP socket");
+    socket.connect("10.255.255.255:9").expect("a route off this machine");
+    let ip = socket.local_addr().expect("its address").ip();
+    assert!(!ip.is_loopback() && !ip.is_unspecified(), "this test needs a network interface besides loopback: {ip}");
+    ip
+}
+
+#[test]
+fn a_broken_edit_shows_its_diff_against_the_last_good_source_and_revert_writes_it_back() {
+    let p = Project::copy_of_repo("serve-last-good");
+    let s = Server::start(&p.root, &["--scene", "scenes/minimal.toml", "--render", "on-change", "--bind", "0.0.0.0"]);
+    let mut ws = s.ws();
+    ws.event("hello", LIMIT, |_| true);
+    s.wait_for("every pipeline built", LIMIT, || {
+        let pipelines = s.get_json("/api/pipelines");
+        let all = pipelines.as_array()?;
+        (!all.is_empty() && all.iter().all(|p| p["status"] == "ok")).then_some(())
+    });
+    assert_eq!(s.get_json("/api/files"), serde_json::json!({ "files": [] }), "every file good");
+
+    // Broken as an editor saves: the diff names the line that changed,
+    // marks it failing where the error points, and the stale pass.
+    let good = p.read(reload::TONEMAP);
+    let bad = reload::broken(&good);
+    p.save_by_rename(reload::TONEMAP, &bad);
+    let event = ws.event("files", LIMIT, |e| e["files"].as_array().is_some_and(|f| !f.is_empty()));
+    let changed_line = good.lines().position(|l| l.contains("let c = max(")).expect("the line broken") + 1;
+    let files = event["files"].as_array().expect("files");
+    assert_eq!(files.len(), 1, "{event}");
+    assert_eq!(files[0]["file"], reload::TONEMAP);
+    assert_eq!(files[0]["pipelines"], serde_json::json!(["post.tonemap"]));
+    let lines = files[0]["hunks"][0]["lines"].as_array().expect("one hunk");
+    let changes: Vec<(&str, &serde_json::Value, &serde_json::Value, &str, bool)> = lines
+        .iter()
+        .filter(|l| l["tag"] != " ")
+        .map(|l| (l["tag"].as_str().unwrap(), &l["old"], &l["new"], l["text"].as_str().unwrap(), l["failing"] == true))
+        .collect();
+    let text = |t: &str| t.lines().nth(changed_line - 1).expect("the line").to_owned();
+    assert_eq!(
+        changes,
+        [
+            ("-", &serde_json::json!(changed_line), &serde_json::Value::Null, text(&good).as_str(), false),
+            ("+", &serde_json::Value::Null, &serde_json::json!(changed_line), text(&bad).as_str(), true),
+        ]
+    );
+    assert!(lines.iter().filter(|l| l["tag"] == " ").count() >= 3, "context around the change");
+    assert_eq!(s.get_json("/api/files"), serde_json::json!({ "files": files }), "the API holds what the event said");
+
+    // From another machine, refused, whatever its Host says.
+    let port: u16 = s.addr.rsplit_once(':').expect("host:port").1.parse().expect("a port");
+    let outside = std::net::SocketAddr::new(outward_address(), port);
+    let request = serde_json::json!({ "file": reload::TONEMAP });
+    let (status, body) = s.post_json("/api/files/revert", &request, Some(outside));
+    assert_eq!(status, 403, "{}", String::from_utf8_lossy(&body));
+    assert_eq!(p.read(reload::TONEMAP), bad, "nothing written");
+    // Bad requests.
+    assert_eq!(s.post_json("/api/files/revert", &serde_json::json!({ "path": reload::TONEMAP }), None).0, 400);
+    assert_eq!(s.post_json("/api/files/revert", &serde_json::json!({ "file": "shaders/lib/color.wgsl" }), None).0, 404);
+
+    // Reverted: the last good text is back, and so is the pass.
+    let (status, body) = s.post_json("/api/files/revert", &request, None);
+    assert_eq!(status, 200, "{}", String::from_utf8_lossy(&body));
+    assert_eq!(p.read(reload::TONEMAP), good);
+    ws.event("files", LIMIT, |e| e["files"].as_array().is_some_and(|f| f.is_empty()));
+    let passes = s.get_json("/api/passes");
+    let tonemap = passes.as_array().expect("passes").iter().find(|p| p["name"] == "tonemap").expect("tonemap").clone();
+    assert_eq!(tonemap["status"], "ok");
+}

@@ -266,7 +266,9 @@ impl Server {
         std::thread::spawn(move || {
             for line in BufReader::new(out).lines().map_while(Result::ok) {
                 if let Some(addr) = line.split("listening on http://").nth(1) {
-                    let _ = tx.send(addr.trim().to_owned());
+                    // Bound to every interface: this machine reaches it on
+                    // loopback.
+                    let _ = tx.send(addr.trim().replace("0.0.0.0:", "127.0.0.1:"));
                 }
                 sink.lock().expect("log").push_str(&(line + "\n"));
             }
@@ -315,6 +317,18 @@ impl Server {
     /// POST a path with an empty body; returns status and body.
     pub fn post(&self, path: &str) -> (u16, Vec<u8>) {
         self.answer(&format!("POST {path}"), agent().post(&self.url(path)).send_empty())
+    }
+
+    /// POST a JSON body to a path; returns status and body. `via`: another
+    /// address of this server to send it to (its `Host` still names the
+    /// loopback address), as a client on another machine would.
+    pub fn post_json(&self, path: &str, body: &serde_json::Value, via: Option<std::net::SocketAddr>) -> (u16, Vec<u8>) {
+        let url = match via {
+            Some(addr) => format!("http://{addr}{path}"),
+            None => self.url(path),
+        };
+        let request = agent().post(&url).header("content-type", "application/json").header("host", &self.addr);
+        self.answer(&format!("POST {path}"), request.send(body.to_string()))
     }
 
     /// Status and body of a request's reply; panics, with the server's

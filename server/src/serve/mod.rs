@@ -10,6 +10,7 @@ pub mod display;
 pub mod event;
 pub mod http;
 pub mod inbox;
+pub mod last_good;
 pub mod materials;
 pub mod preview;
 pub mod shared;

@@ -9,7 +9,9 @@ use tokio::sync::{broadcast, watch};
 
 use super::inbox::Clients;
 use crate::diag::Diagnostic;
-use crate::protocol::{ControlsReport, Encoding, MaterialsReport, NanReport, PassInfo, PipelineInfo, QuadReport, ServerEvent, Status};
+use crate::protocol::{
+    ControlsReport, Encoding, FileDiff, MaterialsReport, NanReport, PassInfo, PipelineInfo, QuadReport, ServerEvent, Status,
+};
 use crate::render::capture::{CapturedImage, CapturedTensor};
 
 /// How many events a slow WebSocket client may fall behind before it
@@ -54,6 +56,17 @@ pub struct Shared {
     /// The newest good scene's materials: a broken material file leaves
     /// the last good report here (the diagnostics carry the error).
     pub materials: RwLock<Arc<MaterialsReport>>,
+    /// Each source file that broke a pass, diffed against its last good
+    /// text (`GET /api/files`), and those texts, which a revert writes back.
+    pub files: RwLock<Arc<FilesState>>,
+}
+
+/// The source files not good now that have a last good version.
+#[derive(Debug, Default)]
+pub struct FilesState {
+    pub diffs: Vec<FileDiff>,
+    /// By display path; one for each diff.
+    pub last_good: BTreeMap<String, (PathBuf, Arc<str>)>,
 }
 
 /// One encoding of one image, made once by whichever client asks first.
@@ -113,6 +126,7 @@ impl Shared {
             tradeoffs,
             measured: RwLock::new(Default::default()),
             controls: RwLock::new(ControlsReport::default()),
+            files: RwLock::new(Arc::default()),
             materials: RwLock::new(Arc::default()),
         })
     }
@@ -124,11 +138,12 @@ impl Shared {
 
     /// The state a client that keeps no HTTP snapshots starts from, or
     /// rebuilds after it lost events: the pass list, the diagnostics, the
-    /// scene's controls and the NaN report, as events.
-    pub fn state_events(&self) -> [ServerEvent; 4] {
+    /// files' diffs, the scene's controls and the NaN report, as events.
+    pub fn state_events(&self) -> [ServerEvent; 5] {
         [
             ServerEvent::Passes { passes: read(&self.passes) },
             ServerEvent::Diagnostics { diagnostics: read(&self.diagnostics) },
+            ServerEvent::Files { files: read(&self.files).diffs.clone() },
             ServerEvent::Controls(read(&self.controls)),
             ServerEvent::Nan { report: read(&self.nan) },
         ]

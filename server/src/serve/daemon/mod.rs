@@ -98,6 +98,8 @@ pub struct Daemon {
     /// Files that failed to load, by display path: their last good content
     /// stays in the session's library meanwhile.
     file_errors: BTreeMap<String, Diagnostic>,
+    /// Each source file's last good text, for the diff of a broken one.
+    last_good: crate::serve::last_good::LastGood,
     /// The scene file and the meshes it references: a change to any
     /// reloads the scene.
     scene_files: Vec<PathBuf>,
@@ -190,6 +192,7 @@ impl Daemon {
             session,
             config,
             // Files whose names are not UTF-8 are left out, each with its warning.
+            last_good: Default::default(),
             file_errors: unnamed.into_iter().filter_map(|d| Some((d.file()?.to_owned(), d))).collect(),
             scene_warnings: loaded.warnings,
             scene_files: loaded.files,

@@ -188,9 +188,23 @@ impl Daemon {
             },
         };
         shared::write(&self.shared.status, status);
+        self.publish_files(&infos, &diagnostics);
         shared::write(&self.shared.pipelines, infos);
         shared::write(&self.shared.diagnostics, diagnostics.clone());
         self.shared.publish(ServerEvent::Diagnostics { diagnostics });
         self.publish_passes();
+    }
+
+    /// The diff of each file that broke a pass against its last good
+    /// version, published when it changed.
+    fn publish_files(&mut self, pipelines: &[protocol::PipelineInfo], diagnostics: &[Diagnostic]) {
+        let settled = !self.reloads.in_flight();
+        let diffs = self.last_good.update(self.session.library(), pipelines, diagnostics, settled);
+        if diffs == shared::read(&self.shared.files).diffs {
+            return;
+        }
+        let last_good = diffs.iter().filter_map(|d| Some((d.file.clone(), self.last_good.text(&d.file)?))).collect();
+        shared::write(&self.shared.files, Arc::new(shared::FilesState { diffs: diffs.clone(), last_good }));
+        self.shared.publish(ServerEvent::Files { files: diffs });
     }
 }

@@ -188,6 +188,11 @@ impl Reloads {
         self.open.values().any(|r| r.swapped_any || r.pending.iter().any(|k| !built(k)))
     }
 
+    /// Whether a reload is still compiling or installing.
+    pub fn in_flight(&self) -> bool {
+        !self.open.is_empty()
+    }
+
     /// Whether finished reloads wait for a frame to show them.
     pub fn waiting(&self) -> bool {
         !self.finished.is_empty()

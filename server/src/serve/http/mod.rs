@@ -29,6 +29,7 @@
 //! [`serve`] until the shutdown future completes.
 
 mod api;
+mod files;
 mod guard;
 mod preview;
 mod quads;
@@ -107,7 +108,8 @@ pub async fn serve(
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> io::Result<()> {
     let (app, stop) = build(shared, allowed_hosts);
-    axum::serve(listener, app)
+    // The peer's address: some routes serve only this machine.
+    axum::serve(listener, app.into_make_service_with_connect_info::<SocketAddr>())
         .with_graceful_shutdown(async move {
             shutdown.await;
             stop.send_replace(true);
@@ -137,6 +139,8 @@ fn build(shared: Arc<Shared>, allowed_hosts: Vec<String>) -> (Router, watch::Sen
         .route("/api/frame/trace", post(api::trace))
         .route("/api/tensors/{pass}/{file}", get(tensors::tensor))
         .route("/api/sources/{*path}", get(sources::source))
+        .route("/api/files", get(files::list))
+        .route("/api/files/revert", post(files::revert))
         .route("/api/reload", post(api::reload))
         .route("/api/controls", get(api::controls))
         .route("/api/materials", get(api::materials))
