@@ -28,10 +28,10 @@ export class ApiError extends Error {
   }
 }
 
-async function request(url, accept) {
+async function request(url, accept, init = {}) {
   let response;
   try {
-    response = await fetch(url, { cache: 'no-store', headers: { Accept: accept } });
+    response = await fetch(url, { cache: 'no-store', ...init, headers: { Accept: accept, ...init.headers } });
   } catch (err) {
     // fetch rejects only when the server is unreachable (restarting).
     throw new ApiError(`${url}: server unreachable`, { url });
@@ -84,6 +84,13 @@ export const pipelines = () => getJson('/api/pipelines').then(unwrap('pipelines'
 export const diagnostics = () => getJson('/api/diagnostics').then(unwrap('diagnostics'));
 export const captures = () => getJson('/api/captures').then(unwrap('captures'));
 export const source = (path) => getText(`/api/sources/${encodePath(path)}`);
+export const files = () => getJson('/api/files').then(unwrap('files'));
+
+/** Writes `file`'s last good text back (`POST /api/files/revert`). */
+export async function revertFile(file) {
+  const init = { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify({ file }) };
+  return (await request('/api/files/revert', 'application/json', init)).json();
+}
 
 /**
  * The newest tradeoff results: `{state, results}`, `state` being whose

@@ -10,6 +10,7 @@
 //   #diagnostics .diagnostic[data-file][data-line][data-column][data-severity][data-code],
 //                      its text holds "file:line:col: severity[code]: message";
 //                      excerpt lines .src-line[data-line], the error line(s) .hl
+//   #file-diffs        see file_diffs.js
 //   #inspector canvas, #pixel-value[data-x][data-y][data-r][data-g][data-b][data-a]
 //                      (#pixel-value-b, #pixel-value-diff when comparing)
 //   #inspect-a, #channel (rgb|r|g|b|a|luminance), #exposure (EV), #range-min,
@@ -32,6 +33,7 @@ import * as api from './api.js';
 import { Connection } from './ws.js';
 import { PassList } from './passes.js';
 import { DiagnosticsPanel } from './diagnostics.js';
+import { FileDiffs } from './file_diffs.js';
 import { Inspector } from './inspector.js';
 import { LiveFrame } from './live.js';
 import { TensorView } from './tensor.js';
@@ -277,6 +279,13 @@ const tileInfo = new TileInfo($('tiles-info'));
 
 const diagnostics = new DiagnosticsPanel($('diagnostics'), $('diag-count'), (path) => api.source(path));
 
+// Each broken file's diff against its last good version, with a revert.
+const fileDiffs = new FileDiffs($('file-diffs'), {
+  revert: (file) => api.revertFile(file),
+  confirm: (text) => window.confirm(text),
+  notify: (text, kind) => notify('revert', text, kind, 10000),
+});
+
 let conn = null; // created below; the inspector's hooks reach it lazily
 
 /** Streams exactly `wanted` ([{pass, output}]) as f32 for `owner`. */
@@ -369,6 +378,7 @@ const refetchDiagnostics = latestOnly(
   fetchFailed('diagnostics'),
 );
 const loadCaptures = latestOnly(api.captures, fetched('captures', applyCaptures), fetchFailed('captures'));
+const refetchFiles = latestOnly(api.files, fetched('files', (f) => fileDiffs.set(f)), fetchFailed('files'));
 
 const refetchNan = latestOnly(() => api.getJson('/api/nan'), fetched('nan', (r) => applyNan(r?.report)), fetchFailed('nan'));
 
@@ -378,6 +388,7 @@ const resyncAll = coalesce(() => {
   refetchPasses();
   refetchPipelines();
   refetchDiagnostics();
+  refetchFiles();
   refetchControls();
   refetchMaterials();
   loadCaptures();
@@ -479,6 +490,9 @@ function onEvent(ev) {
       break;
     case 'diagnostics':
       applyDiagnostics(ev.diagnostics);
+      break;
+    case 'files':
+      fileDiffs.set(ev.files);
       break;
     case 'device_lost':
       state.deviceLost = { message: ev.message, recovered: !!ev.recovered };

@@ -1112,3 +1112,46 @@ async fn the_docs_screenshot_of_the_inspector_is_regenerable() {
     let file = image::open(&committed).unwrap_or_else(|e| panic!("{} (LOUPE_BLESS=1 writes it): {e}", committed.display()));
     assert_eq!((file.width(), file.height()), (WIDTH, HEIGHT), "{} has the screenshot's size", committed.display());
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_broken_file_shows_its_diff_against_the_last_good_version_and_reverts_to_it() {
+    let p = Project::copy_of_repo("browser-file-diff");
+    let s = Server::start(&p.root, &["--scene", "scenes/minimal.toml", "--render", "on-change"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "the tonemap pass listed ok", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"ok\"]')").await;
+    let hidden = c.execute("return document.querySelector('#file-diffs').hidden;", vec![]).await.unwrap();
+    assert_eq!(hidden, true, "no diff while every file compiles");
+
+    // Broken as vim saves: the diff shows the last good line removed and
+    // the broken one added, marked failing.
+    let good = p.read(TONEMAP);
+    let broken = good.replace("let c = max(", "let c = mux(");
+    let line = broken.lines().position(|l| l.contains("mux(")).unwrap() + 1;
+    p.save_by_rename(TONEMAP, &broken);
+    let file = format!("#file-diffs .file-diff[data-file=\"{TONEMAP}\"]");
+    let added = format!("{file} .diff-line.ins.failing[data-new=\"{line}\"]");
+    until(&c, &s, "the failing line in the diff", &format!("document.querySelector('{added}')")).await;
+    let text = |sel: String| {
+        let c = c.clone();
+        async move { c.find(Locator::Css(&sel)).await.unwrap().text().await.unwrap() }
+    };
+    assert!(text(added.clone()).await.contains("mux("));
+    assert!(text(format!("{file} .diff-line.del[data-old=\"{line}\"]")).await.contains("max("));
+    let unmarked = c.execute(&format!("return document.querySelectorAll('{file} .diff-line.failing').length;"), vec![]).await.unwrap();
+    assert_eq!(unmarked, 1, "only the line the error points at is marked");
+
+    // Declined: nothing is written.
+    c.execute("window.confirm = () => false;", vec![]).await.unwrap();
+    c.find(Locator::Css(&format!("{file} button.revert"))).await.unwrap().click().await.unwrap();
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    assert_eq!(p.read(TONEMAP), broken, "a declined revert writes nothing");
+
+    // Confirmed: the last good text is back, the pass runs and the diff goes.
+    c.execute("window.confirm = () => true;", vec![]).await.unwrap();
+    c.find(Locator::Css(&format!("{file} button.revert"))).await.unwrap().click().await.unwrap();
+    until(&c, &s, "the diff gone", "document.querySelector('#file-diffs').hidden").await;
+    until(&c, &s, "the pass ok again", "document.querySelector('#passes li[data-pass=\"tonemap\"][data-status=\"ok\"]')").await;
+    assert_eq!(p.read(TONEMAP), good);
+    c.close().await.unwrap();
+}
