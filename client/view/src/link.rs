@@ -19,6 +19,9 @@ pub enum Command {
     /// Forget every history resource (temporal passes, the path tracer's
     /// accumulation): the next frame starts over.
     ResetHistory,
+    /// Write a broken file's last good text back over it (`POST
+    /// /api/files/revert`).
+    RevertFile { file: String },
 }
 
 /// The newest finished frame, as an `Rgba8Unorm` texture holding sRGB

@@ -30,6 +30,32 @@ pub struct Pass {
     pub quads: Option<QuadTotals>,
 }
 
+/// A source file that broke a pass, diffed against its last good version
+/// (a FileDiff of the `files` event).
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+pub struct FileDiff {
+    pub file: String,
+    pub pipelines: Vec<String>,
+    pub hunks: Vec<Hunk>,
+}
+
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+pub struct Hunk {
+    pub old_start: usize,
+    pub new_start: usize,
+    pub lines: Vec<DiffLine>,
+}
+
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+pub struct DiffLine {
+    /// `" "`, `"-"` or `"+"`.
+    pub tag: String,
+    pub old: Option<usize>,
+    pub new: Option<usize>,
+    pub text: String,
+    pub failing: bool,
+}
+
 /// A raster pass's quad statistics summed over its draws (`quads` of a
 /// `GET /api/quads` pass).
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
@@ -213,6 +239,9 @@ enum Event {
         frame: u64,
         passes: Vec<PassQuads>,
     },
+    Files {
+        files: Vec<FileDiff>,
+    },
 }
 
 #[derive(Debug, Default)]
@@ -239,6 +268,9 @@ pub struct Model {
     pub times: FrameTimes,
     /// The frame of the newest quad statistics, while they are asked for.
     pub quads_frame: Option<u64>,
+    /// Each source file that broke a pass, with its diff against its last
+    /// good version.
+    pub files: Vec<FileDiff>,
 }
 
 impl Model {
@@ -269,6 +301,7 @@ impl Model {
                 self.controls = controls;
                 self.controls_seen += 1;
             }
+            Event::Files { files } => self.files = files,
             Event::Quads { frame, passes } => {
                 self.quads_frame = Some(frame);
                 for p in &mut self.passes {

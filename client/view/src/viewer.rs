@@ -51,6 +51,8 @@ pub struct Viewer {
     sources: HashMap<String, Option<String>>,
     sources_for: Vec<Problem>,
     editor: Option<String>,
+    /// A revert asked for, waiting for its confirmation.
+    confirm_revert: Option<String>,
 }
 
 impl Viewer {
@@ -71,6 +73,7 @@ impl Viewer {
             sources: HashMap::new(),
             sources_for: Vec::new(),
             editor,
+            confirm_revert: None,
         }
     }
 
@@ -145,7 +148,7 @@ impl Viewer {
             .resizable(true)
             .show(ui, |ui| {
                 let (link, sources) = (&self.link, &mut self.sources);
-                panels::problems::show(ui, &self.model.problems, |loc| excerpt(link.as_ref(), sources, loc))
+                panels::problems::show(ui, &self.model.problems, &self.model.files, |loc| excerpt(link.as_ref(), sources, loc))
             })
             .inner;
         let (asked, picked) = egui::Panel::right("passes")
@@ -211,9 +214,12 @@ impl Viewer {
             };
             self.want_tensors(wanted);
         });
-        if let Some(loc) = clicked {
-            self.open(&loc);
+        match clicked {
+            Some(panels::problems::Action::Open(loc)) => self.open(&loc),
+            Some(panels::problems::Action::Revert(file)) => self.confirm_revert = Some(file),
+            None => {}
         }
+        self.confirm(ui.ctx());
         // The window repaints when the link wakes it (a frame finished, an
         // event came) and on input; the fallback catches what arrives
         // without an event (a texel read back after the newest frame).
@@ -287,6 +293,29 @@ impl Viewer {
             self.model.notice = Some(e);
             if let Some(path) = set {
                 self.scene.refused(&path);
+            }
+        }
+    }
+
+    /// The confirmation a revert waits for: it overwrites the file.
+    fn confirm(&mut self, ctx: &egui::Context) {
+        let Some(file) = self.confirm_revert.clone() else { return };
+        let mut answer = None;
+        egui::Modal::new(egui::Id::unique("confirm-revert")).show(ctx, |ui| {
+            ui.label(format!("Write the last good version of {file} over the file? Its current text is lost."));
+            ui.horizontal(|ui| {
+                if ui.button("Revert").clicked() {
+                    answer = Some(true);
+                }
+                if ui.button("Cancel").clicked() {
+                    answer = Some(false);
+                }
+            });
+        });
+        if let Some(revert) = answer {
+            self.confirm_revert = None;
+            if revert {
+                self.send(Command::RevertFile { file });
             }
         }
     }

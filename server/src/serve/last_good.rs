@@ -14,6 +14,7 @@ use std::sync::Arc;
 
 use similar::{ChangeTag, TextDiff};
 
+use super::shared::{Shared, read};
 use crate::diag::{Diagnostic, Severity};
 use crate::protocol::{DiffLine, FileDiff, Hunk, PassStatus, PipelineInfo};
 use crate::shader::Library;
@@ -75,6 +76,37 @@ impl LastGood {
     pub fn text(&self, file: &str) -> Option<(PathBuf, Arc<str>)> {
         self.texts.get(file).cloned()
     }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RevertError {
+    #[error("`{0}` has no last good version to revert to: it is good, or never was")]
+    NoLastGood(String),
+    #[error("`{0}` is not a source file under the project's source roots")]
+    NotASource(String),
+    #[error("cannot write `{0}`: {1}")]
+    Write(String, std::io::Error),
+}
+
+/// Writes `file`'s last good text over it (`POST /api/files/revert`, the
+/// window's "revert to last good"), as an editor saves: a sibling
+/// temporary file renamed over it, so it is never seen half written. The
+/// watcher then reloads it like any save. Only a project source under a
+/// source root is written (not a generated module).
+pub fn revert(shared: &Shared, file: &str) -> Result<(), RevertError> {
+    let state = read(&shared.files);
+    let (path, text) = state.last_good.get(file).ok_or_else(|| RevertError::NoLastGood(file.to_owned()))?;
+    let inside = |root: &PathBuf| Some(path.canonicalize().ok()?.starts_with(root.canonicalize().ok()?));
+    if !shared.source_roots.iter().any(|r| inside(r) == Some(true)) {
+        return Err(RevertError::NotASource(file.to_owned()));
+    }
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let temporary = path.with_file_name(format!(".{name}.loupe-revert"));
+    let written = std::fs::write(&temporary, text.as_bytes()).and_then(|()| std::fs::rename(&temporary, path));
+    written.map_err(|e| {
+        let _ = std::fs::remove_file(&temporary);
+        RevertError::Write(file.to_owned(), e)
+    })
 }
 
 /// The line diff of `old` → `new` in hunks with [`CONTEXT`] lines around

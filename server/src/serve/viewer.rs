@@ -221,6 +221,8 @@ impl Link for InProcess {
             Command::ClearOverrides => inbox::Command::Scene(SceneCommand::Clear),
             Command::SaveScene => inbox::Command::Scene(SceneCommand::Save),
             Command::ResetHistory => inbox::Command::ResetHistory,
+            // Not the daemon's: the watcher sees the write as a save.
+            Command::RevertFile { file } => return crate::serve::last_good::revert(&self.shared, &file).map_err(|e| e.to_string()),
         };
         self.shared.clients.command(command).map_err(|e| e.to_string())
     }

@@ -167,9 +167,27 @@ fn the_window_shows_the_daemons_passes_frame_and_problems() {
     let opened = std::fs::read_to_string(p.path("opened")).expect("the editor ran");
     assert!(opened.starts_with(&format!("+{line} ")) && opened.trim_end().ends_with("tonemap.wgsl"), "{opened}");
 
-    // Fixed: the problem goes.
-    p.write(TONEMAP, &good);
+    // The diff against the version that last compiled: the changed line
+    // removed and added, numbered.
+    w.step_until("the diff", |h| h.query_by_label_contains("tonemap.wgsl changed since it last compiled").is_some());
+    let added = format!("{line} + {}", bad.lines().nth(line - 1).expect("the line"));
+    assert!(w.harness.query_by_label_contains(&added).is_some(), "the diff adds `{added}`");
+    assert!(w.harness.query_by_label_contains(&format!("{line}    - ")).is_some(), "the diff removes the last good line");
+
+    // "revert to last good", cancelled: nothing written.
+    w.harness.get_by_label("revert to last good").click_accesskit();
+    w.harness.run_steps(2);
+    w.harness.get_by_label("Cancel").click_accesskit();
+    w.harness.run_steps(2);
+    assert_eq!(p.read(TONEMAP), bad, "a cancelled revert writes nothing");
+    // Confirmed: the last good text is back, and the problem goes.
+    w.harness.get_by_label("revert to last good").click_accesskit();
+    w.harness.run_steps(2);
+    w.harness.get_by_label("Revert").click_accesskit();
+    w.harness.run_steps(2);
+    assert_eq!(p.read(TONEMAP), good, "reverted to the last good text");
     w.step_until("the fix", |h| h.query_by_label_contains("tonemap.wgsl:").is_none());
+    w.step_until("no diff", |h| h.query_by_label_contains("changed since it last compiled").is_none());
     w.close();
 }
 

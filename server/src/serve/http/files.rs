@@ -14,6 +14,7 @@ use serde::Deserialize;
 
 use super::AppState;
 use super::guard::{error, json};
+use crate::serve::last_good::RevertError;
 use crate::serve::shared::read;
 
 /// `GET /api/files`: `{ "files": [FileDiff…] }`, empty when every file is
@@ -39,31 +40,9 @@ pub(super) async fn revert(State(st): State<Arc<AppState>>, ConnectInfo(peer): C
         Ok(r) => r,
         Err(e) => return error(StatusCode::BAD_REQUEST, &format!("invalid revert request: {e}; expected {{\"file\": \"…\"}}")),
     };
-    let state = read(&st.shared.files);
-    let Some((path, text)) = state.last_good.get(&request.file) else {
-        return error(
-            StatusCode::NOT_FOUND,
-            &format!("`{}` has no last good version to revert to: it is good, or never was", request.file),
-        );
-    };
-    // Only a project source (not a generated module) is written.
-    let inside = |root: &std::path::PathBuf| Some(path.canonicalize().ok()?.starts_with(root.canonicalize().ok()?));
-    if !st.shared.source_roots.iter().any(|r| inside(r) == Some(true)) {
-        return error(StatusCode::NOT_FOUND, &format!("`{}` is not a source file under the project's source roots", request.file));
-    }
-    match write_like_an_editor(path, text.as_bytes()) {
+    match crate::serve::last_good::revert(&st.shared, &request.file) {
         Ok(()) => json(&serde_json::json!({ "file": request.file, "reverted": true })),
-        Err(e) => error(StatusCode::INTERNAL_SERVER_ERROR, &format!("cannot write `{}`: {e}", request.file)),
+        Err(e @ RevertError::NoLastGood(_) | e @ RevertError::NotASource(_)) => error(StatusCode::NOT_FOUND, &e.to_string()),
+        Err(e @ RevertError::Write(..)) => error(StatusCode::INTERNAL_SERVER_ERROR, &e.to_string()),
     }
-}
-
-/// Writes a sibling temporary file and renames it over `path`, so the file
-/// is never seen half written.
-fn write_like_an_editor(path: &std::path::Path, bytes: &[u8]) -> std::io::Result<()> {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let temporary = path.with_file_name(format!(".{name}.loupe-revert"));
-    std::fs::write(&temporary, bytes)?;
-    std::fs::rename(&temporary, path).inspect_err(|_| {
-        let _ = std::fs::remove_file(&temporary);
-    })
 }
