@@ -94,6 +94,7 @@ mod fixture {
             modules: vec![module("shaders/clean.wgsl", vec![]), module(MAIN, vec![error, warning])],
             general: vec![],
             adapter: Some("llvmpipe".to_owned()),
+            images: vec![],
             duration: Duration::from_millis(40),
         }
     }
