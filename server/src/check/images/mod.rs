@@ -160,10 +160,12 @@ fn one(renderer: &mut run::Renderer, case: &Case, opts: &Options, adapter: &str)
             }
         }
         Err(ds) => {
+            // A panic's diagnostic names the file; the renderer's own are
+            // already at the case.
             if ds.iter().any(|d| d.code == Code::CompilerPanic) {
                 renderer.reset();
             }
-            r.diagnostics.extend(ds.into_iter().map(|d| at_case(&case.at, d)));
+            r.diagnostics.extend(ds.into_iter().map(|d| if d.code == Code::CompilerPanic { at_case(&case.at, d) } else { d }));
         }
     }
     if opts.bless.is_some() && r.diagnostics.is_empty() {

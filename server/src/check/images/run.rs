@@ -34,10 +34,12 @@ impl Renderer {
     }
 
     /// The case's outputs in its order (the final output when it names
-    /// none), or why they could not be rendered, at the case's lines.
+    /// none), or why they could not be rendered, at the case's lines (an
+    /// output the frame lacks at its name).
     pub fn render(&mut self, case: &Case) -> Result<Vec<CapturedImage>, Vec<Diagnostic>> {
         let in_case = |d: Diagnostic| at_case(&case.at, d);
-        let mut loaded = crate::loaded::load_with(&case.scene, &case.overrides).map_err(|d| vec![in_case(d)])?;
+        let scene_error = |d: Diagnostic| in_case(Diagnostic { message: format!("{}: {}", display_path(&case.scene), d.message), ..d });
+        let mut loaded = crate::loaded::load_with(&case.scene, &case.overrides).map_err(|d| vec![scene_error(d)])?;
         loaded.scene.width = case.size.0;
         loaded.scene.height = case.size.1;
         let errors = match &mut self.session {
