@@ -161,3 +161,20 @@ fn shards_cover_every_case_once_and_each_format_parses() {
     let github = p.run(&["check", "--format", "github", "--shard", "2/2"]);
     assert_eq!(github.stdout.lines().filter(|l| l.starts_with("::error file=loupe.toml") && l.contains("reference-missing")).count(), 2);
 }
+
+#[test]
+fn without_a_device_every_case_is_skipped_never_passed() {
+    let p = project("images-no-device", PATTERN);
+    let run = super::no_adapter::without_adapter(&p.root, &["check", "--no-timings", "--format", "junit"]);
+    run.code(0);
+    run.check(run.stdout.contains(r#"<testcase classname="loupe.images" name="pattern""#), "a test case for the image case");
+    run.check(run.stdout.contains(r#"<skipped message="no device: the image cases need one"/>"#), "skipped, with the reason");
+    run.check(run.stdout.contains(r#"skipped="1""#), "counted as skipped");
+    let human = super::no_adapter::without_adapter(&p.root, &["check", "--no-timings"]);
+    human.stdout_has("image pattern: skipped (no device: the image cases need one)").stdout_has("1 image case: 1 skipped");
+    super::no_adapter::without_adapter(&p.root, &["check", "--images"]).code(3).stderr_has("mesa-vulkan-drivers");
+    // With --no-device they are skipped as well; with --no-images, not run.
+    p.run(&["check", "--no-device", "--no-timings"]).code(0).stdout_has("image pattern: skipped (--no-device)");
+    let none = p.run(&["check", "--no-images", "--no-timings"]);
+    none.check(!none.stdout.contains("image pattern"), "--no-images runs no case");
+}

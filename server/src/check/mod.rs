@@ -243,7 +243,10 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
 
     report.modules = modules.into_values().collect();
     if let Some(io) = &opts.images {
-        report.images = image_cases(io, gpu.as_ref(), &opts.shader_root, &mut report);
+        report.images = match &gpu {
+            None if opts.device == DeviceMode::Off => images::skipped(io, "--no-device"),
+            _ => image_cases(io, gpu.as_ref(), &opts.shader_root, &mut report),
+        };
     }
     report.duration = start.elapsed();
     Ok((report, files))
