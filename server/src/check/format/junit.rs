@@ -113,7 +113,7 @@ fn escape(s: &str, attribute: bool) -> String {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::super::fixture;
     use super::*;
     use crate::diag::Code;
@@ -127,7 +127,7 @@ mod tests {
     /// Just enough XML checking for what we emit: tags balance, attribute
     /// values are quoted and hold no raw markup, and text has no raw `<`
     /// or stray `&`.
-    fn assert_well_formed(xml: &str) {
+    pub fn assert_well_formed(xml: &str) {
         let body = xml.strip_prefix("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n").expect("declaration");
         let mut stack = Vec::new();
         let mut rest = body;
