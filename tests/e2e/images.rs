@@ -50,6 +50,8 @@ fn a_changed_tonemapper_fails_the_case_a_change_within_noise_passes_and_blessing
     let run = p.run(&["check", "--no-timings", "--color", "never"]);
     run.code(1).stdout_has("image pattern: failed").stdout_has("error[image-mismatch]: `tonemap/color` differs from its reference");
     run.stdout_has("loupe.toml:4:1").stdout_has("loupe check --bless pattern");
+    // An excerpt of the case in loupe.toml, as every other diagnostic has.
+    run.stdout_has("[[images]]\n  │ ^^^^^^^^^^ in this image case");
     let report = std::fs::read_to_string(p.path("target/loupe-images/report.html")).expect("report.html is written on a failure");
     for image in ["reference", "actual", "flip", "side-by-side"] {
         let rel = format!("pattern/tonemap.color.{image}.png");

@@ -247,6 +247,10 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
             None if opts.device == DeviceMode::Off => images::skipped(io, "--no-device"),
             _ => image_cases(io, gpu.as_ref(), &opts.shader_root, &mut report),
         };
+        // Their failures point into loupe.toml: the excerpts need its text.
+        for c in &report.images {
+            format::human::read_sources(&c.diagnostics, &mut files);
+        }
     }
     report.duration = start.elapsed();
     Ok((report, files))
