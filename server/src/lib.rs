@@ -8,10 +8,12 @@
 
 pub mod bvh;
 pub mod check;
+pub mod color;
 pub mod denoise;
 pub mod denoise_options;
 pub mod diag;
 pub mod files;
+pub mod flip;
 pub mod gpu;
 pub mod loaded;
 pub mod material;

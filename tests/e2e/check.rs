@@ -22,6 +22,9 @@ const UTIL: &str = "shaders/lib/util.wgsl";
 fn project_shaders_are_clean_with_pipelines_created() {
     let run = loupe(&repo(), &["check", "--no-timings"]);
     run.code(0).stdout_has("0 errors");
+    // With a device, the repository's image cases (loupe.toml) render and
+    // match their references.
+    run.stdout_has("; 5 image cases: 5 passed").stdout_has("image showcase-raster-320x180: passed");
     // With a device (lavapipe here), every pipeline spec is created.
     run.check(run.stdout.contains("pipelines on"), "expected pipelines to be created on an adapter");
     // The default paths hold the scenes too, each one checked.

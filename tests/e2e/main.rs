@@ -6,6 +6,7 @@ mod budget_preview;
 mod check;
 mod denoise;
 mod golden;
+mod images;
 mod materials;
 mod materials_api;
 mod no_adapter;

@@ -11,7 +11,7 @@ use super::denoise::{fixture, weights};
 /// Runs `loupe args` in `dir` with the Vulkan loader pointed at no driver
 /// at all: a machine with no GPU and no lavapipe. A display is named (none
 /// is reached) so that `view` gets as far as looking for an adapter.
-fn without_adapter(dir: &Path, args: &[&str]) -> Run {
+pub fn without_adapter(dir: &Path, args: &[&str]) -> Run {
     loupe_with_env(dir, args, &[("VK_ICD_FILENAMES", "/nonexistent.json"), ("VK_DRIVER_FILES", "/nonexistent.json"), ("DISPLAY", ":0")])
 }
 

@@ -2,11 +2,15 @@
 //! validates each entry shader under every shader-def permutation the
 //! renderer uses, loads every scene with the meshes it references, and,
 //! with a device, creates every pipeline exactly as the renderer does.
+//! Then, with a device, the image gate (`images`) renders loupe.toml's
+//! image cases and compares them with their references.
 
 pub mod capabilities;
 pub mod format;
+pub mod images;
 pub mod project;
 mod report;
+pub mod spans;
 
 pub use report::{CheckReport, ModuleKind, ModuleResult};
 
@@ -51,6 +55,8 @@ pub struct CheckOptions {
     /// What sources are validated with. `None`: what the adapter supports,
     /// or without one `gpu::capabilities_without_device()`.
     pub capabilities: Option<Capabilities>,
+    /// The image cases to render; `None` with `--no-images`.
+    pub images: Option<images::Options>,
 }
 
 /// A failure of the run itself rather than of a checked file.
@@ -236,8 +242,41 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     }
 
     report.modules = modules.into_values().collect();
+    if let Some(io) = &opts.images {
+        report.images = match &gpu {
+            None if opts.device == DeviceMode::Off => images::skipped(io, "--no-device"),
+            _ => image_cases(io, gpu.as_ref(), &opts.shader_root, &mut report),
+        };
+        // Their failures point into loupe.toml: the excerpts need its text.
+        for c in &report.images {
+            format::human::read_sources(&c.diagnostics, &mut files);
+        }
+    }
     report.duration = start.elapsed();
     Ok((report, files))
+}
+
+/// The image gate, once the sources are checked: skipped, never passed,
+/// without a device or when a shader or scene has errors (its frames
+/// could not be what the project means).
+fn image_cases(io: &images::Options, gpu: Option<&Gpu>, shader_root: &Path, report: &mut CheckReport) -> Vec<images::CaseResult> {
+    let Some(gpu) = gpu else {
+        return images::skipped(io, "no device: the image cases need one");
+    };
+    if report.count(Severity::Error) > 0 {
+        return images::skipped(io, "the shaders or scenes have errors");
+    }
+    match library::read_tree(shader_root) {
+        Ok(lib) => {
+            let (cases, general) = images::run(io, gpu, shader_root, &lib);
+            report.general.extend(general);
+            cases
+        }
+        Err(e) => {
+            report.general.push(Diagnostic::error(Code::Io, format!("the image cases cannot read the shaders: {e}")));
+            images::skipped(io, "the shaders could not be read")
+        }
+    }
 }
 
 /// Whether a file found under `root` is checked: every `*.wgsl` and

@@ -7,6 +7,10 @@
 //! capabilities = ["float64"]           # or "all"
 //! deny_warnings = true
 //! format = "github"
+//! references = "tests/images"         # the image gate's references
+//!
+//! [[images]]                           # an image case (images::config)
+//! scene = "scenes/minimal.toml"
 //! ```
 //!
 //! Every unknown key and bad value is a diagnostic at its file:line:col.
@@ -15,16 +19,20 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use naga::valid::Capabilities;
-use toml_edit::{Item, Value};
 
 use super::capabilities;
 use super::format::Format;
-use crate::diag::{Code, Diagnostic, LineIndex, Location};
+use super::images::config::{self as image_config, Case};
+use super::spans::{Source, span_of, strings};
+use crate::diag::{Code, Diagnostic, Location};
 
 /// The project file's name; a `.toml` of this name is never a scene.
 pub const FILE: &str = "loupe.toml";
 
-const CHECK_KEYS: &[&str] = &["paths", "capabilities", "deny_warnings", "format"];
+const CHECK_KEYS: &[&str] = &["paths", "capabilities", "deny_warnings", "format", "references"];
+
+/// Where the image gate's references live when `references` is not set.
+pub const DEFAULT_REFERENCES: &str = "tests/images";
 
 /// `loupe check`'s defaults from the project file; `None`: not set there.
 #[derive(Debug, Default, Clone, PartialEq)]
@@ -34,6 +42,11 @@ pub struct CheckDefaults {
     pub capabilities: Option<Capabilities>,
     pub deny_warnings: Option<bool>,
     pub format: Option<Format>,
+    /// The image gate's reference folder, joined to the project root
+    /// (`DEFAULT_REFERENCES` when not set).
+    pub references: Option<PathBuf>,
+    /// The `[[images]]` cases, in file order.
+    pub images: Vec<Case>,
 }
 
 /// Reads `root/loupe.toml`; no file means no defaults.
@@ -50,20 +63,18 @@ pub fn read(root: &Path) -> Result<CheckDefaults, Diagnostic> {
 /// Parses the project file's text; `display` names it in diagnostics and
 /// relative paths are joined to `root`.
 pub fn parse(display: &str, text: &str, root: &Path) -> Result<CheckDefaults, Diagnostic> {
-    let lines = LineIndex::new(text);
-    let error = |span: Option<Range<usize>>, message: String| {
-        let d = Diagnostic::error(Code::ProjectFile, message);
-        match span {
-            Some(s) => d.with_label(lines.location(display, text, s), "here", true),
-            None => d.at(Location::file_start(display)),
-        }
-    };
+    let source = Source::new(display, text);
+    let error = |span: Option<Range<usize>>, message: String| source.error(span, message);
     let doc = toml_edit::Document::parse(text).map_err(|e| error(e.span(), e.message().trim().to_owned()))?;
     let mut out = CheckDefaults::default();
     for (key, item) in doc.as_table().iter() {
         let key_span = doc.as_table().key(key).and_then(|k| k.span());
+        if key == "images" {
+            out.images = image_config::parse(&source, item, key_span, root)?;
+            continue;
+        }
         if key != "check" {
-            return Err(error(key_span, format!("unknown table `{key}`; {FILE} has only [check]")));
+            return Err(error(key_span, format!("unknown table `{key}`; {FILE} has only [check] and [[images]]")));
         }
         let Some(check) = item.as_table() else {
             return Err(error(span_of(item).or(key_span), "`check` must be a table: [check]".to_owned()));
@@ -97,25 +108,12 @@ pub fn parse(display: &str, text: &str, root: &Path) -> Result<CheckDefaults, Di
                         .map_err(|_| bad(&format!("one of \"human\", \"json\", \"github\", \"sarif\", \"junit\", not \"{name}\"")))?;
                     out.format = Some(format);
                 }
+                "references" => out.references = Some(root.join(value.as_str().ok_or_else(|| bad("a folder's path"))?)),
                 _ => return Err(error(key_span, format!("unknown key `{key}` in [check]; known keys: {}", CHECK_KEYS.join(", ")))),
             }
         }
     }
     Ok(out)
-}
-
-/// An array of strings with each one's span; `None` for anything else.
-fn strings(value: &Value) -> Option<Vec<(String, Option<Range<usize>>)>> {
-    value.as_array()?.iter().map(|v| v.as_str().map(|s| (s.to_owned(), v.span()))).collect()
-}
-
-fn span_of(item: &Item) -> Option<Range<usize>> {
-    match item {
-        Item::Value(v) => v.span(),
-        Item::Table(t) => t.span(),
-        Item::ArrayOfTables(a) => a.span(),
-        Item::None => None,
-    }
 }
 
 #[cfg(test)]
@@ -137,7 +135,7 @@ mod tests {
     #[test]
     fn every_key_sets_its_default() {
         let d = parsed(
-            "# project\n[check]\npaths = [\"src/shaders\", \"/abs\"]\ncapabilities = [\"float64\", \"shader-int64\"]\ndeny_warnings = true\nformat = \"sarif\"\n",
+            "# project\n[check]\npaths = [\"src/shaders\", \"/abs\"]\ncapabilities = [\"float64\", \"shader-int64\"]\ndeny_warnings = true\nformat = \"sarif\"\nreferences = \"refs\"\n",
         )
         .unwrap();
         assert_eq!(d.paths, Some(vec![PathBuf::from("/proj/src/shaders"), PathBuf::from("/abs")]));
@@ -145,6 +143,7 @@ mod tests {
         assert!(caps.contains(Capabilities::FLOAT64 | Capabilities::SHADER_INT64) && !caps.contains(Capabilities::SUBGROUP));
         assert_eq!(d.deny_warnings, Some(true));
         assert_eq!(d.format, Some(Format::Sarif));
+        assert_eq!(d.references, Some(PathBuf::from("/proj/refs")));
         assert_eq!(parsed("[check]\ncapabilities = \"all\"\n").unwrap().capabilities, Some(Capabilities::all()));
         assert_eq!(parsed("").unwrap(), CheckDefaults::default());
         assert_eq!(parsed("[check]\n").unwrap(), CheckDefaults::default());
@@ -156,6 +155,7 @@ mod tests {
         assert_eq!((code, line, col), (Code::ProjectFile, 3, 1));
         assert!(msg.contains("unknown key `fromat`") && msg.contains("format"), "{msg}");
         let (_, line, col, msg) = located("[serve]\nport = 1\n");
+        assert!(msg.contains("[check] and [[images]]"), "{msg}");
         assert_eq!((line, col), (1, 2), "{msg}");
         let (_, line, col, msg) = located("[check]\ndeny_warnings = \"yes\"\n");
         assert_eq!((line, col), (2, 17));

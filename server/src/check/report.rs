@@ -2,6 +2,7 @@
 
 use std::time::Duration;
 
+use super::images::{CaseResult, Verdict};
 use crate::diag::{Diagnostic, Severity};
 
 /// What one checked file is.
@@ -53,12 +54,20 @@ pub struct CheckReport {
     pub general: Vec<Diagnostic>,
     /// The adapter pipelines were created on, if any.
     pub adapter: Option<String>,
+    /// The image cases, in loupe.toml's order.
+    pub images: Vec<CaseResult>,
     pub duration: Duration,
 }
 
 impl CheckReport {
     pub fn diagnostics(&self) -> impl Iterator<Item = &Diagnostic> {
-        self.modules.iter().flat_map(|m| m.diagnostics.iter()).chain(self.general.iter())
+        let cases = self.images.iter().flat_map(|c| c.diagnostics.iter());
+        self.modules.iter().flat_map(|m| m.diagnostics.iter()).chain(self.general.iter()).chain(cases)
+    }
+
+    /// Image cases with this verdict.
+    pub fn cases(&self, verdict: Verdict) -> usize {
+        self.images.iter().filter(|c| c.verdict == verdict).count()
     }
 
     pub fn count(&self, severity: Severity) -> usize {
@@ -73,7 +82,8 @@ impl CheckReport {
     /// saying why, so that every format reports the failure the exit code
     /// says (a JUnit failure, a SARIF `error`, a GitHub `::error`).
     pub fn deny_warnings(&mut self) {
-        for d in self.modules.iter_mut().flat_map(|m| m.diagnostics.iter_mut()).chain(self.general.iter_mut()) {
+        let cases = self.images.iter_mut().flat_map(|c| c.diagnostics.iter_mut());
+        for d in self.modules.iter_mut().flat_map(|m| m.diagnostics.iter_mut()).chain(self.general.iter_mut()).chain(cases) {
             if d.severity == Severity::Warning {
                 d.severity = Severity::Error;
                 d.notes.push("a warning, made an error by --deny-warnings (or `deny_warnings = true` in loupe.toml)".to_owned());

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use clap::ValueEnum;
 
 use super::{exit, print_diagnostics};
-use loupe::check::{self, CheckOptions, DeviceMode, format};
+use loupe::check::{self, CheckOptions, DeviceMode, format, images};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -46,6 +46,34 @@ pub struct Args {
     /// Project root: where shaders/ and scenes/ are.
     #[arg(long, default_value = ".")]
     root: PathBuf,
+    /// Require the image cases (loupe.toml's [[images]]): exit 3 when no
+    /// GPU adapter exists. Without it they run when a device exists and
+    /// are reported skipped when none does.
+    #[arg(long, conflicts_with_all = ["no_device", "no_images"])]
+    images: bool,
+    /// Skip the image cases.
+    #[arg(long)]
+    no_images: bool,
+    /// Render the named image cases (all when none is named) and write
+    /// them as their references, saying what changed; takes the names that
+    /// follow it. A plain check never writes a reference.
+    #[arg(long, value_name = "CASE", num_args = 0.., conflicts_with_all = ["no_device", "no_images"])]
+    bless: Option<Vec<String>>,
+    /// Where a failed image case's images and report.html go
+    /// [default: ROOT/target/loupe-images].
+    #[arg(long, value_name = "DIR")]
+    artifacts: Option<PathBuf>,
+    /// Image cases rendered at once, each job on a session of its own.
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=64))]
+    jobs: u16,
+    /// Run only every N-th image case from the K-th (1-based), to split
+    /// the cases across CI machines; the shards' reports concatenate.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard)]
+    shard: Option<images::Shard>,
+}
+
+fn parse_shard(s: &str) -> Result<images::Shard, String> {
+    s.parse()
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -76,13 +104,30 @@ pub fn run(args: Args) -> ExitCode {
         eprintln!("loupe check: nothing to check: no paths given and no shaders/ or scenes/ under {}", args.root.display());
         return ExitCode::from(exit::USAGE);
     }
-    let device = match (args.no_device, args.device) {
+    let device = match (args.no_device, args.device || args.images || args.bless.is_some()) {
         (true, _) => DeviceMode::Off,
         (false, true) => DeviceMode::Required,
         (false, false) => DeviceMode::Auto,
     };
     let capabilities = args.capabilities.or(defaults.capabilities);
-    let (mut report, files) = match check::run(&CheckOptions { paths, shader_root, device, capabilities }) {
+    let images = (!args.no_images && !defaults.images.is_empty()).then(|| images::Options {
+        cases: defaults.images,
+        references: defaults.references.unwrap_or_else(|| args.root.join(check::project::DEFAULT_REFERENCES)),
+        artifacts: args.artifacts.clone().unwrap_or_else(|| args.root.join(images::artifacts::DEFAULT_DIR)),
+        bless: args.bless.clone(),
+        jobs: usize::from(args.jobs),
+        shard: args.shard.unwrap_or(images::Shard::ALL),
+    });
+    if let Some(unknown) = images.as_ref().map(images::Options::unknown_names).filter(|u| !u.is_empty()) {
+        let known: Vec<&str> = images.iter().flat_map(|o| o.cases.iter().map(|c| c.name.as_str())).collect();
+        eprintln!("loupe check: no image case named {}; the cases: {}", unknown.join(", "), known.join(", "));
+        return ExitCode::from(exit::USAGE);
+    }
+    if args.bless.is_some() && images.is_none() {
+        eprintln!("loupe check: --bless: {} has no [[images]] cases", args.root.join(check::project::FILE).display());
+        return ExitCode::from(exit::USAGE);
+    }
+    let (mut report, files) = match check::run(&CheckOptions { paths, shader_root, device, capabilities, images }) {
         Ok(r) => r,
         Err(check::CheckError::BadPath(e)) => {
             eprintln!("loupe check: cannot read input: {e}");

@@ -102,14 +102,7 @@ impl Command {
 }
 
 /// `WIDTHxHEIGHT`, each side within the scene's limits.
-pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once('x').ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT"))?;
-    let side = |v: &str| -> Result<u32, String> {
-        let n: u32 = v.trim().parse().map_err(|_| format!("`{v}` is not a number"))?;
-        if (1..=loupe::scene::MAX_SIDE).contains(&n) { Ok(n) } else { Err(format!("{n} is outside 1..={}", loupe::scene::MAX_SIDE)) }
-    };
-    Ok((side(w)?, side(h)?))
-}
+pub use loupe::scene::parse_size;
 
 /// `PATH=VALUE`, the value typed as the browser's live controls type it.
 pub fn parse_override(s: &str) -> Result<(String, Value), String> {

@@ -112,6 +112,10 @@ pub enum Code {
     Image,
     #[serde(rename = "material")]
     Material,
+    #[serde(rename = "image-mismatch")]
+    ImageMismatch,
+    #[serde(rename = "reference-missing")]
+    ReferenceMissing,
 }
 
 impl Code {
@@ -138,6 +142,8 @@ impl Code {
             Code::Weights => "weights",
             Code::Image => "image",
             Code::Material => "material",
+            Code::ImageMismatch => "image-mismatch",
+            Code::ReferenceMissing => "reference-missing",
         }
     }
 
@@ -165,10 +171,12 @@ impl Code {
             Code::Weights => "the denoiser's weights file (.tza) is malformed or is not a U-Net loupe can run",
             Code::Image => "an image file is malformed, or does not fit the images it goes with",
             Code::Material => "the material file is invalid",
+            Code::ImageMismatch => "an image case renders beyond its FLIP threshold from its reference",
+            Code::ReferenceMissing => "an image case has no reference image: bless one with `loupe check --bless`",
         }
     }
 
-    pub const ALL: [Code; 21] = [
+    pub const ALL: [Code; 23] = [
         Code::Io,
         Code::Encoding,
         Code::EmptyFile,
@@ -190,6 +198,8 @@ impl Code {
         Code::Weights,
         Code::Image,
         Code::Material,
+        Code::ImageMismatch,
+        Code::ReferenceMissing,
     ];
 }
 

@@ -5,6 +5,7 @@
 use serde::Serialize;
 
 use super::resource::{Element, TensorLayout};
+pub use crate::color::{linear_to_srgb, srgb_to_linear};
 
 /// One pass output of one frame, exactly as the pass wrote it.
 #[derive(Debug, Clone)]
@@ -330,15 +331,6 @@ impl CapturedTensor {
     pub fn raw_f32(&self) -> Vec<u8> {
         self.data.iter().flat_map(|v| v.to_le_bytes()).collect()
     }
-}
-
-/// The sRGB transfer function's inverse, exactly as the spec writes it.
-pub fn srgb_to_linear(v: f32) -> f32 {
-    if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
-}
-
-pub fn linear_to_srgb(v: f32) -> f32 {
-    if v <= 0.003_130_8 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
 }
 
 #[cfg(test)]

@@ -25,6 +25,17 @@ use crate::mesh::MeshData;
 /// The largest output side loupe renders; larger requests are an error, not
 /// an out-of-memory.
 pub const MAX_SIDE: u32 = 8192;
+
+/// `WIDTHxHEIGHT`, each side in 1..=`MAX_SIDE`: `--size` and the image
+/// cases' `size`.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once('x').ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT"))?;
+    let side = |v: &str| -> Result<u32, String> {
+        let n: u32 = v.trim().parse().map_err(|_| format!("`{v}` is not a number"))?;
+        if (1..=MAX_SIDE).contains(&n) { Ok(n) } else { Err(format!("{n} is outside 1..={MAX_SIDE}")) }
+    };
+    Ok((side(w)?, side(h)?))
+}
 /// Sizes the shaders' fixed loops and the GPU buffers are built for.
 pub const MAX_LIGHTS: usize = 64;
 pub const MAX_MEDIA: usize = 8;

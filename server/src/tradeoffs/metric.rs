@@ -1,9 +1,9 @@
 //! How far an image is from its reference: relative MSE on the HDR image
 //! (what the renderer computed), and PSNR and SSIM on the tonemapped one
 //! (what the user looks at). SSIM is Wang et al. 2004's, on luminance,
-//! with their Gaussian window (σ = 1.5, 11 taps) and constants; FLIP would
-//! be the field's choice of perceptual metric but has no Rust
-//! implementation here yet.
+//! with their Gaussian window (σ = 1.5, 11 taps) and constants. FLIP, the
+//! field's perceptual metric, is `crate::flip`; the image gate
+//! (`check::images`) reports relMSE from here beside it.
 
 /// An RGBA f32 image, rows top first (a capture's layout).
 pub struct Rgba<'a> {

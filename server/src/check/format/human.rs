@@ -10,6 +10,7 @@ use codespan_reporting::files::{self, SimpleFiles};
 use codespan_reporting::term::termcolor::{Ansi, NoColor};
 use codespan_reporting::term::{self, Config, WriteStyle};
 
+use super::super::images::{Verdict, verdict_word};
 use super::super::report::CheckReport;
 use super::Options;
 use crate::diag::{Diagnostic, Location, Severity, SourceFiles};
@@ -55,6 +56,9 @@ fn emit<W: WriteStyle>(diags: &[Diagnostic], files: &SourceFiles, w: &mut W) -> 
 fn render<W: WriteStyle>(report: &CheckReport, files: &SourceFiles, opts: &Options, w: &mut W) -> io::Result<()> {
     let diags: Vec<Diagnostic> = report.diagnostics().cloned().collect();
     emit(&diags, files, w)?;
+    for case in &report.images {
+        writeln!(w, "{}", case.line())?;
+    }
     writeln!(w, "{}", summary(report, opts.timings))
 }
 
@@ -136,6 +140,17 @@ fn summary(report: &CheckReport, timings: bool) -> String {
         let _ = write!(s, " in {} ms", report.duration.as_millis());
     }
     let _ = write!(s, ": {}, {}", count(report.count(Severity::Error), "error"), count(report.count(Severity::Warning), "warning"));
+    if !report.images.is_empty() {
+        let _ = write!(s, "; {}:", count(report.images.len(), "image case"));
+        let verdicts = [Verdict::Passed, Verdict::Failed, Verdict::Skipped, Verdict::Blessed];
+        let counted: Vec<String> = verdicts
+            .iter()
+            .map(|&v| (report.cases(v), v))
+            .filter(|(n, _)| *n > 0)
+            .map(|(n, v)| format!("{n} {}", verdict_word(v)))
+            .collect();
+        let _ = write!(s, " {}", counted.join(", "));
+    }
     s
 }
 

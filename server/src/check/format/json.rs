@@ -1,10 +1,13 @@
 //! JSON Lines: one self-contained object per diagnostic, so tools can stream
-//! and `grep` the output. No summary object: every line has the same shape.
+//! and `grep` the output, then one per image case (the lines with an
+//! `image` key). No summary object.
 
 use std::io;
 
 use serde::Serialize;
 
+use super::super::images::config::Threshold;
+use super::super::images::{OutputResult, Verdict};
 use super::super::report::CheckReport;
 use crate::diag::{Code, Diagnostic, Label, Severity};
 
@@ -42,9 +45,40 @@ impl<'a> From<&'a Diagnostic> for Record<'a> {
     }
 }
 
+/// An image case's line: its verdict and each output's figures, at the
+/// case's line in loupe.toml. Its failures are diagnostic lines too.
+#[derive(Serialize)]
+struct Case<'a> {
+    image: &'a str,
+    verdict: Verdict,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    reason: Option<&'a str>,
+    scene: &'a str,
+    file: &'a str,
+    line: u32,
+    threshold: Threshold,
+    adapter_key: Option<&'a str>,
+    outputs: &'a [OutputResult],
+}
+
 pub fn write(report: &CheckReport, out: &mut dyn io::Write) -> io::Result<()> {
     for d in report.diagnostics() {
         serde_json::to_writer(&mut *out, &Record::from(d))?;
+        writeln!(out)?;
+    }
+    for c in &report.images {
+        let case = Case {
+            image: &c.name,
+            verdict: c.verdict,
+            reason: c.reason.as_deref(),
+            scene: &c.scene,
+            file: &c.at.file,
+            line: c.at.line,
+            threshold: c.threshold,
+            adapter_key: c.adapter_key.as_deref(),
+            outputs: &c.outputs,
+        };
+        serde_json::to_writer(&mut *out, &case)?;
         writeln!(out)?;
     }
     Ok(())

@@ -1,10 +1,12 @@
 //! JUnit XML, which most CI systems show as a test report: one test case
-//! per checked file, failing when the file has an error.
+//! per checked file, failing when the file has an error, and one per image
+//! case (failed, skipped or passed).
 
 use std::fmt::Write as _;
 use std::io;
 use std::time::Duration;
 
+use super::super::images::Verdict;
 use super::super::report::CheckReport;
 use super::Options;
 use crate::diag::{Diagnostic, Severity};
@@ -16,16 +18,17 @@ pub fn write(report: &CheckReport, opts: &Options, out: &mut dyn io::Write) -> i
     if !report.general.is_empty() {
         cases.push(("(general)", Duration::ZERO, &report.general));
     }
-    let failures = cases.iter().filter(|(_, _, ds)| ds.iter().any(is_error)).count();
+    let failures = cases.iter().filter(|(_, _, ds)| ds.iter().any(is_error)).count() + report.cases(Verdict::Failed);
     let time = |d: Duration| {
         if opts.timings { format!("{:.3}", d.as_secs_f64()) } else { "0.000".to_owned() }
     };
-    let counts = format!(r#"tests="{}" failures="{failures}" errors="0""#, cases.len());
+    let counts = format!(r#"tests="{}" failures="{failures}" errors="0""#, cases.len() + report.images.len());
     let total = time(report.duration);
+    let skipped = report.cases(Verdict::Skipped);
 
     writeln!(out, r#"<?xml version="1.0" encoding="UTF-8"?>"#)?;
     writeln!(out, r#"<testsuites name="loupe check" {counts} time="{total}">"#)?;
-    writeln!(out, r#"  <testsuite name="loupe check" {counts} skipped="0" time="{total}">"#)?;
+    writeln!(out, r#"  <testsuite name="loupe check" {counts} skipped="{skipped}" time="{total}">"#)?;
     for (name, duration, diagnostics) in cases {
         let open = format!(r#"    <testcase classname="loupe.check" name="{}" time="{}""#, escape(name, true), time(duration));
         if diagnostics.is_empty() {
@@ -42,6 +45,26 @@ pub fn write(report: &CheckReport, opts: &Options, out: &mut dyn io::Write) -> i
                 first.code.as_str()
             )?,
             None => writeln!(out, "      <system-out>{text}</system-out>")?,
+        }
+        writeln!(out, "    </testcase>")?;
+    }
+    // One case per image case: a failure with its diagnostics, a skip with
+    // its reason, a pass with its figures.
+    for c in &report.images {
+        let open = format!(r#"    <testcase classname="loupe.images" name="{}" time="{}">"#, escape(&c.name, true), time(c.duration));
+        writeln!(out, "{open}")?;
+        match (c.verdict, c.diagnostics.iter().find(|d| is_error(d))) {
+            (Verdict::Failed, Some(first)) => writeln!(
+                out,
+                r#"      <failure message="{}" type="{}">{}</failure>"#,
+                escape(&first.message, true),
+                first.code.as_str(),
+                escape(&plain(&c.diagnostics), false)
+            )?,
+            (Verdict::Skipped, _) => {
+                writeln!(out, r#"      <skipped message="{}"/>"#, escape(c.reason.as_deref().unwrap_or_default(), true))?
+            }
+            _ => writeln!(out, "      <system-out>{}</system-out>", escape(&c.line(), false))?,
         }
         writeln!(out, "    </testcase>")?;
     }
@@ -90,7 +113,7 @@ fn escape(s: &str, attribute: bool) -> String {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::super::fixture;
     use super::*;
     use crate::diag::Code;
@@ -104,7 +127,7 @@ mod tests {
     /// Just enough XML checking for what we emit: tags balance, attribute
     /// values are quoted and hold no raw markup, and text has no raw `<`
     /// or stray `&`.
-    fn assert_well_formed(xml: &str) {
+    pub fn assert_well_formed(xml: &str) {
         let body = xml.strip_prefix("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n").expect("declaration");
         let mut stack = Vec::new();
         let mut rest = body;

@@ -75,6 +75,36 @@ mod fixture {
         files
     }
 
+    /// The report with three image cases: a pass, a failure (with `<&>` in
+    /// its message, for the escaping) and a skip.
+    pub fn with_images() -> CheckReport {
+        use super::super::images::config::DEFAULT_THRESHOLD;
+        use super::super::images::{CaseResult, OutputResult, Verdict};
+        use crate::flip::Summary;
+        let case = |name: &str, line: u32, verdict: Verdict| CaseResult {
+            name: name.to_owned(),
+            scene: "scenes/a.toml".to_owned(),
+            at: loc("loupe.toml", line, 1, line, 11),
+            verdict,
+            reason: None,
+            threshold: DEFAULT_THRESHOLD,
+            adapter_key: None,
+            outputs: vec![OutputResult {
+                output: "tonemap/color".to_owned(),
+                reference: format!("tests/images/{name}/tonemap.color.png"),
+                flip: Some(Summary { mean: 0.25, p99: 0.5, weighted_median: 0.3 }),
+                relative_mse: Some(0.125),
+                blessed: None,
+            }],
+            diagnostics: vec![],
+            duration: Duration::from_millis(7),
+        };
+        let mut failed = case("b", 5, Verdict::Failed);
+        failed.diagnostics.push(Diagnostic::error(Code::ImageMismatch, "`tonemap/color` <&> differs").at(loc("loupe.toml", 5, 1, 5, 11)));
+        let skipped = CaseResult { reason: Some("no device".to_owned()), outputs: vec![], ..case("c", 9, Verdict::Skipped) };
+        CheckReport { images: vec![case("a", 1, Verdict::Passed), failed, skipped], ..report() }
+    }
+
     pub fn report() -> CheckReport {
         let error = Diagnostic::error(Code::Validation, ERROR_MESSAGE)
             .with_label(loc(UTIL, 5, 7, 5, 10), "this expression", true)
@@ -94,6 +124,7 @@ mod fixture {
             modules: vec![module("shaders/clean.wgsl", vec![]), module(MAIN, vec![error, warning])],
             general: vec![],
             adapter: Some("llvmpipe".to_owned()),
+            images: vec![],
             duration: Duration::from_millis(40),
         }
     }
@@ -140,5 +171,48 @@ mod tests {
         }
         let (_, human) = &outputs(true)[0];
         assert!(human.contains("made an error by --deny-warnings"), "{human}");
+    }
+
+    fn render(format: Format, report: &CheckReport) -> String {
+        let mut out = Vec::new();
+        write(format, report, &fixture::files(), &Options::default(), &mut out).unwrap();
+        String::from_utf8(out).unwrap()
+    }
+
+    /// Every format carries the image cases: their verdicts, and the
+    /// failure at its case's line.
+    #[test]
+    fn image_cases_in_every_format() {
+        let report = fixture::with_images();
+        let human = render(Format::Human, &report);
+        assert!(
+            human.contains("image a: passed; tonemap/color FLIP mean 0.2500 (max 0.01), p99 0.5000 (max 0.1), relMSE 1.25e-1\n"),
+            "{human}"
+        );
+        assert!(human.contains("image b: failed;") && human.contains("image c: skipped (no device)\n"), "{human}");
+        assert!(human.contains("loupe.toml:5:1: error[image-mismatch]"), "{human}");
+        assert!(human.ends_with("; 3 image cases: 1 passed, 1 failed, 1 skipped\n"), "{human}");
+
+        let json = render(Format::Json, &report);
+        let cases: Vec<serde_json::Value> =
+            json.lines().map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()).filter(|v| v.get("image").is_some()).collect();
+        assert_eq!(cases.len(), 3);
+        assert_eq!((&cases[1]["verdict"], &cases[1]["line"]), (&serde_json::json!("failed"), &serde_json::json!(5)));
+        assert_eq!(cases[0]["outputs"][0]["flip"]["p99"], 0.5);
+        assert_eq!(cases[2]["reason"], "no device");
+        assert!(json.contains(r#""code":"image-mismatch""#), "the failure is a diagnostic line too: {json}");
+
+        let junit = render(Format::Junit, &report);
+        junit::tests::assert_well_formed(&junit);
+        assert!(junit.contains(r#"tests="5" failures="2" errors="0" skipped="1""#), "{junit}");
+        assert!(junit.contains(r#"<testcase classname="loupe.images" name="c" time="0.000">"#), "{junit}");
+        assert!(junit.contains(r#"<skipped message="no device"/>"#), "{junit}");
+        assert!(junit.contains(r#"<failure message="`tonemap/color` &lt;&amp;&gt; differs" type="image-mismatch">"#), "{junit}");
+
+        let sarif: serde_json::Value = serde_json::from_str(&render(Format::Sarif, &report)).unwrap();
+        let result = sarif["runs"][0]["results"].as_array().unwrap().iter().find(|r| r["ruleId"] == "image-mismatch").cloned().unwrap();
+        assert_eq!(result["locations"][0]["physicalLocation"]["artifactLocation"]["uri"], "loupe.toml");
+        let github = render(Format::Github, &report);
+        assert!(github.contains("::error file=loupe.toml,line=5,col=1,endLine=5,endColumn=11,title=image-mismatch::"), "{github}");
     }
 }

@@ -1,0 +1,111 @@
+//! A rendered output against its reference file: which file, reading it,
+//! and the figures. Display-referred outputs (8-bit formats) are kept as
+//! PNG and compared with LDR-FLIP; HDR outputs as OpenEXR (32-bit float,
+//! exact) with HDR-FLIP. relMSE, on the linear values, is reported beside.
+
+use std::path::{Path, PathBuf};
+
+use crate::diag::{Diagnostic, display_path};
+use crate::flip::{self, FlipError, Linear, Summary};
+use crate::render::capture::{CapturedImage, srgb_to_linear};
+use crate::tradeoffs::metric::{Rgba, relative_mse};
+
+/// How an output is stored and compared.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Range {
+    /// 8 bits per channel: what the display shows.
+    Display,
+    /// Float: what the renderer computed.
+    High,
+}
+
+impl Range {
+    /// By the captured texture's format name.
+    pub fn of(format: &str) -> Range {
+        if ["Rgba8", "Bgra8", "R8", "Rg8"].iter().any(|p| format.starts_with(p)) { Range::Display } else { Range::High }
+    }
+
+    pub fn extension(self) -> &'static str {
+        match self {
+            Range::Display => "png",
+            Range::High => "exr",
+        }
+    }
+}
+
+/// `references/<case>/<pass>.<output>.<png|exr>`: the naming `loupe
+/// render` writes, one folder per case.
+pub fn reference_path(references: &Path, case: &str, output: &str, range: Range) -> PathBuf {
+    references.join(case).join(format!("{}.{}", output.replace('/', "."), range.extension()))
+}
+
+/// An image as linear RGBA f32, rows top first.
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<f32>,
+}
+
+impl Image {
+    pub fn of(c: &CapturedImage) -> Image {
+        Image { width: c.width, height: c.height, rgba: c.data.clone() }
+    }
+
+    fn linear(&self) -> Linear<'_> {
+        Linear { width: self.width, height: self.height, rgba: &self.rgba }
+    }
+
+    fn view(&self) -> Rgba<'_> {
+        Rgba { width: self.width as usize, height: self.height as usize, data: &self.rgba }
+    }
+}
+
+/// Reads a reference; `Ok(None)` when there is none. A PNG holds sRGB
+/// bytes, decoded here to linear as captures are.
+pub fn read(path: &Path, range: Range) -> Result<Option<Image>, Diagnostic> {
+    if !path.exists() {
+        return Ok(None);
+    }
+    let image = crate::denoise::image::read(path, &display_path(path))?;
+    let decode = |v: f32| if range == Range::Display { srgb_to_linear(v) } else { v };
+    let rgba = image.data.chunks_exact(3).flat_map(|p| [decode(p[0]), decode(p[1]), decode(p[2]), 1.0]).collect();
+    Ok(Some(Image { width: image.width as u32, height: image.height as u32, rgba }))
+}
+
+/// The figures of `actual` against `reference`, and FLIP's map.
+pub struct Compared {
+    pub flip: Summary,
+    pub relative_mse: f64,
+    pub map: flip::ErrorMap,
+}
+
+pub fn compare(actual: &Image, reference: &Image, range: Range) -> Result<Compared, FlipError> {
+    let map = match range {
+        Range::Display => {
+            let (a, r) = (flip::encode_srgb8(&actual.rgba), flip::encode_srgb8(&reference.rgba));
+            let srgb = |img: &Image, rgb| flip::Srgb8 { width: img.width, height: img.height, rgb };
+            flip::ldr(srgb(reference, &r), srgb(actual, &a))?
+        }
+        Range::High => flip::hdr(reference.linear(), actual.linear())?,
+    };
+    Ok(Compared { flip: map.summary(), relative_mse: relative_mse(&actual.view(), &reference.view()), map })
+}
+
+/// `capture` as the reference file `range` keeps: an sRGB PNG, or a
+/// 32-bit float OpenEXR, ZIP-compressed (lossless) to keep the repository
+/// small.
+pub fn encode(capture: &CapturedImage, range: Range) -> Result<Vec<u8>, String> {
+    use exr::prelude::*;
+    if range == Range::Display {
+        return Ok(capture.to_png());
+    }
+    let (w, data) = (capture.width as usize, &capture.data);
+    let pixels = SpecificChannels::rgba(|Vec2(x, y): Vec2<usize>| {
+        let i = (y * w + x) * 4;
+        (data[i], data[i + 1], data[i + 2], data[i + 3])
+    });
+    let image = exr::image::Image::from_encoded_channels((w, capture.height as usize), Encoding::SMALL_LOSSLESS, pixels);
+    let mut out = std::io::Cursor::new(Vec::new());
+    image.write().to_buffered(&mut out).map_err(|e| e.to_string())?;
+    Ok(out.into_inner())
+}
