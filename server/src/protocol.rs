@@ -208,6 +208,40 @@ pub struct DiffLine {
     pub failing: bool,
 }
 
+/// `GET /api/references`: loupe.toml's image cases of the daemon's scene
+/// and how each compared with its references ("against reference").
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct ReferenceReport {
+    /// Increases with each comparison published.
+    pub generation: u64,
+    /// `true` while a comparison of newer sources runs.
+    pub comparing: bool,
+    /// loupe.toml's error, when it has one (then there are no cases).
+    pub config_error: Option<Diagnostic>,
+    pub cases: Vec<CaseReport>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct CaseReport {
+    pub name: String,
+    /// `passed` or `failed`.
+    pub verdict: crate::check::images::Verdict,
+    pub flip_mean: f64,
+    pub flip_p99: f64,
+    /// The adapter key whose threshold applied, if one did.
+    pub adapter_key: Option<String>,
+    pub outputs: Vec<OutputReport>,
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct OutputReport {
+    pub output: String,
+    pub reference: String,
+    pub flip: Option<crate::flip::Summary>,
+    pub relative_mse: Option<f64>,
+}
+
 /// WebSocket text messages, server → client.
 #[derive(Debug, Clone, Serialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
@@ -298,6 +332,10 @@ pub enum ServerEvent {
     Files {
         files: Vec<FileDiff>,
     },
+    /// The image cases of the daemon's scene compared with their
+    /// references (also `GET /api/references`), when a comparison starts
+    /// and when it is done.
+    References(ReferenceReport),
 }
 
 /// `GET /api/materials`: the scene's material instances, one per
@@ -351,6 +389,9 @@ pub struct MaterialParam {
 /// The subscription member that stands for quad statistics in a client's
 /// set of `pass/output` keys (it has no `/`, so no output is named so).
 pub const QUAD_STATISTICS: &str = "quads";
+
+/// Likewise for the image cases' comparison with their references.
+pub const REFERENCES: &str = "references";
 
 /// One frame's quad statistics: the model's figures per raster pass and
 /// draw, beside what the adapter counted.
@@ -494,4 +535,8 @@ pub enum ClientMessage {
     /// Start (`on: true`) or stop receiving `quads` events: the daemon
     /// computes quad statistics while any client wants them.
     QuadStatistics { on: bool },
+    /// Start or stop comparing the scene's image cases with their
+    /// references after every reload (`references` events): the daemon
+    /// renders them while any client wants them.
+    ReferenceComparison { on: bool },
 }

@@ -713,3 +713,66 @@ fn a_broken_edit_shows_its_diff_against_the_last_good_source_and_revert_writes_i
     let tonemap = passes.as_array().expect("passes").iter().find(|p| p["name"] == "tonemap").expect("tonemap").clone();
     assert_eq!(tonemap["status"], "ok");
 }
+
+/// Waits for a finished comparison whose one case has `verdict`; returns
+/// its report. (Comparisons of older sources may come first: one asked
+/// for when the client asked, one after the first reload.)
+fn compared(ws: &mut loupe_tests::ws::Ws, verdict: &str) -> serde_json::Value {
+    ws.event("references", LIMIT, |e| e["comparing"] == false && e["cases"][0]["verdict"] == verdict)
+}
+
+/// The inspector's "against reference": while a client asks, the daemon
+/// compares the scene's image cases with their references after every
+/// reload, as `loupe check` would, and a loopback client may bless them.
+#[test]
+fn the_image_cases_of_the_scene_are_compared_live_and_blessed_from_the_page() {
+    let p = Project::copy_of_repo("serve-references");
+    p.write("loupe.toml", "[[images]]\nname = \"pattern\"\nscene = \"scenes/pattern.toml\"\nsize = \"64x36\"\n");
+    let s = Server::start(&p.root, &["--scene", "scenes/pattern.toml", "--render", "on-change", "--bind", "0.0.0.0"]);
+    let mut ws = s.ws();
+    ws.event("hello", LIMIT, |_| true);
+    let idle = s.get_json("/api/references");
+    assert_eq!(
+        (idle["generation"].as_u64(), idle["cases"].as_array().map(Vec::len)),
+        (Some(0), Some(0)),
+        "nothing compared unasked: {idle}"
+    );
+
+    // Asked: no reference yet, so the case fails, and its image shows.
+    ws.send(serde_json::json!({ "type": "reference_comparison", "on": true }));
+    let first = compared(&mut ws, "failed");
+    let case = &first["cases"][0];
+    assert_eq!((case["name"].as_str(), case["verdict"].as_str()), (Some("pattern"), Some("failed")), "{first}");
+    assert_eq!(case["diagnostics"][0]["code"], "reference-missing", "{first}");
+    assert_eq!(case["outputs"][0]["output"], "tonemap/color");
+    let (status, png) = s.get("/api/references/pattern/0/actual.png");
+    assert_eq!((status, &png[1..4]), (200, b"PNG".as_slice()));
+    assert_eq!(s.get("/api/references/pattern/0/reference.png").0, 404, "no reference to show");
+
+    // Blessed from another machine: refused. From this one: written, and
+    // the comparison that follows passes exactly.
+    let port: u16 = s.addr.rsplit_once(':').expect("host:port").1.parse().expect("a port");
+    let outside = std::net::SocketAddr::new(outward_address(), port);
+    let (status, _) = s.post_json("/api/references/pattern/bless", &serde_json::json!({}), Some(outside));
+    assert_eq!(status, 403);
+    assert!(!p.path("tests/images/pattern").exists(), "nothing written");
+    let (status, body) = s.post("/api/references/pattern/bless");
+    assert_eq!(status, 200, "{}", String::from_utf8_lossy(&body));
+    assert!(p.path("tests/images/pattern/tonemap.color.png").is_file());
+    let blessed = compared(&mut ws, "passed");
+    assert_eq!(blessed["cases"][0]["verdict"], "passed", "{blessed}");
+    assert_eq!(blessed["cases"][0]["outputs"][0]["flip"]["mean"], 0.0);
+
+    // A deliberate change to the tonemapper, saved as an editor saves: the
+    // next comparison fails the case, with FLIP's map to look at.
+    let tonemap = p.read(reload::TONEMAP);
+    let input = "let c = max(texel.rgb, vec3(0.0));";
+    assert!(tonemap.contains(input));
+    p.save_by_rename(reload::TONEMAP, tonemap.replace(input, "let c = max(texel.rgb * 1.5, vec3(0.0));"));
+    let changed = compared(&mut ws, "failed");
+    let case = &changed["cases"][0];
+    assert_eq!((case["verdict"].as_str(), case["diagnostics"][0]["code"].as_str()), (Some("failed"), Some("image-mismatch")), "{changed}");
+    assert!(case["outputs"][0]["flip"]["mean"].as_f64().unwrap() > 0.01, "{changed}");
+    let (status, png) = s.get("/api/references/pattern/0/flip.png");
+    assert_eq!((status, &png[1..4]), (200, b"PNG".as_slice()));
+}

@@ -13,6 +13,7 @@ pub mod inbox;
 pub mod last_good;
 pub mod materials;
 pub mod preview;
+pub mod references;
 pub mod shared;
 pub mod viewer;
 pub mod watch;
@@ -92,6 +93,8 @@ pub fn start(opts: ServeOptions, attached: Option<Attached>) -> Result<Running, 
         Some(a) => (Some(a.gpu), Some(a.display)),
         None => (None, None),
     };
+    // The image cases' comparison, idle until a client asks for it.
+    references::start(shared.clone(), opts.root.clone(), opts.scene.clone(), shader_root.clone());
     let config =
         Config { shader_root, scene_path: opts.scene.clone(), mode: opts.mode, max_fps: opts.max_fps, watch_files: watch.files(), display };
     let (shared_r, tx_r) = (shared.clone(), tx.clone());

@@ -59,6 +59,10 @@ pub struct Shared {
     /// Each source file that broke a pass, diffed against its last good
     /// text (`GET /api/files`), and those texts, which a revert writes back.
     pub files: RwLock<Arc<FilesState>>,
+    /// The newest comparison of the scene's image cases with their
+    /// references, and the way to ask for one.
+    pub references: RwLock<Arc<super::references::State>>,
+    pub reference_jobs: Arc<super::references::Queue>,
 }
 
 /// The source files not good now that have a last good version.
@@ -127,6 +131,8 @@ impl Shared {
             measured: RwLock::new(Default::default()),
             controls: RwLock::new(ControlsReport::default()),
             files: RwLock::new(Arc::default()),
+            references: RwLock::new(Arc::default()),
+            reference_jobs: Arc::default(),
             materials: RwLock::new(Arc::default()),
         })
     }

@@ -71,7 +71,8 @@ fn side_by_side(w: u32, h: u32, images: &[&[u8]]) -> Vec<u8> {
     png(total, h, &rgb)
 }
 
-fn png(w: u32, h: u32, rgb: &[u8]) -> Vec<u8> {
+/// RGB8 bytes as a PNG file.
+pub fn png(w: u32, h: u32, rgb: &[u8]) -> Vec<u8> {
     let mut out = Vec::new();
     let encoder = image::codecs::png::PngEncoder::new(&mut out);
     image::ImageEncoder::write_image(encoder, rgb, w, h, image::ExtendedColorType::Rgb8)

@@ -9,10 +9,12 @@
 pub mod artifacts;
 pub mod compare;
 pub mod config;
+pub mod live;
 mod report;
 mod run;
 
 pub use report::{CaseResult, OutputResult, Verdict, verdict_word};
+pub use run::Renderer;
 
 use std::path::{Path, PathBuf};
 use std::str::FromStr;

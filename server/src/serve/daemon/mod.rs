@@ -29,10 +29,11 @@ use std::time::{Duration, Instant};
 use super::display::Source;
 use super::event::{CompileResult, Event, FileBatch, FileChange, SceneCommand};
 use super::inbox::Inbox;
+use super::references;
 use super::shared::{self, Shared};
 use crate::diag::{Diagnostic, display_path};
 use crate::gpu::Gpu;
-use crate::protocol::{NanReport, PassInfo, QUAD_STATISTICS, ServerEvent};
+use crate::protocol::{NanReport, PassInfo, QUAD_STATISTICS, REFERENCES, ServerEvent};
 use crate::render::FrameOptions;
 use crate::render::frame::{FrameResult, PendingFrame};
 use crate::render::passes::{classify, nan_watch};
@@ -264,6 +265,16 @@ impl Daemon {
                 self.render();
             }
         }
+        self.shared.reference_jobs.stop();
+    }
+
+    /// Asks the comparison thread to compare the scene's image cases with
+    /// their references using the sources now, while a client wants it.
+    fn compare_references(&self) {
+        if self.subscriptions.values().any(|s| s.contains(REFERENCES)) {
+            let gpu = self.session.gpu().clone();
+            self.shared.reference_jobs.submit(references::Job { gpu, lib: self.session.library().clone() });
+        }
     }
 
     fn wants_frame(&self) -> bool {
@@ -311,6 +322,11 @@ impl Daemon {
                 self.dirty |= !outputs.is_subset(&before);
                 if !outputs.is_empty() {
                     self.subscriptions.insert(client, outputs);
+                }
+                // A client starting to want the comparison gets one now.
+                let wanted = |s: &BTreeSet<String>| s.contains(REFERENCES);
+                if self.subscriptions.get(&client).is_some_and(wanted) && !wanted(&before) {
+                    self.compare_references();
                 }
                 let quads = self.subscriptions.values().any(|s| s.contains(QUAD_STATISTICS));
                 self.session.set_quads(quads);
@@ -565,6 +581,7 @@ impl Daemon {
         }
         self.dirty = true;
         self.publish_state();
+        self.compare_references();
     }
 
     /// The one place a frame is submitted.
@@ -576,7 +593,8 @@ impl Daemon {
         self.last_frame = Some(started);
         self.dirty = false;
         let final_key = self.session.graph().final_name();
-        let mut capture: BTreeSet<String> = self.subscriptions.values().flatten().filter(|k| *k != QUAD_STATISTICS).cloned().collect();
+        let mut capture: BTreeSet<String> =
+            self.subscriptions.values().flatten().filter(|k| *k != QUAD_STATISTICS && *k != REFERENCES).cloned().collect();
         capture.extend(final_key.clone());
         capture.insert(nan_watch::OUTPUT.to_owned());
         // The frame event's tile statistics.

@@ -33,6 +33,7 @@ mod files;
 mod guard;
 mod preview;
 mod quads;
+mod references;
 mod sources;
 mod tensors;
 #[cfg(test)]
@@ -141,6 +142,9 @@ fn build(shared: Arc<Shared>, allowed_hosts: Vec<String>) -> (Router, watch::Sen
         .route("/api/sources/{*path}", get(sources::source))
         .route("/api/files", get(files::list))
         .route("/api/files/revert", post(files::revert))
+        .route("/api/references", get(references::report))
+        .route("/api/references/{case}/bless", post(references::bless))
+        .route("/api/references/{case}/{index}/{file}", get(references::image))
         .route("/api/reload", post(api::reload))
         .route("/api/controls", get(api::controls))
         .route("/api/materials", get(api::materials))

@@ -16,7 +16,7 @@ use tokio::sync::broadcast::error::RecvError;
 
 use super::AppState;
 use super::guard::error;
-use crate::protocol::{ClientMessage, Encoding, QUAD_STATISTICS, ServerEvent};
+use crate::protocol::{ClientMessage, Encoding, QUAD_STATISTICS, REFERENCES, ServerEvent};
 use crate::serve::event::SceneCommand;
 use crate::serve::inbox::{Client, Command, MAX_CONNECTIONS, Refused};
 use crate::serve::shared::{FrameImages, Shared};
@@ -164,18 +164,8 @@ fn client_message(
             }
             return Ok(());
         }
-        ClientMessage::QuadStatistics { on } => {
-            let changed = if on {
-                room_for(subscriptions, QUAD_STATISTICS, "`quad_statistics`")?;
-                subscriptions.insert(QUAD_STATISTICS.to_owned(), Encoding::default()).is_none()
-            } else {
-                subscriptions.remove(QUAD_STATISTICS).is_some()
-            };
-            if changed {
-                client.subscribe(subscriptions.keys().cloned().collect());
-            }
-            return Ok(());
-        }
+        ClientMessage::QuadStatistics { on } => return toggle(client, subscriptions, QUAD_STATISTICS, "`quad_statistics`", on),
+        ClientMessage::ReferenceComparison { on } => return toggle(client, subscriptions, REFERENCES, "`reference_comparison`", on),
         ClientMessage::Rebuild {} => ("rebuild", Command::Rebuild),
         ClientMessage::SetOverride { path, value } => ("set_override", Command::Scene(SceneCommand::Set { path, value })),
         ClientMessage::ClearOverrides {} => ("clear_overrides", Command::Scene(SceneCommand::Clear)),
@@ -188,6 +178,21 @@ fn client_message(
         // the client then.
         Ok(()) | Err(Refused::Gone) => Ok(()),
     }
+}
+
+/// Adds or drops `key` (something computed for the client, not an output)
+/// in the client's subscriptions, telling the daemon when that changed.
+fn toggle(client: &mut Client, subscriptions: &mut BTreeMap<String, Encoding>, key: &str, what: &str, on: bool) -> Result<(), String> {
+    let changed = if on {
+        room_for(subscriptions, key, what)?;
+        subscriptions.insert(key.to_owned(), Encoding::default()).is_none()
+    } else {
+        subscriptions.remove(key).is_some()
+    };
+    if changed {
+        client.subscribe(subscriptions.keys().cloned().collect());
+    }
+    Ok(())
 }
 
 /// Whether `key` may join a connection's subscriptions: it is there
