@@ -1,7 +1,8 @@
 //! A rendered output against its reference file: which file, reading it,
-//! and the figures. Display-referred outputs (8-bit formats) are kept as
-//! PNG and compared with LDR-FLIP; HDR outputs as OpenEXR (32-bit float,
-//! exact) with HDR-FLIP. relMSE, on the linear values, is reported beside.
+//! and the figures. Display-referred outputs (8-bit sRGB textures) are kept
+//! as PNG, which holds their bytes exactly, and compared with LDR-FLIP;
+//! every other output as OpenEXR (32-bit float, exact) with HDR-FLIP.
+//! relMSE, on the linear values, is reported beside.
 
 use std::path::{Path, PathBuf};
 
@@ -13,16 +14,17 @@ use crate::tradeoffs::metric::{Rgba, relative_mse};
 /// How an output is stored and compared.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Range {
-    /// 8 bits per channel: what the display shows.
+    /// 8-bit sRGB: what the display shows.
     Display,
-    /// Float: what the renderer computed.
+    /// Anything else (float, linear 8-bit): what the renderer computed.
     High,
 }
 
 impl Range {
-    /// By the captured texture's format name.
+    /// By the captured texture's format name: a PNG's sRGB bytes give back
+    /// an sRGB texture's exactly, and a linear one's only approximately.
     pub fn of(format: &str) -> Range {
-        if ["Rgba8", "Bgra8", "R8", "Rg8"].iter().any(|p| format.starts_with(p)) { Range::Display } else { Range::High }
+        if format.ends_with("Srgb") { Range::Display } else { Range::High }
     }
 
     pub fn extension(self) -> &'static str {
@@ -108,4 +110,20 @@ pub fn encode(capture: &CapturedImage, range: Range) -> Result<Vec<u8>, String> 
     let mut out = std::io::Cursor::new(Vec::new());
     image.write().to_buffered(&mut out).map_err(|e| e.to_string())?;
     Ok(out.into_inner())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_outputs_are_png_and_the_rest_exr_named_as_loupe_render_names_them() {
+        assert_eq!(Range::of("Rgba8UnormSrgb"), Range::Display);
+        assert_eq!(Range::of("Bgra8UnormSrgb"), Range::Display);
+        assert_eq!(Range::of("Rgba8Unorm"), Range::High);
+        assert_eq!(Range::of("Rgba16Float"), Range::High);
+        let path = reference_path(Path::new("tests/images"), "show-320x180", "tonemap/color", Range::Display);
+        assert_eq!(path, Path::new("tests/images/show-320x180/tonemap.color.png"));
+        assert_eq!(reference_path(Path::new("r"), "c", "lighting/color", Range::High), Path::new("r/c/lighting.color.exr"));
+    }
 }

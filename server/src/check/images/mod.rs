@@ -203,14 +203,14 @@ fn check(c: &CapturedImage, case: &Case, opts: &Options, r: &mut CaseResult) -> 
                 .with_note(bless_hint),
                 Err(d) => d.with_note(bless_hint),
             };
-            fail(r, case, opts, d, &output, &actual, c, None, None);
+            fail(r, case, opts, d, (c, &actual), None);
             return out;
         }
     };
     let compared = match compare::compare(&actual, &reference, range) {
         Ok(compared) => compared,
         Err(e) => {
-            fail(r, case, opts, Diagnostic::error(Code::Image, e.to_string()), &output, &actual, c, None, None);
+            fail(r, case, opts, Diagnostic::error(Code::Image, e.to_string()), (c, &actual), None);
             return out;
         }
     };
@@ -228,27 +228,25 @@ fn check(c: &CapturedImage, case: &Case, opts: &Options, r: &mut CaseResult) -> 
         )
         .with_note(format!("relMSE {:.3e} against {shown}", compared.relative_mse))
         .with_note(bless_hint);
-        fail(r, case, opts, d, &output, &actual, c, Some(&reference), Some(&compared.map));
+        fail(r, case, opts, d, (c, &actual), Some((&reference, &compared.map)));
     }
     out
 }
 
 /// Records a failed output: its diagnostic, at the case, naming where its
-/// images were written.
-#[allow(clippy::too_many_arguments)]
+/// images were written. `actual`: the capture and its image; `compared`:
+/// the reference and FLIP's map, when the two could be compared.
 fn fail(
     r: &mut CaseResult,
     case: &Case,
     opts: &Options,
     d: Diagnostic,
-    output: &str,
-    actual: &Image,
-    c: &CapturedImage,
-    reference: Option<&Image>,
-    map: Option<&crate::flip::ErrorMap>,
+    (c, actual): (&CapturedImage, &Image),
+    compared: Option<(&Image, &crate::flip::ErrorMap)>,
 ) {
     let exr = (Range::of(&c.format) == Range::High).then(|| compare::encode(c, Range::High).ok()).flatten();
-    let written = artifacts::write_output(&opts.artifacts, &case.name, output, actual, exr.as_deref(), reference, map);
+    let (reference, map) = compared.unzip();
+    let written = artifacts::write_output(&opts.artifacts, &case.name, &c.key(), actual, exr.as_deref(), reference, map);
     let d = at_case(&case.at, d);
     r.diagnostics.push(match written {
         Ok(()) => d.with_note(format!(
