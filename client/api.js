@@ -86,6 +86,11 @@ export const captures = () => getJson('/api/captures').then(unwrap('captures'));
 export const source = (path) => getText(`/api/sources/${encodePath(path)}`);
 export const files = () => getJson('/api/files').then(unwrap('files'));
 
+/** Writes image case `name`'s shown outputs as its references. */
+export async function blessReference(name) {
+  return (await request(`/api/references/${encodeURIComponent(name)}/bless`, 'application/json', { method: 'POST' })).json();
+}
+
 /** Writes `file`'s last good text back (`POST /api/files/revert`). */
 export async function revertFile(file) {
   const init = { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify({ file }) };

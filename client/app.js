@@ -11,6 +11,7 @@
 //                      its text holds "file:line:col: severity[code]: message";
 //                      excerpt lines .src-line[data-line], the error line(s) .hl
 //   #file-diffs        see file_diffs.js
+//   #reference-on, #reference-body: see references.js
 //   #inspector canvas, #pixel-value[data-x][data-y][data-r][data-g][data-b][data-a]
 //                      (#pixel-value-b, #pixel-value-diff when comparing)
 //   #inspect-a, #channel (rgb|r|g|b|a|luminance), #exposure (EV), #range-min,
@@ -34,6 +35,7 @@ import { Connection } from './ws.js';
 import { PassList } from './passes.js';
 import { DiagnosticsPanel } from './diagnostics.js';
 import { FileDiffs } from './file_diffs.js';
+import { ReferenceView } from './references.js';
 import { Inspector } from './inspector.js';
 import { LiveFrame } from './live.js';
 import { TensorView } from './tensor.js';
@@ -494,6 +496,9 @@ function onEvent(ev) {
     case 'files':
       fileDiffs.set(ev.files);
       break;
+    case 'references':
+      referenceView.apply(ev);
+      break;
     case 'device_lost':
       state.deviceLost = { message: ev.message, recovered: !!ev.recovered };
       notify(
@@ -606,6 +611,22 @@ $('rebuild').addEventListener('click', async () => {
 // Temporal passes and the path tracer's accumulation start over
 // (`reset_history`, a daemon command like `rebuild`).
 $('reset-history').addEventListener('click', () => conn.send({ type: 'reset_history' }));
+
+// ---- against reference ---------------------------------------------------
+
+const referenceView = new ReferenceView(
+  { toggle: $('reference-on'), body: $('reference-body'), meta: $('reference-meta') },
+  {
+    send: (on) => {
+      conn?.setReferences(on);
+      // What an earlier comparison found, until the next one ends.
+      if (on) api.getJson('/api/references').then((r) => referenceView.apply(r), () => {});
+    },
+    bless: (name) => api.blessReference(name),
+    confirm: (text) => window.confirm(text),
+    notify: (text, kind) => notify('bless', text, kind, 10000),
+  },
+);
 
 // ---- quad statistics -----------------------------------------------------
 

@@ -9,10 +9,7 @@
 // .diff-line[data-tag= |-|+][data-old][data-new] (.failing where an error
 // points), button.revert.
 
-import { el } from './util.js';
-
-/** Host names a page served on this machine has. */
-const LOOPBACK = new Set(['127.0.0.1', 'localhost', '[::1]', '::1']);
+import { el, writeButton } from './util.js';
 
 /** The rows of a FileDiff: each hunk's lines, a gap between hunks. */
 export function diffRows(diff) {
@@ -33,7 +30,6 @@ export class FileDiffs {
     this.container = container;
     this.hooks = hooks;
     this.key = null;
-    this.canRevert = LOOPBACK.has(location.hostname);
     this.set([]);
   }
 
@@ -65,10 +61,15 @@ export class FileDiffs {
           ),
     );
     const pipelines = (d.pipelines ?? []).join(', ');
-    const revert = this.canRevert
-      ? el('button', { class: 'revert', type: 'button', title: 'write the version that last compiled back to the file' }, 'revert to last good')
-      : null;
-    revert?.addEventListener('click', () => this.revert(d.file, revert));
+    const revert = writeButton({
+      cls: 'revert',
+      label: 'revert to last good',
+      title: 'write the version that last compiled back to the file',
+      question: () => `Write the last good version of ${d.file} over the file? Its current text is lost.`,
+      run: () => this.hooks.revert(d.file),
+      confirm: this.hooks.confirm,
+      notify: this.hooks.notify,
+    });
     return el(
       'div',
       { class: 'file-diff', dataset: { file: d.file } },
@@ -81,16 +82,5 @@ export class FileDiffs {
       ),
       el('div', { class: 'excerpt diff' }, rows),
     );
-  }
-
-  async revert(file, button) {
-    if (!this.hooks.confirm(`Write the last good version of ${file} over the file? Its current text is lost.`)) return;
-    button.disabled = true;
-    try {
-      await this.hooks.revert(file);
-    } catch (err) {
-      this.hooks.notify(`revert of ${file} failed: ${err.message ?? err}`, 'error');
-      button.disabled = false;
-    }
   }
 }

@@ -91,3 +91,28 @@ export function coalesce(fn, delay = 30) {
     }, delay);
   };
 }
+
+/** Host names of a page served from this machine. */
+const LOOPBACK = new Set(['127.0.0.1', 'localhost', '[::1]', '::1']);
+
+/**
+ * A button for an action that writes project files. It is offered only on
+ * a page served from loopback (the server refuses any other client): null
+ * elsewhere. A click asks `confirm(question)` first; the button is disabled
+ * while `run()` goes, and a failure goes to `notify` and enables it again.
+ */
+export function writeButton({ cls, label, title, question, run, confirm, notify }) {
+  if (!LOOPBACK.has(location.hostname)) return null;
+  const button = el('button', { class: cls, type: 'button', title }, label);
+  button.addEventListener('click', async () => {
+    if (!confirm(question())) return;
+    button.disabled = true;
+    try {
+      await run();
+    } catch (err) {
+      notify(`${label} failed: ${err.message ?? err}`, 'error');
+      button.disabled = false;
+    }
+  });
+  return button;
+}

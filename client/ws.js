@@ -75,6 +75,7 @@ export class Connection {
       this.setState('connected');
       for (const message of this.subscriptions.values()) this.send(message);
       if (this.quads) this.send({ type: 'quad_statistics', on: true });
+      if (this.references) this.send({ type: 'reference_comparison', on: true });
       this.safe(() => this.cb.onOpen?.());
     };
     ws.onmessage = (msg) => this.receive(msg.data);
@@ -160,6 +161,12 @@ export class Connection {
   setQuads(on) {
     this.quads = on;
     this.send({ type: 'quad_statistics', on });
+  }
+
+  /** Asks for (or stops) the image cases' comparison with their references. */
+  setReferences(on) {
+    this.references = on;
+    this.send({ type: 'reference_comparison', on });
   }
 
   /**

@@ -49,6 +49,8 @@ const NOT_PROVOKED: &[&str] = &[
 fn every_documented_message_has_every_documented_key() {
     let rows: Vec<Row> = protocol::documented();
     let p = Project::copy_of_repo("protocol-keys");
+    // One tiny image case of the scene, for "against reference".
+    p.write("loupe.toml", "[[images]]\nname = \"tiny\"\nscene = \"scenes/minimal.toml\"\nsize = \"32x18\"\n");
     // The minimal scene has a depth-tested draw (gbuffer: `rasterized`, no
     // `what_if`) and fullscreen passes (`what_if`, no `rasterized`).
     let s = Server::start(&p.root, &["--scene", "scenes/minimal.toml", "--render", "on-change", "--debug-api"]);
@@ -88,6 +90,17 @@ fn every_documented_message_has_every_documented_key() {
     seen.add("POST /api/files/revert", serde_json::from_slice(&body).expect("JSON"));
     assert_eq!(p.read(reload::TONEMAP), good);
     seen.until(&mut ws, "reload_succeeded", |_| true);
+
+    // Against reference: no reference yet (a failure with its
+    // diagnostic), then blessed (a pass, with FLIP's figures).
+    ws.send(json!({ "type": "reference_comparison", "on": true }));
+    seen.until(&mut ws, "references", |v| v["comparing"] == false && v["cases"][0]["verdict"] == "failed");
+    seen.add("GET /api/references", s.get_json("/api/references"));
+    let (status, body) = s.post("/api/references/tiny/bless");
+    assert_eq!(status, 200, "{}", String::from_utf8_lossy(&body));
+    seen.add("POST /api/references/{case}/bless", serde_json::from_slice(&body).expect("JSON"));
+    seen.until(&mut ws, "references", |v| v["comparing"] == false && v["cases"][0]["verdict"] == "passed");
+    seen.add("GET /api/references", s.get_json("/api/references"));
 
     // A traced frame's report: `nan` event and `/api/nan`.
     assert_eq!(s.post("/api/frame/trace").0, 202);

@@ -1155,3 +1155,40 @@ async fn a_broken_file_shows_its_diff_against_the_last_good_version_and_reverts_
     assert_eq!(p.read(TONEMAP), good);
     c.close().await.unwrap();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn against_reference_shows_the_gates_verdict_live_and_blesses_what_it_shows() {
+    let p = Project::copy_of_repo("browser-references");
+    p.write("loupe.toml", "[[images]]\nname = \"pattern\"\nscene = \"scenes/pattern.toml\"\nsize = \"64x36\"\n");
+    let s = Server::start(&p.root, &["--scene", "scenes/pattern.toml", "--render", "on-change"]);
+    let (_driver, c) = browser().await;
+    c.goto(&s.url("/")).await.unwrap();
+    until(&c, &s, "connected", "document.querySelector('#connection').textContent === 'connected'").await;
+
+    // On: no reference yet, so the case fails, showing what it rendered.
+    c.find(Locator::Css("#reference-on")).await.unwrap().click().await.unwrap();
+    let case = "#reference-body .reference-case[data-case=\"pattern\"]";
+    until(&c, &s, "the failing case", &format!("document.querySelector('{case}[data-verdict=\"failed\"]')")).await;
+    let width = format!("document.querySelector('{case} img[data-kind=\"actual\"]').naturalWidth === 64");
+    until(&c, &s, "the rendered image", &width).await;
+    let shown = c.execute(&format!("return document.querySelectorAll('{case} img').length;"), vec![]).await.unwrap();
+    assert_eq!(shown, 1, "no reference, no FLIP map: only the rendered image");
+
+    // Blessed (confirmed): the reference is written and the case passes,
+    // with the three images.
+    c.execute("window.confirm = () => true;", vec![]).await.unwrap();
+    c.find(Locator::Css(&format!("{case} button.bless"))).await.unwrap().click().await.unwrap();
+    until(&c, &s, "the case passing", &format!("document.querySelector('{case}[data-verdict=\"passed\"]')")).await;
+    assert!(p.path("tests/images/pattern/tonemap.color.png").is_file());
+    let figures = c.find(Locator::Css(&format!("{case} .reference-figures"))).await.unwrap().text().await.unwrap();
+    assert!(figures.contains("FLIP mean 0.0000 (≤ 0.01)"), "{figures}");
+    until(&c, &s, "the FLIP map", &format!("document.querySelector('{case} img[data-kind=\"flip\"]')?.naturalWidth === 64")).await;
+
+    // A tonemapper change, saved: the page says the gate would fail.
+    let tonemap = p.read(TONEMAP);
+    p.save_by_rename(TONEMAP, tonemap.replace("let c = max(texel.rgb, vec3(0.0));", "let c = max(texel.rgb * 1.5, vec3(0.0));"));
+    until(&c, &s, "the case failing again", &format!("document.querySelector('{case}[data-verdict=\"failed\"]')")).await;
+    let problem = c.find(Locator::Css(&format!("{case} .reference-problem"))).await.unwrap().text().await.unwrap();
+    assert!(problem.contains("differs from its reference"), "{problem}");
+    c.close().await.unwrap();
+}
