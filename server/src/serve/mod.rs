@@ -13,6 +13,7 @@ pub mod inbox;
 pub mod last_good;
 pub mod materials;
 pub mod preview;
+pub mod reference_jobs;
 pub mod references;
 pub mod shared;
 pub mod viewer;

@@ -10,108 +10,20 @@
 //! `references` event) with the images a page shows. Blessing writes the
 //! outputs last shown as the case's references, then compares again.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::sync::Arc;
 
+use super::reference_jobs::{Images, Job, State};
 use super::shared::{self, Shared};
 use crate::check::images::artifacts::png;
 use crate::check::images::config::Case;
 use crate::check::images::{Renderer, live};
 use crate::check::project;
 use crate::flip::encode_srgb8;
-use crate::gpu::Gpu;
 use crate::protocol::{CaseReport, OutputReport, ReferenceReport, ServerEvent};
-use crate::render::capture::CapturedImage;
-use crate::shader::Library;
 
 /// The default references folder, as `loupe check` has it.
 const DEFAULT_REFERENCES: &str = "tests/images";
-
-/// The images of one output, as PNG: the actual output, its reference and
-/// FLIP's map (the last two when they compared), and the capture a bless
-/// writes.
-pub struct Images {
-    pub actual: Vec<u8>,
-    pub reference: Option<Vec<u8>>,
-    pub flip: Option<Vec<u8>>,
-    pub capture: Arc<CapturedImage>,
-}
-
-/// The newest comparison: the report and, by case and output index, the
-/// images.
-#[derive(Clone, Default)]
-pub struct State {
-    pub report: ReferenceReport,
-    pub images: BTreeMap<(String, usize), Arc<Images>>,
-    /// Where the cases' references are.
-    pub references: PathBuf,
-}
-
-/// A comparison to run: the daemon's device and sources now.
-#[derive(Clone)]
-pub struct Job {
-    pub gpu: Gpu,
-    pub lib: Arc<Library>,
-}
-
-/// The way to the comparison thread, shared by the daemon (new sources)
-/// and the HTTP side (compare again after a bless).
-#[derive(Default)]
-pub struct Queue {
-    slot: Mutex<Slot>,
-    ready: Condvar,
-}
-
-#[derive(Default)]
-struct Slot {
-    waiting: Option<Job>,
-    /// The newest job taken, to run again.
-    last: Option<Job>,
-    stopped: bool,
-}
-
-impl Queue {
-    fn lock(&self) -> MutexGuard<'_, Slot> {
-        self.slot.lock().unwrap_or_else(|e| e.into_inner())
-    }
-
-    /// Asks for a comparison with `job`'s sources, replacing one waiting.
-    pub fn submit(&self, job: Job) {
-        self.lock().waiting = Some(job);
-        self.ready.notify_one();
-    }
-
-    /// Compares the newest sources again (after references changed).
-    pub fn again(&self) {
-        let mut slot = self.lock();
-        if slot.waiting.is_none() {
-            slot.waiting = slot.last.clone();
-        }
-        drop(slot);
-        self.ready.notify_one();
-    }
-
-    /// Ends the thread once it finishes what it runs.
-    pub fn stop(&self) {
-        self.lock().stopped = true;
-        self.ready.notify_one();
-    }
-
-    fn next(&self) -> Option<Job> {
-        let mut slot = self.lock();
-        loop {
-            if slot.stopped {
-                return None;
-            }
-            if let Some(job) = slot.waiting.take() {
-                slot.last = Some(job.clone());
-                return Some(job);
-            }
-            slot = self.ready.wait(slot).unwrap_or_else(|e| e.into_inner());
-        }
-    }
-}
 
 /// Starts the comparison thread for the daemon's `scene` in the project at
 /// `root`.

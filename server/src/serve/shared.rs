@@ -61,8 +61,8 @@ pub struct Shared {
     pub files: RwLock<Arc<FilesState>>,
     /// The newest comparison of the scene's image cases with their
     /// references, and the way to ask for one.
-    pub references: RwLock<Arc<super::references::State>>,
-    pub reference_jobs: Arc<super::references::Queue>,
+    pub references: RwLock<Arc<super::reference_jobs::State>>,
+    pub reference_jobs: Arc<super::reference_jobs::Queue>,
 }
 
 /// The source files not good now that have a last good version.

@@ -29,7 +29,7 @@ use std::time::{Duration, Instant};
 use super::display::Source;
 use super::event::{CompileResult, Event, FileBatch, FileChange, SceneCommand};
 use super::inbox::Inbox;
-use super::references;
+use super::reference_jobs;
 use super::shared::{self, Shared};
 use crate::diag::{Diagnostic, display_path};
 use crate::gpu::Gpu;
@@ -273,7 +273,7 @@ impl Daemon {
     fn compare_references(&self) {
         if self.subscriptions.values().any(|s| s.contains(REFERENCES)) {
             let gpu = self.session.gpu().clone();
-            self.shared.reference_jobs.submit(references::Job { gpu, lib: self.session.library().clone() });
+            self.shared.reference_jobs.submit(reference_jobs::Job { gpu, lib: self.session.library().clone() });
         }
     }
 
