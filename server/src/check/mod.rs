@@ -51,6 +51,8 @@ pub struct CheckOptions {
     /// What sources are validated with. `None`: what the adapter supports,
     /// or without one `gpu::capabilities_without_device()`.
     pub capabilities: Option<Capabilities>,
+    /// Every `debugPrintf` call is an error (a CI that wants none merged).
+    pub deny_debug_printf: bool,
 }
 
 /// A failure of the run itself rather than of a checked file.
@@ -199,6 +201,17 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
     for c in &checked {
         for d in c.diagnostics.iter().cloned() {
             place(&c.display, d, &mut modules);
+        }
+    }
+    if opts.deny_debug_printf {
+        for file in target_displays.iter().filter_map(|d| lib.get(d)) {
+            for site in &file.prints.sites {
+                let at = file.location(site.call.clone());
+                let d = Diagnostic::error(Code::PrintfDenied, "`debugPrintf` is denied in this check")
+                    .with_label(at, "printed here", true)
+                    .with_note("denied by --deny-debug-printf (or `deny_debug_printf = true` in loupe.toml)");
+                place(&file.display, d, &mut modules);
+            }
         }
     }
     // A shader tree that holds some of the renderer's shaders must hold all

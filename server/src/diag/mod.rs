@@ -112,6 +112,16 @@ pub enum Code {
     Image,
     #[serde(rename = "material")]
     Material,
+    #[serde(rename = "printf-syntax")]
+    PrintfSyntax,
+    #[serde(rename = "printf-format")]
+    PrintfFormat,
+    #[serde(rename = "printf-arguments")]
+    PrintfArguments,
+    #[serde(rename = "printf-type")]
+    PrintfType,
+    #[serde(rename = "printf-denied")]
+    PrintfDenied,
 }
 
 impl Code {
@@ -138,6 +148,11 @@ impl Code {
             Code::Weights => "weights",
             Code::Image => "image",
             Code::Material => "material",
+            Code::PrintfSyntax => "printf-syntax",
+            Code::PrintfFormat => "printf-format",
+            Code::PrintfArguments => "printf-arguments",
+            Code::PrintfType => "printf-type",
+            Code::PrintfDenied => "printf-denied",
         }
     }
 
@@ -165,10 +180,15 @@ impl Code {
             Code::Weights => "the denoiser's weights file (.tza) is malformed or is not a U-Net loupe can run",
             Code::Image => "an image file is malformed, or does not fit the images it goes with",
             Code::Material => "the material file is invalid",
+            Code::PrintfSyntax => "a debugPrintf call is malformed (not a statement, no string literal, no enable directive)",
+            Code::PrintfFormat => "a debugPrintf format string has a placeholder loupe does not know",
+            Code::PrintfArguments => "a debugPrintf call passes more or fewer arguments than its format string has placeholders",
+            Code::PrintfType => "a debugPrintf argument's type does not fit its placeholder, or cannot be printed",
+            Code::PrintfDenied => "a debugPrintf call in a check run with --deny-debug-printf",
         }
     }
 
-    pub const ALL: [Code; 21] = [
+    pub const ALL: [Code; 26] = [
         Code::Io,
         Code::Encoding,
         Code::EmptyFile,
@@ -190,6 +210,11 @@ impl Code {
         Code::Weights,
         Code::Image,
         Code::Material,
+        Code::PrintfSyntax,
+        Code::PrintfFormat,
+        Code::PrintfArguments,
+        Code::PrintfType,
+        Code::PrintfDenied,
     ];
 }
 
