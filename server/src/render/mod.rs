@@ -4,6 +4,7 @@
 
 pub mod capture;
 pub mod context;
+pub mod debug_print;
 pub mod denoise_weights;
 pub mod dfg;
 pub mod frame;

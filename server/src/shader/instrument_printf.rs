@@ -212,8 +212,11 @@ fn rewrite_sites(types: &naga::UniqueArena<Type>, f: &mut Function, g: &Globals,
     walk(
         &mut body,
         &mut |stmt, exprs| {
-            let Statement::Store { pointer, .. } = *stmt else { return };
+            let Statement::Store { pointer, value } = *stmt else { return };
             let Expression::LocalVariable(var) = exprs.f.expressions[pointer] else { return };
+            if exprs.f.expressions[value] != Expression::Literal(Literal::U32(printf::MARK)) {
+                return;
+            }
             let Some(&site) = markers.get(&var) else { return };
             let mut site_args = args.get(&site).cloned().unwrap_or_default();
             site_args.sort_unstable();

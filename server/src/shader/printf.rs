@@ -7,7 +7,7 @@
 //!
 //! ```wgsl
 //! { var loupe_printf_<tag>_<k>_0_arg = x; var loupe_printf_<tag>_<k>_1_arg = n;
-//!   var loupe_printf_<tag>_<k>_site: u32; loupe_printf_<tag>_<k>_site = 0u; }
+//!   var loupe_printf_<tag>_<k>_site: u32; loupe_printf_<tag>_<k>_site = 1u; }
 //! ```
 //!
 //! The `var`s keep each argument as a local of its inferred (concrete) type,
@@ -30,6 +30,9 @@ use crate::diag::Code;
 pub const ENABLE: &str = "wgpu_debug_printf";
 /// The call, as wgpu's native feature spells it.
 pub const CALL: &str = "debugPrintf";
+/// The value stored to a site's marker: naga may zero a local declared
+/// in a loop with a store of its own, which is not the site.
+pub const MARK: u32 = 1;
 /// What every generated name starts with.
 pub const PREFIX: &str = "loupe_printf_";
 
@@ -156,7 +159,7 @@ impl Prints {
                 out.insert(&mut text_out, "; ", site.call.start);
             }
             let marker = site_var(tag, k);
-            out.insert(&mut text_out, &format!("var {marker}: u32; {marker} = 0u; }}"), site.call.start);
+            out.insert(&mut text_out, &format!("var {marker}: u32; {marker} = {MARK}u; }}"), site.call.start);
             copied_to = site.call.end;
             out.sites.push(site);
         }
@@ -475,6 +478,86 @@ pub fn parse_format(s: &str) -> Result<Vec<Segment>, (usize, String)> {
         out.push(Segment::Text(text));
     }
     Ok(out)
+}
+
+impl Site {
+    /// Words a record of this site holds after its site word.
+    pub fn words(&self) -> usize {
+        self.specs().map(|s| usize::from(s.components)).sum()
+    }
+
+    /// The printed line from a record's argument words ([`Site::words`]
+    /// of them), and each argument's value (a number, or an array of them
+    /// for a vector; a float that is not finite as a string).
+    pub fn render(&self, words: &[u32]) -> (String, Vec<serde_json::Value>) {
+        let mut text = String::new();
+        let mut values = Vec::new();
+        let mut words = words.iter().copied();
+        for segment in &self.format {
+            match segment {
+                Segment::Text(t) => text.push_str(t),
+                Segment::Spec(spec) => {
+                    let parts: Vec<(String, serde_json::Value)> =
+                        (0..spec.components).map(|_| spec.render(words.next().unwrap_or_default())).collect();
+                    text.push_str(&parts.iter().map(|(t, _)| t.as_str()).collect::<Vec<_>>().join(", "));
+                    let mut v: Vec<serde_json::Value> = parts.into_iter().map(|(_, v)| v).collect();
+                    values.push(if v.len() == 1 { v.remove(0) } else { serde_json::Value::Array(v) });
+                }
+            }
+        }
+        (text, values)
+    }
+}
+
+impl Spec {
+    /// One component as C's printf shows it, and its value.
+    fn render(&self, word: u32) -> (String, serde_json::Value) {
+        use serde_json::Value;
+        match self.conversion {
+            Conversion::Signed => ((word as i32).to_string(), Value::from(word as i32)),
+            Conversion::Unsigned => (word.to_string(), Value::from(word)),
+            Conversion::Hex => (format!("{word:x}"), Value::from(word)),
+            float => {
+                let x = f32::from_bits(word);
+                let p = usize::from(self.precision.unwrap_or(6));
+                let text = if x.is_nan() {
+                    "nan".to_owned()
+                } else if x.is_infinite() {
+                    if x > 0.0 { "inf" } else { "-inf" }.to_owned()
+                } else {
+                    match float {
+                        Conversion::Fixed => format!("{x:.p$}"),
+                        Conversion::Exponent => exponent(f64::from(x), p),
+                        _ => general(f64::from(x), p),
+                    }
+                };
+                let value = if x.is_finite() { Value::from(f64::from(x)) } else { Value::from(text.clone()) };
+                (text, value)
+            }
+        }
+    }
+}
+
+/// C's `%.pe`: `1.500000e+00`.
+fn exponent(x: f64, p: usize) -> String {
+    let rust = format!("{x:.p$e}");
+    let (mantissa, exp) = rust.split_once('e').unwrap_or((&rust, "0"));
+    let exp: i32 = exp.parse().unwrap_or(0);
+    format!("{mantissa}e{}{:02}", if exp < 0 { '-' } else { '+' }, exp.abs())
+}
+
+/// C's `%.pg`: `%e` or `%f` by the exponent, trailing zeros dropped.
+fn general(x: f64, p: usize) -> String {
+    let p = p.max(1);
+    let exp: i32 = format!("{x:.*e}", p - 1).split_once('e').and_then(|(_, e)| e.parse().ok()).unwrap_or(0);
+    let trim = |s: String| -> String {
+        match s.split_once('e') {
+            Some((m, e)) if m.contains('.') => format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.')),
+            None if s.contains('.') => s.trim_end_matches('0').trim_end_matches('.').to_owned(),
+            _ => s,
+        }
+    };
+    if exp < -4 || exp >= p as i32 { trim(exponent(x, p - 1)) } else { trim(format!("{x:.*}", (p as i32 - 1 - exp) as usize)) }
 }
 
 /// A value a print can show: 32-bit scalars and vectors of f32, i32, u32

@@ -39,7 +39,7 @@ fn calls_become_blocks_of_locals_and_comments_are_left_alone() {
     assert!(p.text.starts_with(&" ".repeat(HEAD.len() - 1)), "the directive is blanked: {}", p.text);
     assert!(
         p.text.contains(
-            "{ var loupe_printf_00000007_0_0_arg = x * (2.0 + 1.0); var loupe_printf_00000007_0_1_arg = i32(x); var loupe_printf_00000007_0_site: u32; loupe_printf_00000007_0_site = 0u; }"
+            "{ var loupe_printf_00000007_0_0_arg = x * (2.0 + 1.0); var loupe_printf_00000007_0_1_arg = i32(x); var loupe_printf_00000007_0_site: u32; loupe_printf_00000007_0_site = 1u; }"
         ),
         "{}",
         p.text
@@ -125,4 +125,27 @@ fn format_strings() {
     assert!(parse_format("%").is_err());
     assert!(parse_format("%.2d").is_err());
     assert_eq!(parse_format("ab %v1f").unwrap_err().0, 3);
+}
+
+#[test]
+fn values_are_shown_as_c_shows_them() {
+    let site = |format: &str| Site { call: 0..0, format: parse_format(format).unwrap(), args: Vec::new() };
+    let f = |x: f32| x.to_bits();
+    let (text, values) = site("%d %u %x %f|%.2f %e %g %g %g %v2f").render(&[
+        (-3i32) as u32,
+        7,
+        255,
+        f(1.5),
+        f(2.0 / 3.0),
+        f(1234.5),
+        f(0.0001),
+        f(1e-5),
+        f(100000.0),
+        f(0.25),
+        f(f32::NAN),
+    ]);
+    assert_eq!(text, "-3 7 ff 1.500000|0.67 1.234500e+03 0.0001 1e-05 100000 0.250000, nan");
+    assert_eq!(values[0], serde_json::json!(-3));
+    assert_eq!(values[9], serde_json::json!([0.25, "nan"]));
+    assert_eq!(site("%v3u").words(), 3);
 }
