@@ -233,7 +233,7 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
         for c in &checked {
             for (spec, defs, composed) in &c.composed {
                 let result = crate::shader::guard::guarded(&c.display, "wgpu", || {
-                    pipeline::create(&gpu.device, spec, defs, composed, &lib, &c.display).map(|_| ())
+                    pipeline::create(&gpu.device, spec, defs, composed, &lib, &c.display, None).map(|_| ())
                 });
                 match result {
                     Ok(()) => modules.get_mut(&c.display).expect("inserted").pipelines += 1,

@@ -186,7 +186,7 @@ pub fn offline_failed(cmd: &str, e: OfflineError) -> ExitCode {
             print_diagnostics(&diags);
             ExitCode::from(exit::ERRORS)
         }
-        OfflineError::Io(e) => {
+        OfflineError::Io(e) | OfflineError::Usage(e) => {
             eprintln!("loupe {cmd}: {e}");
             ExitCode::from(exit::USAGE)
         }

@@ -50,6 +50,18 @@ pub struct Args {
     /// Samples per pixel for the path tracer, as `--set quality.path_spp=N`.
     #[arg(long)]
     spp: Option<i64>,
+    /// Collect the `debugPrintf`s of pixel X,Y (from the top left) into
+    /// report.json's `prints` (docs/printf.md).
+    #[arg(long, value_name = "X,Y", value_parser = parse_pixel)]
+    debug_pixel: Option<[u32; 2]>,
+}
+
+fn parse_pixel(s: &str) -> Result<[u32; 2], String> {
+    let parse = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("`{s}` is not a pixel: X,Y with whole numbers from 0"));
+    match s.split_once(',') {
+        Some((x, y)) => Ok([parse(x)?, parse(y)?]),
+        None => Err(format!("`{s}` is not a pixel: X,Y")),
+    }
 }
 
 pub fn run(args: Args) -> ExitCode {
@@ -61,7 +73,7 @@ pub fn run(args: Args) -> ExitCode {
     if let Some(n) = args.spp {
         job.overrides.insert("quality.path_spp".into(), Value::Int(n));
     }
-    let report = match offline::render::run(&job, &args.out) {
+    let report = match offline::render::run(&job, &args.out, args.debug_pixel) {
         Ok(r) => r,
         Err(e) => return offline_failed("render", e),
     };

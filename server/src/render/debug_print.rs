@@ -8,8 +8,65 @@ use std::sync::Arc;
 use serde::Serialize;
 
 use super::readback::Readback;
+use super::resource::PipelineKey;
 use crate::shader::SourceFile;
 use crate::shader::instrument_printf::{HEADER_WORDS, SiteId};
+
+/// What a frame binds for prints: the buffer, the group each
+/// instrumented pipeline binds it at, and what its records mean.
+#[derive(Clone, Copy)]
+pub struct PrintBinding<'a> {
+    pub buffer: &'a PrintBuffer,
+    pub groups: &'a std::collections::BTreeMap<PipelineKey, u32>,
+    pub table: &'a Arc<Vec<Option<TableSite>>>,
+}
+
+/// A frame's prints on their way back: its own copy of the buffer, so
+/// frames in flight never share a readback.
+pub struct PendingPrints {
+    readback: Readback,
+    table: Arc<Vec<Option<TableSite>>>,
+}
+
+impl PendingPrints {
+    pub fn map(&self) {
+        self.readback.map();
+    }
+
+    pub fn landed(&self) -> bool {
+        self.readback.landed()
+    }
+
+    /// The decoded prints; `None` when the readback failed.
+    pub fn read(&self) -> Option<Printed> {
+        let words = self
+            .readback
+            .read(|bytes| bytes.chunks_exact(4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).collect::<Vec<u32>>())?;
+        Some(decode(&words, &self.table))
+    }
+}
+
+/// Where a record number comes from: the pass and the site.
+#[derive(Debug, Clone)]
+pub struct TableSite {
+    pub pass: String,
+    pub file: Arc<SourceFile>,
+    /// Index in the file's prints.
+    pub site: usize,
+}
+
+/// The table entries of one instrumented module's `sites`, looked up in
+/// `files` (the files it was composed from) by tag; `None` keeps the
+/// numbering where no file has the tag.
+pub fn table(pass: &str, sites: &[SiteId], files: &[Arc<SourceFile>]) -> Vec<Option<TableSite>> {
+    sites
+        .iter()
+        .map(|&(tag, site)| {
+            let file = files.iter().find(|f| f.prints.tag == tag)?;
+            Some(TableSite { pass: pass.to_owned(), file: file.clone(), site })
+        })
+        .collect()
+}
 
 /// Record words a buffer holds by default: 64 KiB, about four thousand
 /// prints of a vec3.
@@ -37,10 +94,9 @@ pub struct Printed {
     pub dropped: u32,
 }
 
-/// The buffer and its readback.
+/// The buffer the instrumented pipelines write.
 pub struct PrintBuffer {
     buffer: wgpu::Buffer,
-    readback: Readback,
 }
 
 impl PrintBuffer {
@@ -53,7 +109,7 @@ impl PrintBuffer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        PrintBuffer { buffer, readback: Readback::new(device, "debug prints: readback", size) }
+        PrintBuffer { buffer }
     }
 
     /// What the instrumented module binds at `@group(group) @binding(0)`.
@@ -66,46 +122,37 @@ impl PrintBuffer {
         encoder.clear_buffer(&self.buffer, 0, None);
     }
 
-    /// Copies the buffer out: recorded after the frame's passes; call
-    /// [`PrintBuffer::map`] once submitted.
-    pub fn copy_out(&self, encoder: &mut wgpu::CommandEncoder) {
-        encoder.copy_buffer_to_buffer(&self.buffer, 0, self.readback.buffer(), 0, self.buffer.size());
-    }
-
-    pub fn map(&self) {
-        self.readback.map();
-    }
-
-    /// The buffer's words once mapping has landed (poll the device first);
-    /// `None` while pending or when mapping failed.
-    pub fn read(&self) -> Option<Vec<u32>> {
-        if !self.readback.landed() {
-            return None;
-        }
-        self.readback.read(|bytes| bytes.chunks_exact(4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).collect())
+    /// Copies the buffer out: recorded after the frame's passes; map the
+    /// result once submitted.
+    pub fn copy_out(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        table: &Arc<Vec<Option<TableSite>>>,
+    ) -> PendingPrints {
+        let readback = Readback::new(device, "debug prints: readback", self.buffer.size());
+        encoder.copy_buffer_to_buffer(&self.buffer, 0, readback.buffer(), 0, self.buffer.size());
+        PendingPrints { readback, table: table.clone() }
     }
 }
 
-/// Decodes a buffer's words: the records of `sites` (the instrumented
-/// module's table), each located in the one of `files` whose prints hold
-/// it. A record that names no known site ends the decoding: what follows
-/// cannot be framed.
-pub fn decode(words: &[u32], sites: &[SiteId], files: &[Arc<SourceFile>], pass: &str) -> Printed {
+/// Decodes a buffer's words, each record by its number in `table`. A
+/// record that names no known site ends the decoding: what follows cannot
+/// be framed.
+pub fn decode(words: &[u32], table: &[Option<TableSite>]) -> Printed {
     let header = HEADER_WORDS as usize;
     let (used, dropped) = (words.first().copied().unwrap_or(0), words.get(1).copied().unwrap_or(0));
     let end = words.len().min(header.saturating_add(used as usize));
     let mut records = words.get(header..end).unwrap_or_default();
     let mut lines = Vec::new();
     while let Some((&number, rest)) = records.split_first() {
-        let found = sites.get(number as usize).and_then(|&(tag, k)| {
-            let file = files.iter().find(|f| f.prints.tag == tag)?;
-            Some((file, file.prints.sites.get(k)?))
-        });
-        let Some((file, site)) = found else { break };
+        let found = table.get(number as usize).and_then(Option::as_ref).and_then(|t| Some((t, t.file.prints.sites.get(t.site)?)));
+        let Some((entry, site)) = found else { break };
+        let file = &entry.file;
         let Some(args) = rest.get(..site.words()) else { break };
         let (text, values) = site.render(args);
         let at = file.location(site.call.clone());
-        lines.push(PrintLine { pass: pass.to_owned(), file: file.display.clone(), line: at.line, column: at.column, text, values });
+        lines.push(PrintLine { pass: entry.pass.clone(), file: file.display.clone(), line: at.line, column: at.column, text, values });
         records = &rest[site.words()..];
     }
     Printed { lines, dropped }

@@ -16,6 +16,7 @@ pub mod path_geometry;
 pub mod pipelines;
 pub mod pool;
 pub mod preview;
+pub mod print_selection;
 pub mod quads;
 pub mod readback;
 pub mod resource;

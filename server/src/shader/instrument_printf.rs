@@ -41,9 +41,11 @@ pub const HEADER_WORDS: u64 = 2;
 #[derive(Debug, Clone)]
 pub struct InstrumentedPrints {
     pub module: Module,
+    pub info: naga::valid::ModuleInfo,
     /// The group of the print buffer (binding 0).
     pub group: u32,
-    /// Record `i` starts with word `i`: this site (file tag, site index).
+    /// A record starting with word `first_site + i` is from site `i`
+    /// (file tag, site index in the file).
     pub sites: Vec<SiteId>,
 }
 
@@ -63,10 +65,13 @@ fn functions(module: &Module) -> impl Iterator<Item = &Function> {
     module.functions.iter().map(|(_, f)| f).chain(module.entry_points.iter().map(|e| &e.function))
 }
 
-/// Instruments every print of `module` for the invocation at `pixel`.
-pub fn instrument(module: &Module, pixel: [u32; 2]) -> Result<InstrumentedPrints, PrintInstrumentError> {
+/// Instruments every print of `module` for the invocation at `pixel`. The
+/// buffer's group is the first past the module's groups and at least
+/// `min_group`; sites are numbered from `first_site`, so several modules
+/// can share one buffer.
+pub fn instrument(module: &Module, pixel: [u32; 2], min_group: u32, first_site: u32) -> Result<InstrumentedPrints, PrintInstrumentError> {
     let mut m = module.clone();
-    let group = m.global_variables.iter().filter_map(|(_, g)| g.binding.as_ref()).map(|b| b.group + 1).max().unwrap_or(0);
+    let group = m.global_variables.iter().filter_map(|(_, g)| g.binding.as_ref()).map(|b| b.group + 1).max().unwrap_or(0).max(min_group);
     let ty = Types::add(&mut m);
     let buffer = m.global_variables.append(
         GlobalVariable {
@@ -91,7 +96,7 @@ pub fn instrument(module: &Module, pixel: [u32; 2]) -> Result<InstrumentedPrints
         Span::UNDEFINED,
     );
     let globals = Globals { buffer, on, ty };
-    let mut sites = Sites::default();
+    let mut sites = Sites { first: first_site, ..Sites::default() };
     let Module { types, functions, entry_points, .. } = &mut m;
     for f in functions.iter_mut().map(|(_, f)| f).chain(entry_points.iter_mut().map(|e| &mut e.function)) {
         rewrite_sites(types, f, &globals, &mut sites);
@@ -99,10 +104,10 @@ pub fn instrument(module: &Module, pixel: [u32; 2]) -> Result<InstrumentedPrints
     for ep in entry_points {
         select(types, ep.stage, &mut ep.function, &globals, pixel);
     }
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+    let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
         .validate(&m)
         .map_err(|e| PrintInstrumentError::Internal(e.emit_to_string("")))?;
-    Ok(InstrumentedPrints { module: m, group, sites: sites.order })
+    Ok(InstrumentedPrints { module: m, info, group, sites: sites.order })
 }
 
 #[derive(Clone, Copy)]
@@ -146,6 +151,7 @@ type SiteArgs = Vec<(usize, Handle<LocalVariable>)>;
 /// The sites met so far, numbered in the order met.
 #[derive(Default)]
 struct Sites {
+    first: u32,
     order: Vec<SiteId>,
     index: BTreeMap<SiteId, u32>,
 }
@@ -154,7 +160,7 @@ impl Sites {
     fn number(&mut self, site: SiteId) -> u32 {
         *self.index.entry(site).or_insert_with(|| {
             self.order.push(site);
-            self.order.len() as u32 - 1
+            self.first + self.order.len() as u32 - 1
         })
     }
 }

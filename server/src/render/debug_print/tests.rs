@@ -79,19 +79,20 @@ fn run(
     record: impl FnOnce(&mut wgpu::CommandEncoder, &PrintBuffer),
 ) -> Printed {
     let prints = PrintBuffer::new(&gpu.device, words);
+    let table = Arc::new(table("test", &out.sites, std::slice::from_ref(file)));
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     prints.clear(&mut encoder);
     record(&mut encoder, &prints);
-    prints.copy_out(&mut encoder);
+    let pending = prints.copy_out(&gpu.device, &mut encoder, &table);
     gpu.queue.submit([encoder.finish()]);
-    prints.map();
+    pending.map();
     gpu.device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
-    decode(&prints.read().expect("mapped"), &out.sites, std::slice::from_ref(file), "test")
+    pending.read().expect("mapped")
 }
 
 fn fragment(gpu: &Gpu, pixel: [u32; 2]) -> Printed {
     let (file, module) = source();
-    let out = instrument_printf::instrument(&module, pixel).unwrap();
+    let out = instrument_printf::instrument(&module, pixel, 0, 0).unwrap();
     let module = shader(gpu, out.module.clone());
     let pipeline = gpu.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: None,
@@ -143,7 +144,7 @@ fn fragment(gpu: &Gpu, pixel: [u32; 2]) -> Printed {
 
 fn compute(gpu: &Gpu, entry: &str, pixel: [u32; 2], words: u64) -> Printed {
     let (file, module) = source();
-    let out = instrument_printf::instrument(&module, pixel).unwrap();
+    let out = instrument_printf::instrument(&module, pixel, 0, 0).unwrap();
     let module = shader(gpu, out.module.clone());
     let pipeline = gpu.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: None,

@@ -62,7 +62,7 @@ fn every_shader_with_a_print_validates_instrumented() {
         for defs in spec.permutations() {
             let module = compose(&lib, &file.display, &defs);
             assert!(has_prints(&module), "{} {defs:?}", spec.name);
-            let out = instrument(&module, [3, 5]).unwrap_or_else(|e| panic!("{} {defs:?}: {e}", spec.name));
+            let out = instrument(&module, [3, 5], 0, 0).unwrap_or_else(|e| panic!("{} {defs:?}: {e}", spec.name));
             assert!(!out.sites.is_empty());
             checked += 1;
         }
@@ -91,7 +91,7 @@ fn helper(x: f32) { debugPrintf(\"%f\", x); }
 @vertex fn d() -> @builtin(position) vec4<f32> { helper(1.0); return vec4(1.0); }
 ",
     );
-    let out = instrument(&m, [1, 2]).unwrap();
+    let out = instrument(&m, [1, 2], 0, 0).unwrap();
     let args = |name: &str| out.module.entry_points.iter().find(|e| e.name == name).unwrap().function.arguments.len();
     assert_eq!((args("a"), args("b"), args("c"), args("d")), (1, 1, 1, 0));
     assert_eq!(out.sites.len(), 2);
@@ -99,4 +99,11 @@ fn helper(x: f32) { debugPrintf(\"%f\", x); }
     let bound: Vec<_> = out.module.global_variables.iter().filter_map(|(_, g)| g.binding).collect();
     assert_eq!(bound, [ResourceBinding { group: 0, binding: 0 }]);
     assert!(!has_prints(&naga::front::wgsl::parse_str("fn f() { var loupe: u32; }").unwrap()));
+    // Past a group the caller keeps, numbered after sites of other modules.
+    let later = instrument(&m, [1, 2], 3, 10).unwrap();
+    assert_eq!(later.group, 3);
+    let words =
+        |out: &InstrumentedPrints| naga::back::wgsl::write_string(&out.module, &out.info, naga::back::wgsl::WriterFlags::empty()).unwrap();
+    let text = words(&later);
+    assert!(text.contains("] = 10u;") && text.contains("] = 11u;") && !text.contains("] = 0u;"), "{text}");
 }
