@@ -298,6 +298,14 @@ pub enum ServerEvent {
     Files {
         files: Vec<FileDiff>,
     },
+    /// What a frame's `debugPrintf`s printed at the selected pixel
+    /// (`debug_pixel`), for every frame while one is selected.
+    Prints {
+        frame: u64,
+        pixel: [u32; 2],
+        lines: Vec<crate::render::debug_print::PrintLine>,
+        dropped: u32,
+    },
 }
 
 /// `GET /api/materials`: the scene's material instances, one per
@@ -494,4 +502,12 @@ pub enum ClientMessage {
     /// Start (`on: true`) or stop receiving `quads` events: the daemon
     /// computes quad statistics while any client wants them.
     QuadStatistics { on: bool },
+    /// Select the pixel whose `debugPrintf`s every frame reports in a
+    /// `prints` event; `x` and `y` `null` (or left out) clear it.
+    DebugPixel {
+        #[serde(default)]
+        x: Option<u32>,
+        #[serde(default)]
+        y: Option<u32>,
+    },
 }

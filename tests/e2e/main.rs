@@ -9,6 +9,7 @@ mod golden;
 mod materials;
 mod materials_api;
 mod no_adapter;
+mod printf;
 mod protocol;
 mod recipe;
 mod render;

@@ -43,7 +43,6 @@ pub struct FrameReport {
 /// The prints at the selected pixel (docs/printf.md).
 #[derive(Debug, Serialize)]
 pub struct PrintsReport {
-    pub pixel: [u32; 2],
     /// The pipelines that ran instrumented.
     pub pipelines: Vec<String>,
     #[serde(flatten)]
@@ -121,10 +120,9 @@ pub fn run(job: &Job, out: &Path, debug_pixel: Option<[u32; 2]>) -> Result<Frame
     session.set_quads(true);
     session.set_debug_pixel(debug_pixel);
     let result = frame(&mut session, None);
-    let prints = debug_pixel.zip(session.debug_prints()).map(|(pixel, selection)| PrintsReport {
-        pixel,
+    let prints = session.debug_prints().map(|selection| PrintsReport {
         pipelines: selection.printing().map(|k| k.label()).collect(),
-        printed: result.prints.clone().unwrap_or_default(),
+        printed: result.prints.clone().unwrap_or(Printed { pixel: selection.pixel(), ..Printed::default() }),
     });
     std::fs::create_dir_all(out).map_err(|e| OfflineError::Io(format!("cannot create {}: {e}", out.display())))?;
     let write = |name: String, bytes: Vec<u8>| {

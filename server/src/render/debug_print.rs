@@ -19,6 +19,7 @@ pub struct PrintBinding<'a> {
     pub buffer: &'a PrintBuffer,
     pub groups: &'a std::collections::BTreeMap<PipelineKey, u32>,
     pub table: &'a Arc<Vec<Option<TableSite>>>,
+    pub pixel: [u32; 2],
 }
 
 /// A frame's prints on their way back: its own copy of the buffer, so
@@ -26,6 +27,7 @@ pub struct PrintBinding<'a> {
 pub struct PendingPrints {
     readback: Readback,
     table: Arc<Vec<Option<TableSite>>>,
+    pixel: [u32; 2],
 }
 
 impl PendingPrints {
@@ -42,7 +44,7 @@ impl PendingPrints {
         let words = self
             .readback
             .read(|bytes| bytes.chunks_exact(4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).collect::<Vec<u32>>())?;
-        Some(decode(&words, &self.table))
+        Some(Printed { pixel: self.pixel, ..decode(&words, &self.table) })
     }
 }
 
@@ -89,6 +91,8 @@ pub struct PrintLine {
 /// What one buffer held after a frame.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Printed {
+    /// The pixel selected when the frame was recorded.
+    pub pixel: [u32; 2],
     pub lines: Vec<PrintLine>,
     /// Prints that did not fit the buffer.
     pub dropped: u32,
@@ -124,21 +128,16 @@ impl PrintBuffer {
 
     /// Copies the buffer out: recorded after the frame's passes; map the
     /// result once submitted.
-    pub fn copy_out(
-        &self,
-        device: &wgpu::Device,
-        encoder: &mut wgpu::CommandEncoder,
-        table: &Arc<Vec<Option<TableSite>>>,
-    ) -> PendingPrints {
+    pub fn copy_out(&self, device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, binding: &PrintBinding<'_>) -> PendingPrints {
         let readback = Readback::new(device, "debug prints: readback", self.buffer.size());
         encoder.copy_buffer_to_buffer(&self.buffer, 0, readback.buffer(), 0, self.buffer.size());
-        PendingPrints { readback, table: table.clone() }
+        PendingPrints { readback, table: binding.table.clone(), pixel: binding.pixel }
     }
 }
 
-/// Decodes a buffer's words, each record by its number in `table`. A
-/// record that names no known site ends the decoding: what follows cannot
-/// be framed.
+/// Decodes a buffer's words, each record by its number in `table` (the
+/// pixel is left for the caller to say). A record that names no known site
+/// ends the decoding: what follows cannot be framed.
 pub fn decode(words: &[u32], table: &[Option<TableSite>]) -> Printed {
     let header = HEADER_WORDS as usize;
     let (used, dropped) = (words.first().copied().unwrap_or(0), words.get(1).copied().unwrap_or(0));
@@ -155,7 +154,7 @@ pub fn decode(words: &[u32], table: &[Option<TableSite>]) -> Printed {
         lines.push(PrintLine { pass: entry.pass.clone(), file: file.display.clone(), line: at.line, column: at.column, text, values });
         records = &rest[site.words()..];
     }
-    Printed { lines, dropped }
+    Printed { pixel: [0, 0], lines, dropped }
 }
 
 #[cfg(test)]

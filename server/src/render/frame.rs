@@ -281,7 +281,7 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
     let timestamps = query_set
         .map(|qs| (resolve(f.device, &mut encoder, &qs, graph.passes.len() as u32 * 2, "timestamps"), f.queue.get_timestamp_period()));
     let statistics = statistics_set.map(|set| (resolve(f.device, &mut encoder, &set, next_query, "fragment invocations"), queries));
-    let prints = f.prints.map(|p| p.buffer.copy_out(f.device, &mut encoder, p.table));
+    let prints = f.prints.map(|p| p.buffer.copy_out(f.device, &mut encoder, &p));
     f.queue.submit([encoder.finish()]);
     if let Some(p) = &prints {
         p.map();

@@ -127,6 +127,6 @@ impl PrintSelection {
     }
 
     pub fn binding(&self) -> PrintBinding<'_> {
-        PrintBinding { buffer: &self.buffer, groups: &self.groups, table: &self.table }
+        PrintBinding { buffer: &self.buffer, groups: &self.groups, table: &self.table, pixel: self.pixel }
     }
 }

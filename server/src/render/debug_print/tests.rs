@@ -83,7 +83,9 @@ fn run(
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     prints.clear(&mut encoder);
     record(&mut encoder, &prints);
-    let pending = prints.copy_out(&gpu.device, &mut encoder, &table);
+    let groups = Default::default();
+    let binding = PrintBinding { buffer: &prints, groups: &groups, table: &table, pixel: [0, 0] };
+    let pending = prints.copy_out(&gpu.device, &mut encoder, &binding);
     gpu.queue.submit([encoder.finish()]);
     pending.map();
     gpu.device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
@@ -195,7 +197,7 @@ fn a_compute_stage_prints_at_the_invocation_whose_id_is_the_pixel() {
         let printed = compute(&gpu, "cs", pixel, DEFAULT_WORDS);
         assert_eq!(texts(&printed), [("print.wgsl".to_owned(), 18, 5, text)], "{pixel:?}");
     }
-    assert_eq!(compute(&gpu, "cs", [SIZE, 0], DEFAULT_WORDS), Printed::default(), "no invocation is outside the grid");
+    assert_eq!(compute(&gpu, "cs", [SIZE, 0], DEFAULT_WORDS).lines, [], "no invocation is outside the grid");
 }
 
 /// 100 prints of 2 words each into 51 words: 25 fit, 75 are counted.
