@@ -9,11 +9,11 @@ use loupe_tests::{Project, Server};
 use serde_json::{Value, json};
 
 const LIMIT: Duration = Duration::from_secs(60);
-const TONEMAP: &str = "shaders/post/tonemap.wgsl";
+pub const TONEMAP: &str = "shaders/post/tonemap.wgsl";
 const AFTER: &str = "    let c = max(texel.rgb, vec3(0.0));\n";
 
 /// The tonemap shader with `print` after its `c`, the directive on top.
-fn with_print(good: &str, print: &str) -> String {
+pub fn with_print(good: &str, print: &str) -> String {
     assert!(good.contains(AFTER), "the premise: tonemap computes `c` so");
     format!("enable wgpu_debug_printf;\n{}", good.replacen(AFTER, &format!("{AFTER}    {print}\n"), 1))
 }
