@@ -6,7 +6,9 @@
 //! says whether this invocation is the selected one (fragment: the floor of
 //! `@builtin(position).xy` is the pixel, the builtin added when the entry
 //! point lacks it; compute: `global_invocation_id.xy` is the pixel; other
-//! stages: never). Each site's marker store becomes
+//! stages: never; a compute stage that does not read its global id maps
+//! invocations to pixels its own way, so every invocation prints, into the
+//! same bounded buffer). Each site's marker store becomes
 //!
 //! ```wgsl
 //! if loupe_printf_on {
@@ -336,6 +338,18 @@ fn select(types: &mut naga::UniqueArena<Type>, stage: ShaderStage, f: &mut Funct
         {
             found = Some((i, Some(m as u32)));
         }
+    }
+    // A compute stage that does not read its global id maps invocations
+    // to pixels some other way (the lighting's tile lists): every
+    // invocation prints, into the same bounded buffer.
+    if found.is_none() && stage == ShaderStage::Compute {
+        let mut x = Exprs { f };
+        let on = x.plain(Expression::GlobalVariable(g.on));
+        let yes = x.plain(Expression::Literal(Literal::Bool(true)));
+        let mut body = naga::Block::from_vec(vec![Statement::Store { pointer: on, value: yes }]);
+        body.append(&mut x.f.body);
+        x.f.body = body;
+        return;
     }
     let (arg, member) = found.unwrap_or_else(|| {
         let ty = types.insert(Type { name: None, inner: ty }, Span::UNDEFINED);

@@ -31,6 +31,11 @@ fn cs(@builtin(global_invocation_id) id: vec3<u32>) {
     debugPrintf(\"id %v2u u %.2f odd %u\", id.xy, u.y, (id.x + id.y) % 2u == 1u);
 }
 
+@compute @workgroup_size(4, 4)
+fn everyone(@builtin(local_invocation_id) l: vec3<u32>) {
+    debugPrintf(\"l %u\", l.x + 4u * l.y);
+}
+
 @compute @workgroup_size(1)
 fn loops(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var i = 0u; i < 100u; i++) {
@@ -198,6 +203,20 @@ fn a_compute_stage_prints_at_the_invocation_whose_id_is_the_pixel() {
         assert_eq!(texts(&printed), [("print.wgsl".to_owned(), 18, 5, text)], "{pixel:?}");
     }
     assert_eq!(compute(&gpu, "cs", [SIZE, 0], DEFAULT_WORDS).lines, [], "no invocation is outside the grid");
+}
+
+/// A compute stage that does not read its global id prints from every
+/// invocation: 16 workgroups of 16.
+#[test]
+fn a_compute_stage_without_a_global_id_prints_from_every_invocation() {
+    let gpu = testing::device();
+    let printed = compute(&gpu, "everyone", [0, 0], DEFAULT_WORDS);
+    assert_eq!((printed.lines.len(), printed.dropped), (256, 0));
+    for l in 0..16 {
+        assert_eq!(printed.lines.iter().filter(|p| p.text == format!("l {l}")).count(), 16, "{l}");
+    }
+    let capped = compute(&gpu, "everyone", [0, 0], 100);
+    assert_eq!((capped.lines.len(), capped.dropped), (50, 206));
 }
 
 /// 100 prints of 2 words each into 51 words: 25 fit, 75 are counted.

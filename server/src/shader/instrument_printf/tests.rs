@@ -87,14 +87,15 @@ struct In { @location(0) uv: vec2<f32>, @builtin(position) at: vec4<f32> }
 fn helper(x: f32) { debugPrintf(\"%f\", x); }
 @fragment fn a(v: In) -> @location(0) vec4<f32> { helper(v.uv.x); return v.at; }
 @fragment fn b() -> @location(0) vec4<f32> { helper(2.0); return vec4(1.0); }
-@compute @workgroup_size(1) fn c() { debugPrintf(\"%u\", 3u); }
+@compute @workgroup_size(1) fn c(@builtin(global_invocation_id) id: vec3<u32>) { debugPrintf(\"%u\", id.x); }
+@compute @workgroup_size(1) fn e(@builtin(local_invocation_id) l: vec3<u32>) { debugPrintf(\"%u\", l.x); }
 @vertex fn d() -> @builtin(position) vec4<f32> { helper(1.0); return vec4(1.0); }
 ",
     );
     let out = instrument(&m, [1, 2], 0, 0).unwrap();
     let args = |name: &str| out.module.entry_points.iter().find(|e| e.name == name).unwrap().function.arguments.len();
-    assert_eq!((args("a"), args("b"), args("c"), args("d")), (1, 1, 1, 0));
-    assert_eq!(out.sites.len(), 2);
+    assert_eq!((args("a"), args("b"), args("c"), args("d"), args("e")), (1, 1, 1, 0, 1));
+    assert_eq!(out.sites.len(), 3);
     assert_eq!(out.group, 0);
     let bound: Vec<_> = out.module.global_variables.iter().filter_map(|(_, g)| g.binding).collect();
     assert_eq!(bound, [ResourceBinding { group: 0, binding: 0 }]);
@@ -105,5 +106,5 @@ fn helper(x: f32) { debugPrintf(\"%f\", x); }
     let words =
         |out: &InstrumentedPrints| naga::back::wgsl::write_string(&out.module, &out.info, naga::back::wgsl::WriterFlags::empty()).unwrap();
     let text = words(&later);
-    assert!(text.contains("] = 10u;") && text.contains("] = 11u;") && !text.contains("] = 0u;"), "{text}");
+    assert!(text.contains("] = 10u;") && text.contains("] = 12u;") && !text.contains("] = 0u;"), "{text}");
 }
