@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::{exit, init_logging, offline_failed, parse_override, parse_size, under_root};
+use super::{exit, init_logging, offline_failed, parse_override, parse_pixel, parse_size, under_root};
 use loupe::offline;
 use loupe::scene::settings::Value;
 
@@ -54,14 +54,6 @@ pub struct Args {
     /// report.json's `prints` (docs/printf.md).
     #[arg(long, value_name = "X,Y", value_parser = parse_pixel)]
     debug_pixel: Option<[u32; 2]>,
-}
-
-fn parse_pixel(s: &str) -> Result<[u32; 2], String> {
-    let parse = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("`{s}` is not a pixel: X,Y with whole numbers from 0"));
-    match s.split_once(',') {
-        Some((x, y)) => Ok([parse(x)?, parse(y)?]),
-        None => Err(format!("`{s}` is not a pixel: X,Y")),
-    }
 }
 
 pub fn run(args: Args) -> ExitCode {

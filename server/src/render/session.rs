@@ -142,6 +142,9 @@ pub struct Session {
     capture_generations: BTreeMap<PipelineKey, u64>,
     /// The selected pixel's prints (`None`: no pixel selected).
     prints: Option<PrintSelection>,
+    /// Frames run the plain pipelines though a pixel is selected (`loupe
+    /// bench` times both ways, interleaved, without rebuilding).
+    prints_paused: bool,
     /// Frames submitted since the history was last forgotten: the samples
     /// per pixel the path tracer holds.
     accumulated: u32,
@@ -168,6 +171,7 @@ impl Session {
             vertex_captures: BTreeMap::new(),
             capture_generations: BTreeMap::new(),
             prints: None,
+            prints_paused: false,
             accumulated: 0,
             scene: loaded.scene.clone(),
             meshes: loaded.meshes.clone(),
@@ -407,7 +411,8 @@ impl Session {
             self.refresh_vertex_captures();
         }
         let mut live = self.cache.live();
-        if let Some(prints) = &mut self.prints {
+        let prints = self.prints.as_mut().filter(|_| !self.prints_paused);
+        if let Some(prints) = prints {
             let keys: Vec<(PipelineKey, String)> =
                 self.graph.passes.iter().flat_map(|p| p.pipelines.iter().map(|k| (k.clone(), p.name.clone()))).collect();
             prints.refresh(&self.gpu.device, &self.cache, &self.lib, &keys);
@@ -428,7 +433,7 @@ impl Session {
             samples: self.accumulated,
             dt,
             serial: self.serial,
-            prints: self.prints.as_ref().map(PrintSelection::binding),
+            prints: self.prints.as_ref().filter(|_| !self.prints_paused).map(PrintSelection::binding),
         };
         frame::submit(inputs, &mut self.pool)
     }
@@ -439,6 +444,12 @@ impl Session {
         if self.prints.as_ref().map(PrintSelection::pixel) != pixel {
             self.prints = pixel.map(|p| PrintSelection::new(&self.gpu.device, p));
         }
+    }
+
+    /// Runs the plain pipelines while `paused`, keeping the selection and
+    /// its instrumented pipelines for when it is not.
+    pub fn pause_prints(&mut self, paused: bool) {
+        self.prints_paused = paused;
     }
 
     /// The selection, when a pixel is selected.
@@ -764,6 +775,13 @@ mod tests {
             assert_eq!(selection.printing().map(PipelineKey::label).collect::<Vec<_>>(), ["debug.test_pattern"]);
             assert_eq!(selection.built(), 1, "built once, kept while selected");
         }
+        // Paused (how `loupe bench` times the plain pipelines): nothing
+        // printed, and nothing rebuilt when it resumes.
+        s.pause_prints(true);
+        assert_eq!(frame(&mut s), None);
+        s.pause_prints(false);
+        assert_eq!(frame(&mut s).map(|p| p.lines.len()), Some(1));
+        assert_eq!(s.debug_prints().unwrap().built(), 1);
         s.set_debug_pixel(None);
         assert_eq!(frame(&mut s), None);
         assert!(s.debug_prints().is_none());
