@@ -1,6 +1,7 @@
 //! `debugPrintf` through `loupe serve`: a pixel selected over the
 //! WebSocket gets a `prints` event each frame, from the pass's own
-//! shader, and an edit to the print shows in the next ones.
+//! shader; an edit to the print shows in the next ones, and the selection
+//! outlives a lost device.
 
 use std::time::Duration;
 
@@ -33,7 +34,7 @@ fn a_selected_pixel_streams_its_prints_and_follows_edits() {
     let printing = with_print(&good, "debugPrintf(\"at %v2f\", in.position.xy);");
     let at = printing.lines().position(|l| l.contains("debugPrintf")).unwrap() as u64 + 1;
     p.write(TONEMAP, printing);
-    let s = Server::start(&p.root, &["--scene", "scenes/minimal.toml", "--render", "on-change"]);
+    let s = Server::start(&p.root, &["--scene", "scenes/minimal.toml", "--render", "on-change", "--debug-api"]);
     let mut ws = s.ws();
     ws.until("hello", LIMIT, |m| matches!(m, Msg::Event(v) if v["type"] == "hello").then_some(()));
 
@@ -48,6 +49,13 @@ fn a_selected_pixel_streams_its_prints_and_follows_edits() {
     // An edit to the print shows in the frames after its reload.
     p.write(TONEMAP, with_print(&good, "debugPrintf(\"now %.1v2f\", in.position.xy);"));
     assert_eq!(prints(&mut ws, "now ")["lines"][0]["text"], "now 7.5, 4.5");
+
+    // A device lost while selected: the selection survives on the new one.
+    assert_eq!(s.post("/api/debug/lose-device").0, 202);
+    ws.until("the device recovered", LIMIT, |m| {
+        matches!(m, Msg::Event(v) if v["type"] == "device_lost" && v["recovered"] == true).then_some(())
+    });
+    assert_eq!(prints(&mut ws, "now ")["pixel"], json!([7, 4]));
 
     // Another pixel; one outside the frame is refused and changes nothing.
     ws.send(json!({ "type": "debug_pixel", "x": 1000, "y": 0 }));
