@@ -42,6 +42,7 @@ import { TensorView } from './tensor.js';
 import { ControlsPanel } from './controls.js';
 import { MaterialsPanel } from './materials.js';
 import { QuadView } from './quads.js';
+import { PrintsPanel } from './prints.js';
 import { PathView, TRACED } from './path.js';
 import { TradeoffsView } from './tradeoffs.js';
 import { awaitListed } from './capture_wait.js';
@@ -458,6 +459,7 @@ function onEvent(ev) {
     case 'reload_started':
       setReload({ id: ev.id, state: 'reloading', files: ev.files, pipelines: ev.pipelines });
       diagnostics.invalidate(ev.files);
+      prints.invalidate(ev.files);
       break;
     case 'reload_succeeded':
       setReload({ id: ev.id, state: 'ok', files: ev.files, pipelines: ev.pipelines, timings: ev.timings });
@@ -529,6 +531,9 @@ function onEvent(ev) {
     case 'quads':
       quadView.setReport(ev);
       break;
+    case 'prints':
+      prints.set(ev);
+      break;
     default:
       // A newer server may send events this page does not know: ignore.
       break;
@@ -539,7 +544,10 @@ function onBinary(hdr, bytes) {
   // `frame`: the final output, for the live view; `capture`: an output the
   // inspector or the path view subscribed to. Other kinds are for newer
   // pages.
-  if (hdr.kind === 'frame') live.push(hdr, bytes);
+  if (hdr.kind === 'frame') {
+    live.push(hdr, bytes);
+    prints.frameSize(hdr.width, hdr.height);
+  }
   else if (hdr.kind === 'capture') {
     inspector.onCapture(hdr, bytes);
     pathView.onCapture(hdr, bytes);
@@ -651,7 +659,12 @@ const controls = new ControlsPanel($('scene-panel'), (message) => conn.send(mess
 // ---- materials: tree, report, parameters; the pinned pixel's material -----
 
 const materials = new MaterialsPanel({ send: (message) => conn.send(message), want: (wanted) => conn?.want('materials', wanted) });
-inspector.onPin = (p, a) => materials.pin(p, a && { width: a.width, height: a.height });
+const prints = new PrintsPanel($('pixel-prints'), { send: (message) => conn.send(message), source: api.source });
+inspector.onPin = (p, a) => {
+  const size = a && { width: a.width, height: a.height };
+  materials.pin(p, size);
+  prints.pin(p, size);
+};
 
 // ---- renderer switch, samples, path − raster -----------------------------
 

@@ -336,6 +336,14 @@ pub enum ServerEvent {
     /// references (also `GET /api/references`), when a comparison starts
     /// and when it is done.
     References(ReferenceReport),
+    /// What a frame's `debugPrintf`s printed at the selected pixel
+    /// (`debug_pixel`), for every frame while one is selected.
+    Prints {
+        frame: u64,
+        pixel: [u32; 2],
+        lines: Vec<crate::render::debug_print::PrintLine>,
+        dropped: u32,
+    },
 }
 
 /// `GET /api/materials`: the scene's material instances, one per
@@ -539,4 +547,12 @@ pub enum ClientMessage {
     /// references after every reload (`references` events): the daemon
     /// renders them while any client wants them.
     ReferenceComparison { on: bool },
+    /// Select the pixel whose `debugPrintf`s every frame reports in a
+    /// `prints` event; `x` and `y` `null` (or left out) clear it.
+    DebugPixel {
+        #[serde(default)]
+        x: Option<u32>,
+        #[serde(default)]
+        y: Option<u32>,
+    },
 }

@@ -10,6 +10,7 @@ mod images;
 mod materials;
 mod materials_api;
 mod no_adapter;
+mod printf;
 mod protocol;
 mod recipe;
 mod render;

@@ -61,6 +61,9 @@ fn every_documented_message_has_every_documented_key() {
     ws.send(json!({ "type": "quad_statistics", "on": true }));
     ws.send(json!({ "type": "subscribe", "pass": "tonemap", "output": "color" }));
     seen.until(&mut ws, "quads", |_| true);
+    ws.send(json!({ "type": "debug_pixel", "x": 3, "y": 2 }));
+    seen.until(&mut ws, "prints", |v| v["pixel"] == json!([3, 2]));
+    ws.send(json!({ "type": "debug_pixel", "x": null, "y": null }));
     ws.send(json!({ "type": "no_such_message" }));
     seen.until(&mut ws, "error", |_| true);
     ws.send(json!({ "type": "set_override", "path": "post.exposure_ev", "value": 0.5 }));

@@ -573,3 +573,46 @@ fn the_uv_debug_view_shows_where_each_pixel_sits_on_the_sphere() {
         assert_eq!(seen[2], 0.0, "pixel ({x}, {y}): blue is 0");
     }
 }
+
+/// `--debug-pixel`: a print added to the tonemap pass shows its pixel's
+/// position and HDR input in report.json, from the instrumented pipeline;
+/// without it the report has no prints; a pixel outside is refused.
+#[test]
+fn debug_pixel_writes_the_prints_of_that_pixel_into_the_report() {
+    let p = Project::copy_of_repo("printf");
+    let tonemap = p.read("shaders/post/tonemap.wgsl");
+    let needle = "    let c = max(texel.rgb, vec3(0.0));\n";
+    assert!(tonemap.contains(needle), "the premise: tonemap computes `c` so");
+    let line = tonemap[..tonemap.find(needle).unwrap()].lines().count() + 2 + 1;
+    let edited = format!(
+        "enable wgpu_debug_printf;\n{}",
+        tonemap.replacen(needle, &format!("{needle}    debugPrintf(\"at %v2f hdr %v3f\", in.position.xy, c);\n"), 1)
+    );
+    p.write("shaders/post/tonemap.wgsl", edited);
+
+    let (run, report) = render(&p, "scenes/minimal.toml", &["--debug-pixel", "70,20"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let prints = &report.expect("report.json written")["prints"];
+    assert_eq!(prints["pixel"], serde_json::json!([70, 20]));
+    assert_eq!(prints["pipelines"], serde_json::json!(["post.tonemap"]), "only the pipeline with a print is instrumented");
+    assert_eq!(prints["dropped"], 0);
+    let lines = prints["lines"].as_array().expect("lines");
+    assert_eq!(lines.len(), 1, "one invocation is the pixel: {prints}");
+    let l = &lines[0];
+    assert_eq!(
+        (l["pass"].as_str(), l["file"].as_str(), l["line"].as_u64(), l["column"].as_u64()),
+        (Some("tonemap"), Some("shaders/post/tonemap.wgsl"), Some(line as u64), Some(5))
+    );
+    assert_eq!(l["values"][0], serde_json::json!([70.5, 20.5]));
+    let hdr = l["values"][1].as_array().expect("a vec3");
+    assert!(hdr.len() == 3 && hdr.iter().all(|c| c.as_f64().is_some_and(|c| c >= 0.0)), "{l}");
+    assert!(l["text"].as_str().unwrap().starts_with("at 70.500000, 20.500000 hdr "), "{l}");
+
+    let (run, report) = render(&p, "scenes/minimal.toml", &[]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    assert!(report.expect("report.json written").get("prints").is_none(), "no pixel selected: no prints");
+
+    let (run, _) = render(&p, "scenes/minimal.toml", &["--debug-pixel", "96,0"]);
+    assert_eq!(run.code, 2);
+    assert!(run.stderr.contains("--debug-pixel 96,0 is outside the 96x54 frame"), "{}", run.stderr);
+}

@@ -57,6 +57,8 @@ pub struct CheckOptions {
     pub capabilities: Option<Capabilities>,
     /// The image cases to render; `None` with `--no-images`.
     pub images: Option<images::Options>,
+    /// Every `debugPrintf` call is an error (a CI that wants none merged).
+    pub deny_debug_printf: bool,
 }
 
 /// A failure of the run itself rather than of a checked file.
@@ -207,6 +209,17 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
             place(&c.display, d, &mut modules);
         }
     }
+    if opts.deny_debug_printf {
+        for file in target_displays.iter().filter_map(|d| lib.get(d)) {
+            for site in &file.prints.sites {
+                let at = file.location(site.call.clone());
+                let d = Diagnostic::error(Code::PrintfDenied, "`debugPrintf` is denied in this check")
+                    .with_label(at, "printed here", true)
+                    .with_note("denied by --deny-debug-printf (or `deny_debug_printf = true` in loupe.toml)");
+                place(&file.display, d, &mut modules);
+            }
+        }
+    }
     // A shader tree that holds some of the renderer's shaders must hold all
     // of them; a tree with none is someone else's WGSL, checked as sources.
     let renderer_tree = !specs_by_file.is_empty() && opts.paths.iter().any(|p| canon(p) == shader_root);
@@ -226,7 +239,7 @@ pub fn run(opts: &CheckOptions) -> Result<(CheckReport, SourceFiles), CheckError
         for c in &checked {
             for (spec, defs, composed) in &c.composed {
                 let result = crate::shader::guard::guarded(&c.display, "wgpu", || {
-                    pipeline::create(&gpu.device, spec, defs, composed, &lib, &c.display).map(|_| ())
+                    pipeline::create(&gpu.device, spec, defs, composed, &lib, &c.display, None).map(|_| ())
                 });
                 match result {
                     Ok(()) => modules.get_mut(&c.display).expect("inserted").pipelines += 1,

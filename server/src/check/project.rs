@@ -6,6 +6,7 @@
 //! paths = ["shaders", "scenes"]        # relative to the project root
 //! capabilities = ["float64"]           # or "all"
 //! deny_warnings = true
+//! deny_debug_printf = true
 //! format = "github"
 //! references = "tests/images"         # the image gate's references
 //!
@@ -29,7 +30,7 @@ use crate::diag::{Code, Diagnostic, Location};
 /// The project file's name; a `.toml` of this name is never a scene.
 pub const FILE: &str = "loupe.toml";
 
-const CHECK_KEYS: &[&str] = &["paths", "capabilities", "deny_warnings", "format", "references"];
+const CHECK_KEYS: &[&str] = &["paths", "capabilities", "deny_warnings", "deny_debug_printf", "format", "references"];
 
 /// Where the image gate's references live when `references` is not set.
 pub const DEFAULT_REFERENCES: &str = "tests/images";
@@ -41,6 +42,7 @@ pub struct CheckDefaults {
     pub paths: Option<Vec<PathBuf>>,
     pub capabilities: Option<Capabilities>,
     pub deny_warnings: Option<bool>,
+    pub deny_debug_printf: Option<bool>,
     pub format: Option<Format>,
     /// The image gate's reference folder, joined to the project root
     /// (`DEFAULT_REFERENCES` when not set).
@@ -102,6 +104,7 @@ pub fn parse(display: &str, text: &str, root: &Path) -> Result<CheckDefaults, Di
                     out.capabilities = Some(caps);
                 }
                 "deny_warnings" => out.deny_warnings = Some(value.as_bool().ok_or_else(|| bad("true or false"))?),
+                "deny_debug_printf" => out.deny_debug_printf = Some(value.as_bool().ok_or_else(|| bad("true or false"))?),
                 "format" => {
                     let name = value.as_str().ok_or_else(|| bad("a string"))?;
                     let format = <Format as clap::ValueEnum>::from_str(name, false)
@@ -135,13 +138,13 @@ mod tests {
     #[test]
     fn every_key_sets_its_default() {
         let d = parsed(
-            "# project\n[check]\npaths = [\"src/shaders\", \"/abs\"]\ncapabilities = [\"float64\", \"shader-int64\"]\ndeny_warnings = true\nformat = \"sarif\"\nreferences = \"refs\"\n",
+            "# project\n[check]\npaths = [\"src/shaders\", \"/abs\"]\ncapabilities = [\"float64\", \"shader-int64\"]\ndeny_warnings = true\ndeny_debug_printf = true\nformat = \"sarif\"\nreferences = \"refs\"\n",
         )
         .unwrap();
         assert_eq!(d.paths, Some(vec![PathBuf::from("/proj/src/shaders"), PathBuf::from("/abs")]));
         let caps = d.capabilities.unwrap();
         assert!(caps.contains(Capabilities::FLOAT64 | Capabilities::SHADER_INT64) && !caps.contains(Capabilities::SUBGROUP));
-        assert_eq!(d.deny_warnings, Some(true));
+        assert_eq!((d.deny_warnings, d.deny_debug_printf), (Some(true), Some(true)));
         assert_eq!(d.format, Some(Format::Sarif));
         assert_eq!(d.references, Some(PathBuf::from("/proj/refs")));
         assert_eq!(parsed("[check]\ncapabilities = \"all\"\n").unwrap().capabilities, Some(Capabilities::all()));

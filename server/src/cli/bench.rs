@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::{exit, init_logging, offline_failed, parse_size, tradeoffs, under_root};
+use super::{exit, init_logging, offline_failed, parse_pixel, parse_size, tradeoffs, under_root};
 use loupe::offline;
 use loupe::scene::overrides::Overrides;
 use loupe::scene::settings::Value;
@@ -37,6 +37,10 @@ pub struct Args {
     /// do not bracket compute work (llvmpipe).
     #[arg(long)]
     serial: bool,
+    /// Also time frames with pixel X,Y selected for `debugPrintf`
+    /// (docs/printf.md), after the others.
+    #[arg(long, value_name = "X,Y", value_parser = parse_pixel)]
+    debug_pixel: Option<[u32; 2]>,
 }
 
 #[derive(clap::Subcommand)]
@@ -72,7 +76,7 @@ pub fn run(args: Args) -> ExitCode {
             overrides.insert("quality.path_bounces".into(), Value::Int(b));
         }
         let job = offline::Job { scene, shader_root: args.root.join("shaders"), size: Some(args.size), overrides };
-        let r = match offline::bench::run(&job, args.frames, args.serial) {
+        let r = match offline::bench::run(&job, args.frames, args.serial, args.debug_pixel) {
             Ok(r) => r,
             Err(e) => return offline_failed("bench", e),
         };
@@ -101,6 +105,12 @@ pub fn run(args: Args) -> ExitCode {
             r.convert_ms_quads,
             r.convert_ms_quads / r.frame_ms_no_capture
         );
+        if let (Some(on), Some(off)) = (r.frame_ms_debug_pixel, r.frame_ms_debug_pixel_off) {
+            println!(
+                "  a pixel selected for debugPrintf: frame {on:.2} ms, {off:.2} ms without, interleaved ({:+.1} %)",
+                (on / off - 1.0) * 100.0
+            );
+        }
         if let Some((_, ms)) = r.passes.iter().find(|(n, _)| n == "path_trace") {
             let paths = f64::from(r.width) * f64::from(r.height);
             // llvmpipe's timestamps around a compute dispatch do not

@@ -29,6 +29,10 @@ pub struct Args {
     /// overrides loupe.toml's `deny_warnings = true`.
     #[arg(long, value_name = "BOOL", num_args = 0..=1, require_equals = true, default_missing_value = "true")]
     deny_warnings: Option<bool>,
+    /// Make every `debugPrintf` call an error; `--deny-debug-printf=false`
+    /// overrides loupe.toml's `deny_debug_printf = true`.
+    #[arg(long, value_name = "BOOL", num_args = 0..=1, require_equals = true, default_missing_value = "true")]
+    deny_debug_printf: Option<bool>,
     /// Shader capabilities to validate with, comma-separated naga names
     /// (`float64,shader-int64,shader-float16`) or `all`; what every WebGPU
     /// device has is always allowed. Default: `capabilities` in loupe.toml,
@@ -127,7 +131,8 @@ pub fn run(args: Args) -> ExitCode {
         eprintln!("loupe check: --bless: {} has no [[images]] cases", args.root.join(check::project::FILE).display());
         return ExitCode::from(exit::USAGE);
     }
-    let (mut report, files) = match check::run(&CheckOptions { paths, shader_root, device, capabilities, images }) {
+    let deny_debug_printf = args.deny_debug_printf.or(defaults.deny_debug_printf).unwrap_or(false);
+    let (mut report, files) = match check::run(&CheckOptions { paths, shader_root, device, capabilities, images, deny_debug_printf }) {
         Ok(r) => r,
         Err(check::CheckError::BadPath(e)) => {
             eprintln!("loupe check: cannot read input: {e}");

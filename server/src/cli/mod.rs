@@ -104,6 +104,15 @@ impl Command {
 /// `WIDTHxHEIGHT`, each side within the scene's limits.
 pub use loupe::scene::parse_size;
 
+/// `X,Y`: a pixel, from the top left (`--debug-pixel`).
+pub fn parse_pixel(s: &str) -> Result<[u32; 2], String> {
+    let parse = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("`{s}` is not a pixel: X,Y with whole numbers from 0"));
+    match s.split_once(',') {
+        Some((x, y)) => Ok([parse(x)?, parse(y)?]),
+        None => Err(format!("`{s}` is not a pixel: X,Y")),
+    }
+}
+
 /// `PATH=VALUE`, the value typed as the browser's live controls type it.
 pub fn parse_override(s: &str) -> Result<(String, Value), String> {
     let (path, v) = s.split_once('=').ok_or_else(|| format!("`{s}` is not PATH=VALUE"))?;
@@ -179,7 +188,7 @@ pub fn offline_failed(cmd: &str, e: OfflineError) -> ExitCode {
             print_diagnostics(&diags);
             ExitCode::from(exit::ERRORS)
         }
-        OfflineError::Io(e) => {
+        OfflineError::Io(e) | OfflineError::Usage(e) => {
             eprintln!("loupe {cmd}: {e}");
             ExitCode::from(exit::USAGE)
         }

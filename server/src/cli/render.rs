@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::{exit, init_logging, offline_failed, parse_override, parse_size, under_root};
+use super::{exit, init_logging, offline_failed, parse_override, parse_pixel, parse_size, under_root};
 use loupe::offline;
 use loupe::scene::settings::Value;
 
@@ -50,6 +50,10 @@ pub struct Args {
     /// Samples per pixel for the path tracer, as `--set quality.path_spp=N`.
     #[arg(long)]
     spp: Option<i64>,
+    /// Collect the `debugPrintf`s of pixel X,Y (from the top left) into
+    /// report.json's `prints` (docs/printf.md).
+    #[arg(long, value_name = "X,Y", value_parser = parse_pixel)]
+    debug_pixel: Option<[u32; 2]>,
 }
 
 pub fn run(args: Args) -> ExitCode {
@@ -61,7 +65,7 @@ pub fn run(args: Args) -> ExitCode {
     if let Some(n) = args.spp {
         job.overrides.insert("quality.path_spp".into(), Value::Int(n));
     }
-    let report = match offline::render::run(&job, &args.out) {
+    let report = match offline::render::run(&job, &args.out, args.debug_pixel) {
         Ok(r) => r,
         Err(e) => return offline_failed("render", e),
     };

@@ -116,6 +116,16 @@ pub enum Code {
     ImageMismatch,
     #[serde(rename = "reference-missing")]
     ReferenceMissing,
+    #[serde(rename = "printf-syntax")]
+    PrintfSyntax,
+    #[serde(rename = "printf-format")]
+    PrintfFormat,
+    #[serde(rename = "printf-arguments")]
+    PrintfArguments,
+    #[serde(rename = "printf-type")]
+    PrintfType,
+    #[serde(rename = "printf-denied")]
+    PrintfDenied,
 }
 
 impl Code {
@@ -144,6 +154,11 @@ impl Code {
             Code::Material => "material",
             Code::ImageMismatch => "image-mismatch",
             Code::ReferenceMissing => "reference-missing",
+            Code::PrintfSyntax => "printf-syntax",
+            Code::PrintfFormat => "printf-format",
+            Code::PrintfArguments => "printf-arguments",
+            Code::PrintfType => "printf-type",
+            Code::PrintfDenied => "printf-denied",
         }
     }
 
@@ -173,10 +188,15 @@ impl Code {
             Code::Material => "the material file is invalid",
             Code::ImageMismatch => "an image case renders beyond its FLIP threshold from its reference",
             Code::ReferenceMissing => "an image case has no reference image: bless one with `loupe check --bless`",
+            Code::PrintfSyntax => "a debugPrintf call is malformed (not a statement, no string literal, no enable directive)",
+            Code::PrintfFormat => "a debugPrintf format string has a placeholder loupe does not know",
+            Code::PrintfArguments => "a debugPrintf call passes more or fewer arguments than its format string has placeholders",
+            Code::PrintfType => "a debugPrintf argument's type does not fit its placeholder, or cannot be printed",
+            Code::PrintfDenied => "a debugPrintf call in a check run with --deny-debug-printf",
         }
     }
 
-    pub const ALL: [Code; 23] = [
+    pub const ALL: [Code; 28] = [
         Code::Io,
         Code::Encoding,
         Code::EmptyFile,
@@ -200,6 +220,11 @@ impl Code {
         Code::Material,
         Code::ImageMismatch,
         Code::ReferenceMissing,
+        Code::PrintfSyntax,
+        Code::PrintfFormat,
+        Code::PrintfArguments,
+        Code::PrintfType,
+        Code::PrintfDenied,
     ];
 }
 

@@ -287,7 +287,10 @@ pub enum Pipeline {
 
 /// Creates the pipeline for `spec` from an already composed module. Driver
 /// and wgpu validation errors are caught with an error scope and become
-/// diagnostics at the shader's entry point; nothing here panics.
+/// diagnostics at the shader's entry point; nothing here panics. `prints`:
+/// the module is instrumented for prints (`shader::instrument_printf`) and
+/// binds the print buffer at `@group(prints) @binding(0)`, past the
+/// spec's groups.
 pub fn create(
     device: &wgpu::Device,
     spec: &PipelineSpec,
@@ -295,8 +298,9 @@ pub fn create(
     composed: &Composed,
     lib: &Library,
     shader_display: &str,
+    prints: Option<u32>,
 ) -> Result<Pipeline, Vec<Diagnostic>> {
-    let mismatches = check_bindings(spec, defs, composed, lib);
+    let mismatches = check_bindings(spec, defs, composed, lib, prints);
     if !mismatches.is_empty() {
         return Err(mismatches);
     }
@@ -306,7 +310,7 @@ pub fn create(
         label: Some(spec.name),
         source: wgpu::ShaderSource::Naga(Cow::Owned(composed.module.clone())),
     });
-    let layouts: Vec<Option<wgpu::BindGroupLayout>> = spec
+    let mut layouts: Vec<Option<wgpu::BindGroupLayout>> = spec
         .layout(defs)
         .into_iter()
         .map(|bindings| {
@@ -316,6 +320,10 @@ pub fn create(
             })
         })
         .collect();
+    if let Some(group) = prints {
+        layouts.resize_with(layouts.len().max(group as usize + 1), || None);
+        layouts[group as usize] = Some(print_layout(device));
+    }
     let layout_refs: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(Option::as_ref).collect();
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(spec.name),
@@ -404,6 +412,24 @@ pub fn create(
         .collect())
 }
 
+/// The print buffer's group: one read-write storage buffer, written by
+/// fragment and compute stages.
+fn print_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("debug prints"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }],
+    })
+}
+
 /// Where `fn <entry>` is written, or the file start.
 fn entry_location(composed: &Composed, lib: &Library, shader_display: &str, entry: &str) -> Location {
     find_in_files(composed, lib, |line| line.contains(&format!("fn {entry}"))).unwrap_or_else(|| Location::file_start(shader_display))
@@ -427,12 +453,15 @@ fn find_in_files(composed: &Composed, lib: &Library, pred: impl Fn(&str) -> bool
 /// Every resource the shader declares must exist in the layout the renderer
 /// binds, with a compatible type. wgpu would reject a mismatch too, but only
 /// with the composed module's names; this names the declaration's line.
-fn check_bindings(spec: &PipelineSpec, defs: &ShaderDefs, composed: &Composed, lib: &Library) -> Vec<Diagnostic> {
+fn check_bindings(spec: &PipelineSpec, defs: &ShaderDefs, composed: &Composed, lib: &Library, prints: Option<u32>) -> Vec<Diagnostic> {
     let module = &composed.module;
     let layout = spec.layout(defs);
     let mut out = Vec::new();
     for (handle, var) in module.global_variables.iter() {
         let Some(rb) = &var.binding else { continue };
+        if Some(rb.group) == prints {
+            continue;
+        }
         let entries = spec.entry_points();
         let used = module
             .entry_points

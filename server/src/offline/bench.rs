@@ -35,6 +35,11 @@ pub struct BenchReport {
     /// on the conversion thread.
     pub frame_ms_quads: f64,
     pub convert_ms_quads: f64,
+    /// With `--debug-pixel`: the frame (no capture) with that pixel
+    /// selected for `debugPrintf`, and with the plain pipelines, timed
+    /// interleaved after the others; `null` without.
+    pub frame_ms_debug_pixel: Option<f64>,
+    pub frame_ms_debug_pixel_off: Option<f64>,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -45,7 +50,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// `serial`: per-pass times from an extra frame each round that submits
 /// each pass alone and waits for it (wall clock), instead of from the
 /// uncaptured frame's timestamps.
-pub fn run(job: &Job, frames: u32, serial: bool) -> Result<BenchReport, OfflineError> {
+pub fn run(job: &Job, frames: u32, serial: bool, debug_pixel: Option<[u32; 2]>) -> Result<BenchReport, OfflineError> {
     let mut session = prepare(job)?;
     let none = BTreeSet::new();
     let fin: BTreeSet<String> = session.graph().final_name().into_iter().collect();
@@ -91,6 +96,29 @@ pub fn run(job: &Job, frames: u32, serial: bool) -> Result<BenchReport, OfflineE
             }
         }
     }
+    let (frame_ms_debug_pixel, frame_ms_debug_pixel_off) = match debug_pixel {
+        Some(pixel) => {
+            session.set_quads(false);
+            session.set_debug_pixel(Some(pixel));
+            // The first frames build the instrumented pipelines.
+            for _ in 0..3 {
+                frame(&mut session, Some(&none));
+            }
+            let (mut on, mut off) = (Vec::new(), Vec::new());
+            for _ in 0..frames {
+                for (paused, times) in [(false, &mut on), (true, &mut off)] {
+                    session.pause_prints(paused);
+                    let start = Instant::now();
+                    let pending = session.submit(Some(&none), FRAME_DT);
+                    session.land(&pending);
+                    times.push(start.elapsed().as_secs_f64() * 1e3);
+                }
+            }
+            session.pause_prints(false);
+            (Some(median(on)), Some(median(off)))
+        }
+        None => (None, None),
+    };
     let order: Vec<String> = session.graph().passes.iter().map(|x| x.name.clone()).collect();
     Ok(BenchReport {
         scene: display_path(&job.scene),
@@ -107,5 +135,7 @@ pub fn run(job: &Job, frames: u32, serial: bool) -> Result<BenchReport, OfflineE
         convert_ms_all_captures: median(c_all),
         frame_ms_quads: median(t_quads),
         convert_ms_quads: median(c_quads),
+        frame_ms_debug_pixel,
+        frame_ms_debug_pixel_off,
     })
 }

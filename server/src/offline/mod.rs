@@ -29,6 +29,9 @@ pub enum OfflineError {
     Input(Vec<Diagnostic>),
     #[error("{0}")]
     Io(String),
+    /// An argument that does not fit the scene (a pixel outside it).
+    #[error("{0}")]
+    Usage(String),
 }
 
 /// What to render.

@@ -9,6 +9,7 @@ use serde::Serialize;
 use super::{Job, OfflineError, frame, frames_to_finish, prepare};
 use crate::diag::display_path;
 use crate::render::capture::{ImageStats, TensorStats};
+use crate::render::debug_print::Printed;
 use crate::render::frame::NanOrigin;
 use crate::render::passes::classify::Statistics;
 use crate::render::quads::{DrawReport, WhatIf};
@@ -34,6 +35,18 @@ pub struct FrameReport {
     pub tiles: Option<Statistics>,
     /// wgpu errors no error scope caught (an invalid frame).
     pub gpu_errors: Vec<String>,
+    /// With `--debug-pixel`: what the frame's `debugPrintf`s printed there.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prints: Option<PrintsReport>,
+}
+
+/// The prints at the selected pixel (docs/printf.md).
+#[derive(Debug, Serialize)]
+pub struct PrintsReport {
+    /// The pipelines that ran instrumented.
+    pub pipelines: Vec<String>,
+    #[serde(flatten)]
+    pub printed: Printed,
 }
 
 /// A live pass: the session's summary, its time and what was written.
@@ -89,16 +102,28 @@ pub struct CulledReport {
 
 /// Renders `job` once and writes `<pass>.<output>.png` and `.exr` for every
 /// texture and `.npy` for every buffer into `out`; returns the report (the
-/// caller writes it as JSON).
-pub fn run(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
+/// caller writes it as JSON). With `debug_pixel`, the last frame runs the
+/// pipelines that print instrumented for that pixel.
+pub fn run(job: &Job, out: &Path, debug_pixel: Option<[u32; 2]>) -> Result<FrameReport, OfflineError> {
     let mut session = prepare(job)?;
+    let (width, height) = (session.scene().width, session.scene().height);
+    if let Some([x, y]) = debug_pixel
+        && (x >= width || y >= height)
+    {
+        return Err(OfflineError::Usage(format!("--debug-pixel {x},{y} is outside the {width}x{height} frame")));
+    }
     // The path tracer adds a sample a frame: the frames before the last
     // accumulate, uncaptured.
     for _ in 1..frames_to_finish(session.scene()) {
         frame(&mut session, Some(&BTreeSet::new()));
     }
     session.set_quads(true);
+    session.set_debug_pixel(debug_pixel);
     let result = frame(&mut session, None);
+    let prints = session.debug_prints().map(|selection| PrintsReport {
+        pipelines: selection.printing().map(|k| k.label()).collect(),
+        printed: result.prints.clone().unwrap_or(Printed { pixel: selection.pixel(), ..Printed::default() }),
+    });
     std::fs::create_dir_all(out).map_err(|e| OfflineError::Io(format!("cannot create {}: {e}", out.display())))?;
     let write = |name: String, bytes: Vec<u8>| {
         std::fs::write(out.join(&name), bytes).map_err(|e| OfflineError::Io(format!("cannot write {name}: {e}"))).map(|()| name)
@@ -139,7 +164,6 @@ pub fn run(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
         };
         passes.push(PassReport { pass, time_ms, outputs, draws, quads, what_if, fragment_invocations });
     }
-    let (width, height) = (session.scene().width, session.scene().height);
     Ok(FrameReport {
         scene: display_path(&job.scene),
         adapter: session.gpu().adapter_name(),
@@ -153,5 +177,6 @@ pub fn run(job: &Job, out: &Path) -> Result<FrameReport, OfflineError> {
         nan: result.nan.clone(),
         tiles: Statistics::of_frame(&result.tensors),
         gpu_errors: session.take_uncaptured(),
+        prints,
     })
 }

@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use wgpu::util::DeviceExt;
 
+use super::debug_print::PrintBinding;
 use super::quads::{Faces, PendingDepth, PendingDraw, PendingTarget, QuadRecorder, depth_state};
 use super::readback::copy_texture;
 use super::resource::{Handle, Physical, PipelineKey};
@@ -59,6 +60,8 @@ pub struct PassContext<'a> {
     pub(super) statistics: Option<Statistics<'a>>,
     /// Where draws are recorded for quad statistics, when the frame asked.
     pub(super) quads: Option<QuadRecorder<'a>>,
+    /// The print buffer, when a pixel is selected.
+    pub(super) prints: Option<PrintBinding<'a>>,
 }
 
 /// The frame's pipeline-statistics queries: one per render pass recorded.
@@ -153,6 +156,20 @@ impl<'a> PassContext<'a> {
             groups.push((
                 i as u32,
                 self.device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(self.pass), layout: &layout, entries: &entries }),
+            ));
+        }
+        if let Some(p) = self.prints
+            && let Some(&group) = p.groups.get(key)
+        {
+            let entries = [wgpu::BindGroupEntry { binding: 0, resource: p.buffer.binding() }];
+            let layout = layout_of(group);
+            groups.push((
+                group,
+                self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("debug prints"),
+                    layout: &layout,
+                    entries: &entries,
+                }),
             ));
         }
         Some(groups)

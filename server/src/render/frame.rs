@@ -3,6 +3,7 @@
 //! copied out right after the pass that wrote them and read back
 //! asynchronously.
 
+use super::debug_print::{PendingPrints, Printed};
 use std::collections::{BTreeMap, BTreeSet};
 use std::time::Instant;
 
@@ -43,6 +44,8 @@ pub struct FrameInputs<'a> {
     /// clock: for adapters whose timestamps do not bracket compute work
     /// (llvmpipe's), at the cost of the overlap between passes.
     pub serial: bool,
+    /// The print buffer and the pipelines instrumented to write it.
+    pub prints: Option<super::debug_print::PrintBinding<'a>>,
 }
 
 /// A submitted frame whose captures and timings are still on their way back.
@@ -64,6 +67,8 @@ pub struct PendingFrame {
     passes: Vec<String>,
     /// Per pass: the capture names it read and wrote, for the NaN report.
     io: Vec<(Vec<String>, Vec<String>)>,
+    /// The selected pixel's prints, when one is selected.
+    prints: Option<PendingPrints>,
 }
 
 /// What a capture copied.
@@ -101,6 +106,9 @@ pub struct FrameResult {
     pub fragment_invocations: Vec<(String, u64)>,
     /// Per raster pass that drew, its quad statistics; empty unless asked.
     pub quads: Vec<super::quads::PassQuads>,
+    /// What the selected pixel printed; `None` without a selection (or
+    /// when its readback failed).
+    pub prints: Option<Printed>,
     /// Where a NaN or Inf first appeared, when any output holds one.
     pub nan: Option<NanOrigin>,
 }
@@ -201,6 +209,9 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
     let mut quad_targets = Vec::new();
 
     let mut encoder = f.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+    if let Some(p) = f.prints {
+        p.buffer.clear(&mut encoder);
+    }
     let mut captures = Vec::new();
     let mut skipped = Vec::new();
     let mut serial = f.serial.then(Vec::new);
@@ -221,6 +232,7 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
             skipped: false,
             statistics: statistics_set.as_ref().map(|set| Statistics { set, next: next_query, used: Vec::new() }),
             quads: f.vertex_captures.map(|captures| QuadRecorder { captures, targets: Vec::new() }),
+            prints: f.prints,
         };
         // A copy pass records no render or compute pass of its own: empty
         // compute passes around it carry its stamps.
@@ -269,7 +281,11 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
     let timestamps = query_set
         .map(|qs| (resolve(f.device, &mut encoder, &qs, graph.passes.len() as u32 * 2, "timestamps"), f.queue.get_timestamp_period()));
     let statistics = statistics_set.map(|set| (resolve(f.device, &mut encoder, &set, next_query, "fragment invocations"), queries));
+    let prints = f.prints.map(|p| p.buffer.copy_out(f.device, &mut encoder, &p));
     f.queue.submit([encoder.finish()]);
+    if let Some(p) = &prints {
+        p.map();
+    }
     for c in &captures {
         c.readback.map();
     }
@@ -283,6 +299,7 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
         t.map();
     }
     PendingFrame {
+        prints,
         frame: f.frame,
         submitted: Instant::now(),
         cpu_record_ms: start.elapsed().as_secs_f64() * 1e3,
@@ -360,6 +377,7 @@ impl PendingFrame {
             && self.timestamps.as_ref().is_none_or(|t| t.0.landed())
             && self.statistics.as_ref().is_none_or(|t| t.0.landed())
             && self.quad_targets.iter().all(PendingTarget::landed)
+            && self.prints.as_ref().is_none_or(PendingPrints::landed)
     }
 
     /// Converts the mapped readbacks and takes their statistics: the
@@ -416,6 +434,7 @@ impl PendingFrame {
         let recorded: Vec<_> = self.quad_targets.into_iter().filter_map(PendingTarget::read).collect();
         let quads = super::quads::replay(&recorded);
         let nan = nan_origin(&self.passes, &self.io, &captures, &tensors);
+        let prints = self.prints.as_ref().and_then(PendingPrints::read);
         FrameResult {
             frame: self.frame,
             timings,
@@ -427,6 +446,7 @@ impl PendingFrame {
             fragment_invocations,
             quads,
             nan,
+            prints,
         }
     }
 }

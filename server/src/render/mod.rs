@@ -4,6 +4,7 @@
 
 pub mod capture;
 pub mod context;
+pub mod debug_print;
 pub mod denoise_weights;
 pub mod dfg;
 pub mod frame;
@@ -15,6 +16,7 @@ pub mod path_geometry;
 pub mod pipelines;
 pub mod pool;
 pub mod preview;
+pub mod print_selection;
 pub mod quads;
 pub mod readback;
 pub mod resource;

@@ -139,7 +139,7 @@ impl PipelineCache {
         }
         let created = result.and_then(|Compiled { composed, sources }| {
             entry.files = composed.files.clone();
-            pipeline::create(device, key.spec, &key.defs, &composed, lib, shader_display).map(|p| (p, composed, sources))
+            pipeline::create(device, key.spec, &key.defs, &composed, lib, shader_display, None).map(|p| (p, composed, sources))
         });
         match created {
             Ok((p, composed, sources)) => {
@@ -164,7 +164,7 @@ impl PipelineCache {
             entry.current = None;
             let Some(composed) = &entry.last_good else { continue };
             let display = entry.files.last().cloned().unwrap_or_default();
-            match pipeline::create(device, key.spec, &key.defs, composed, lib, &display) {
+            match pipeline::create(device, key.spec, &key.defs, composed, lib, &display, None) {
                 Ok(p) => entry.current = Some(p),
                 Err(d) => problems.extend(d),
             }

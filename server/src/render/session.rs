@@ -21,6 +21,7 @@ use super::frame::{self, FrameInputs, FrameResult, PendingFrame};
 use super::graph::{Graph, PassKind};
 use super::pipelines::{self, Compiled, Installed, PipelineCache, PipelineSummary, Status};
 use super::pool::ResourcePool;
+use super::print_selection::PrintSelection;
 use super::resource::{Lifetime, Meaning, PipelineKey, Projection, ResourceDesc, TensorLayout};
 use super::scene_gpu::SceneGpu;
 use super::vertex_capture::VertexCapture;
@@ -139,6 +140,11 @@ pub struct Session {
     /// generation each was instrumented from; built while `quads` is on.
     vertex_captures: BTreeMap<PipelineKey, VertexCapture>,
     capture_generations: BTreeMap<PipelineKey, u64>,
+    /// The selected pixel's prints (`None`: no pixel selected).
+    prints: Option<PrintSelection>,
+    /// Frames run the plain pipelines though a pixel is selected (`loupe
+    /// bench` times both ways, interleaved, without rebuilding).
+    prints_paused: bool,
     /// Frames submitted since the history was last forgotten: the samples
     /// per pixel the path tracer holds.
     accumulated: u32,
@@ -164,6 +170,8 @@ impl Session {
             serial: false,
             vertex_captures: BTreeMap::new(),
             capture_generations: BTreeMap::new(),
+            prints: None,
+            prints_paused: false,
             accumulated: 0,
             scene: loaded.scene.clone(),
             meshes: loaded.meshes.clone(),
@@ -402,7 +410,14 @@ impl Session {
         if self.quads {
             self.refresh_vertex_captures();
         }
-        let live = self.cache.live();
+        let mut live = self.cache.live();
+        let prints = self.prints.as_mut().filter(|_| !self.prints_paused);
+        if let Some(prints) = prints {
+            let keys: Vec<(PipelineKey, String)> =
+                self.graph.passes.iter().flat_map(|p| p.pipelines.iter().map(|k| (k.clone(), p.name.clone()))).collect();
+            prints.refresh(&self.gpu.device, &self.cache, &self.lib, &keys);
+            prints.replace(&mut live);
+        }
         let g = &self.gpu;
         let inputs = FrameInputs {
             device: &g.device,
@@ -418,8 +433,28 @@ impl Session {
             samples: self.accumulated,
             dt,
             serial: self.serial,
+            prints: self.prints.as_ref().filter(|_| !self.prints_paused).map(PrintSelection::binding),
         };
         frame::submit(inputs, &mut self.pool)
+    }
+
+    /// Selects the pixel whose prints the next frames collect (`None`:
+    /// none, and the plain pipelines run again).
+    pub fn set_debug_pixel(&mut self, pixel: Option<[u32; 2]>) {
+        if self.prints.as_ref().map(PrintSelection::pixel) != pixel {
+            self.prints = pixel.map(|p| PrintSelection::new(&self.gpu.device, p));
+        }
+    }
+
+    /// Runs the plain pipelines while `paused`, keeping the selection and
+    /// its instrumented pipelines for when it is not.
+    pub fn pause_prints(&mut self, paused: bool) {
+        self.prints_paused = paused;
+    }
+
+    /// The selection, when a pixel is selected.
+    pub fn debug_prints(&self) -> Option<&PrintSelection> {
+        self.prints.as_ref()
     }
 
     /// Instruments the vertex stage of every raster pipeline the frame uses
@@ -536,6 +571,8 @@ impl Session {
         self.pool = ResourcePool::default();
         self.vertex_captures.clear();
         self.capture_generations.clear();
+        // The selection's buffer and variants were the old device's.
+        self.prints = self.prints.as_ref().map(|p| PrintSelection::new(&self.gpu.device, p.pixel()));
         self.scene_gpu =
             SceneGpu::new(&self.gpu.device, &self.gpu.queue, &self.scene, &self.meshes, &self.materials, self.network.as_ref(), None);
         self.cache.recreate_all(&self.gpu.device, &self.lib)
@@ -701,6 +738,53 @@ mod tests {
         assert_eq!(r.timing, "cpu");
         assert_eq!(r.timings, vec![], "no pass gets a time it did not measure");
         assert!(r.total_ms > 0.0, "the frame's wall clock is reported");
+    }
+
+    /// With no pixel selected the plain pipelines run and nothing prints;
+    /// selecting one builds the variant of the pipeline that prints (and
+    /// of no other), kept across frames while selected; clearing it
+    /// drops it.
+    #[test]
+    fn a_selected_pixel_runs_the_printing_pipeline_instrumented_and_only_then() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+        let mut lib = library::read_tree(&root).unwrap();
+        let file = lib.files().find(|f| f.display.ends_with("passes/test_pattern.wgsl")).unwrap().clone();
+        let text = format!("enable wgpu_debug_printf;\n{}", file.text).replacen(
+            "fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {\n",
+            "fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {\n    debugPrintf(\"at %v2f\", in.position.xy);\n",
+            1,
+        );
+        assert!(text.contains("debugPrintf"), "the premise: fs_main is written so");
+        lib.upsert(SourceFile::from_text(file.display.clone(), file.path.clone(), text.into()));
+        let gpu = crate::gpu::open().unwrap_or_else(|e| panic!("a GPU device (lavapipe will do): {e}"));
+        let mut s = Session::new(gpu, &root, lib, &pattern(false));
+        assert_eq!(s.install_missing(), vec![]);
+        let frame = |s: &mut Session| {
+            let pending = s.submit(Some(&BTreeSet::new()), 0.0);
+            s.wait(pending).prints
+        };
+        assert_eq!(frame(&mut s), None);
+        assert!(s.debug_prints().is_none());
+
+        s.set_debug_pixel(Some([2, 3]));
+        for _ in 0..2 {
+            let printed = frame(&mut s).expect("a pixel is selected");
+            let texts: Vec<(&str, &str)> = printed.lines.iter().map(|l| (l.pass.as_str(), l.text.as_str())).collect();
+            assert_eq!(texts, [("test_pattern", "at 2.500000, 3.500000")]);
+            let selection = s.debug_prints().unwrap();
+            assert_eq!(selection.printing().map(PipelineKey::label).collect::<Vec<_>>(), ["debug.test_pattern"]);
+            assert_eq!(selection.built(), 1, "built once, kept while selected");
+        }
+        // Paused (how `loupe bench` times the plain pipelines): nothing
+        // printed, and nothing rebuilt when it resumes.
+        s.pause_prints(true);
+        assert_eq!(frame(&mut s), None);
+        s.pause_prints(false);
+        assert_eq!(frame(&mut s).map(|p| p.lines.len()), Some(1));
+        assert_eq!(s.debug_prints().unwrap().built(), 1);
+        s.set_debug_pixel(None);
+        assert_eq!(frame(&mut s), None);
+        assert!(s.debug_prints().is_none());
     }
 
     /// Pipeline statistics count each raster pass's fragment-shader

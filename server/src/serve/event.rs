@@ -42,6 +42,9 @@ pub enum Event {
     /// Render a material's preview (`GET /api/materials/{index}/preview`):
     /// the daemon hands it to the preview thread with its current scene.
     Preview(super::preview::Request),
+    /// Select the pixel whose prints each frame reports (`None`: clear):
+    /// the WebSocket `debug_pixel` message.
+    DebugPixel(Option<[u32; 2]>),
     /// Stop the daemon: the HTTP side is shutting down.
     Shutdown,
 }

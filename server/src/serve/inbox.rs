@@ -38,6 +38,7 @@ pub enum Command {
     LoseDevice,
     Trace,
     Preview(super::preview::Request),
+    DebugPixel(Option<[u32; 2]>),
 }
 
 impl Command {
@@ -49,13 +50,23 @@ impl Command {
             Command::LoseDevice => Event::LoseDevice,
             Command::Trace => Event::Trace,
             Command::Preview(r) => Event::Preview(r),
+            Command::DebugPixel(p) => Event::DebugPixel(p),
         }
     }
 }
 
 /// The events [`Command::into_event`] makes: counted while they wait.
 fn is_command(event: &Event) -> bool {
-    matches!(event, Event::Rebuild | Event::Scene(_) | Event::ResetHistory | Event::LoseDevice | Event::Trace | Event::Preview(_))
+    matches!(
+        event,
+        Event::Rebuild
+            | Event::Scene(_)
+            | Event::ResetHistory
+            | Event::LoseDevice
+            | Event::Trace
+            | Event::Preview(_)
+            | Event::DebugPixel(_)
+    )
 }
 
 #[derive(Debug, thiserror::Error)]

@@ -96,7 +96,11 @@ impl Warm {
                 continue;
             }
             self.composer
-                .add_composable_module(ComposableModuleDescriptor { source: &dep.text, file_path: &dep.display, ..Default::default() })
+                .add_composable_module(ComposableModuleDescriptor {
+                    source: &dep.prints.text,
+                    file_path: &dep.display,
+                    ..Default::default()
+                })
                 .map_err(Box::new)?;
             if let Some(name) = name {
                 self.modules.insert(name.clone(), (dep.display.clone(), dep.hash));
@@ -104,7 +108,7 @@ impl Warm {
         }
         self.composer
             .make_naga_module(NagaModuleDescriptor {
-                source: &entry.text,
+                source: &entry.prints.text,
                 file_path: &entry.display,
                 shader_defs: naga_oil_defs(&with_implied(defs, deps)),
                 ..Default::default()
@@ -167,8 +171,13 @@ fn compose_and_validate(
     let reachable = lib.reachable_under(entry, defs, &with_implied(defs, &deps));
     let files: Vec<String> =
         deps.iter().map(|f| f.display.clone()).chain([entry.display.clone()]).filter(|d| reachable.contains(d)).collect();
+    let problems: Vec<Diagnostic> =
+        deps.iter().map(|d| &**d).chain([entry]).filter(|f| reachable.contains(&f.display)).flat_map(SourceFile::print_problems).collect();
+    if !problems.is_empty() {
+        return Err(problems);
+    }
     let module = if !entry.has_directives {
-        naga::front::wgsl::parse_str(&entry.text).map_err(|e| {
+        naga::front::wgsl::parse_str(&entry.prints.text).map_err(|e| {
             let labels = e.labels().map(|(s, m)| (s.to_range().unwrap_or(0..0), m.to_owned())).collect();
             vec![located(Code::Parse, e.message().to_owned(), labels, Vec::new(), entry)]
         })?
@@ -183,6 +192,12 @@ fn compose_and_validate(
         let labels = validation_labels(e.spans().map(|(s, m)| (s.to_range().unwrap_or(0..0), m.clone())));
         vec![located(Code::Validation, message, labels, notes, entry)]
     })?;
+    let sources = deps.iter().map(|d| &**d).chain([entry]).filter(|f| !f.prints.sites.is_empty());
+    let problems: Vec<Diagnostic> =
+        sources.flat_map(|f| f.prints.type_problems(&module).into_iter().map(|p| f.print_problem(&p))).collect();
+    if !problems.is_empty() {
+        return Err(problems);
+    }
     Ok(Composed { module, info, files })
 }
 
@@ -220,6 +235,10 @@ pub fn check_library(lib: &Library, file: &Arc<SourceFile>, defs: &ShaderDefs, c
     let Some((path, _)) = &file.import_path else { return Ok(()) };
     let mut deps = lib.dependencies(file)?;
     deps.push(file.clone());
+    let problems: Vec<Diagnostic> = file.print_problems().collect();
+    if !problems.is_empty() {
+        return Err(problems);
+    }
     let probe = SourceFile::from_text(file.display.clone(), file.path.clone(), format!("#import {path}\n").into());
     compose_with_naga_oil(&deps, &probe, defs, caps).map(|_| ())
 }
@@ -281,7 +300,7 @@ fn from_composer(composer: &Composer, err: ComposerError, deps: &[Arc<SourceFile
     let loc = |r: Range<usize>| -> Location {
         let r = r.start.min(text.len())..r.end.min(text.len()).max(r.start.min(text.len()));
         match original {
-            Some(f) => f.location(original_range(&text, &f.text, r)),
+            Some(f) => f.composed_location(original_range(&text, &f.prints.text, r)),
             None => lines.location(&path, &text, r),
         }
     };
@@ -343,7 +362,7 @@ fn root_cause(e: &dyn std::error::Error) -> (String, Vec<String>) {
 }
 
 fn located(code: Code, message: String, labels: Vec<(Range<usize>, String)>, notes: Vec<String>, file: &SourceFile) -> Diagnostic {
-    let d = build(code, message, labels.into_iter().map(|(r, m)| (file.location(r), m)), notes.into_iter());
+    let d = build(code, message, labels.into_iter().map(|(r, m)| (file.composed_location(r), m)), notes.into_iter());
     // Some errors carry no span (naga's recursion limit): the file itself.
     if d.location.is_none() { d.at(Location::file_start(&file.display)) } else { d }
 }

@@ -8,6 +8,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use super::printf::{self, Prints};
 use crate::diag::{Code, Diagnostic, LineIndex, Location, display_path};
 
 /// Files above this are refused: real shaders are a few hundred kilobytes at
@@ -31,6 +32,8 @@ pub struct SourceFile {
     /// Whether any preprocessor directive appears; files without one are
     /// plain WGSL and skip the composer entirely.
     pub has_directives: bool,
+    /// The `debugPrintf` calls, and the text naga is given without them.
+    pub prints: Arc<Prints>,
 }
 
 impl SourceFile {
@@ -38,10 +41,26 @@ impl SourceFile {
         self.lines.location(&self.display, &self.text, range)
     }
 
+    /// The location of `range` of the text naga is given
+    /// ([`Prints::text`]), in the file.
+    pub fn composed_location(&self, range: Range<usize>) -> Location {
+        self.location(self.prints.original_range(range))
+    }
+
+    /// The problems of its prints found before parsing, as diagnostics.
+    pub fn print_problems(&self) -> impl Iterator<Item = Diagnostic> + '_ {
+        self.prints.problems.iter().map(|p| self.print_problem(p))
+    }
+
+    pub fn print_problem(&self, p: &printf::Problem) -> Diagnostic {
+        Diagnostic::error(p.code, p.message.clone()).with_label(self.location(p.range.clone()), p.label.clone(), true)
+    }
+
     /// Builds a source file from text already in memory.
     pub fn from_text(display: String, path: PathBuf, text: Arc<str>) -> Self {
         let Directives { import_path, imports, has_directives } = scan_directives(&text);
         SourceFile {
+            prints: Arc::new(Prints::of(&text, printf::tag_of(&display))),
             display,
             path,
             lines: Arc::new(LineIndex::new(&text)),

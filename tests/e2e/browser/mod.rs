@@ -17,6 +17,7 @@ mod difference;
 mod layout;
 mod materials;
 mod presets;
+mod prints;
 mod readouts;
 mod tiles;
 mod timings;

@@ -350,6 +350,7 @@ impl Daemon {
                 self.trace_next = Some("request");
                 self.dirty = true;
             }
+            Event::DebugPixel(pixel) => self.debug_pixel(pixel),
             Event::Preview(request) => {
                 let current = super::preview::Current {
                     gpu: self.gpu().clone(),
@@ -361,6 +362,21 @@ impl Daemon {
             }
             Event::Shutdown => {}
         }
+    }
+
+    /// Selects the pixel whose prints frames report, or clears it; a pixel
+    /// outside the frame is refused with an `error` event.
+    fn debug_pixel(&mut self, pixel: Option<[u32; 2]>) {
+        let (width, height) = (self.session.scene().width, self.session.scene().height);
+        if let Some([x, y]) = pixel
+            && (x >= width || y >= height)
+        {
+            let message = format!("`debug_pixel` refused: ({x}, {y}) is outside the {width}x{height} frame");
+            self.shared.publish(ServerEvent::Error { message });
+            return;
+        }
+        self.session.set_debug_pixel(pixel);
+        self.dirty = true;
     }
 
     fn files_changed(&mut self, batch: FileBatch) {

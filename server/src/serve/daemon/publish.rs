@@ -2,6 +2,7 @@
 //! snapshots HTTP serves) and the events it sends clients, after a frame
 //! and whenever the state they describe changes.
 
+use crate::render::debug_print::Printed;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -86,6 +87,9 @@ impl Daemon {
         }
         if clean && !result.quads.is_empty() {
             self.publish_quads(result.frame, result.quads, &result.fragment_invocations);
+        }
+        if let Some(Printed { pixel, lines, dropped }) = result.prints {
+            self.shared.publish(ServerEvent::Prints { frame: result.frame, pixel, lines, dropped });
         }
         self.last_times = times;
         for r in &reloads {

@@ -171,6 +171,11 @@ fn client_message(
         ClientMessage::ClearOverrides {} => ("clear_overrides", Command::Scene(SceneCommand::Clear)),
         ClientMessage::SaveScene {} => ("save_scene", Command::Scene(SceneCommand::Save)),
         ClientMessage::ResetHistory {} => ("reset_history", Command::ResetHistory),
+        ClientMessage::DebugPixel { x, y } => match (x, y) {
+            (Some(x), Some(y)) => ("debug_pixel", Command::DebugPixel(Some([x, y]))),
+            (None, None) => ("debug_pixel", Command::DebugPixel(None)),
+            _ => return Err("`debug_pixel` needs both `x` and `y`, or neither to clear the selection".to_owned()),
+        },
     };
     match shared.clients.command(command) {
         Err(busy @ Refused::Busy) => Err(format!("`{kind}` refused: {busy}")),

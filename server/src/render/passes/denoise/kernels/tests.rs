@@ -15,7 +15,7 @@ fn pipeline(gpu: &Gpu, key: &PipelineKey) -> wgpu::ComputePipeline {
     let lib = crate::shader::library::read_tree(&root).unwrap();
     let display = crate::diag::display_path(&root.join(key.spec.shader));
     let compiled = crate::render::pipelines::compose(&crate::shader::NagaOil, &lib, key, &display).unwrap_or_else(|d| panic!("{d:?}"));
-    match crate::gpu::pipeline::create(&gpu.device, key.spec, &key.defs, &compiled.composed, &lib, &display).unwrap_or_else(|d| panic!("{d:?}")) {
+    match crate::gpu::pipeline::create(&gpu.device, key.spec, &key.defs, &compiled.composed, &lib, &display, None).unwrap_or_else(|d| panic!("{d:?}")) {
         Pipeline::Compute(p) => (*p).clone(),
         Pipeline::Render(_) => unreachable!("a compute spec"),
     }
