@@ -6,7 +6,8 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::diag::{Diagnostic, display_path};
+use super::config::Threshold;
+use crate::diag::{Code, Diagnostic, display_path};
 use crate::flip::{self, FlipError, Linear, Summary};
 use crate::render::capture::{CapturedImage, srgb_to_linear};
 use crate::tradeoffs::metric::{Rgba, relative_mse};
@@ -91,6 +92,68 @@ pub fn compare(actual: &Image, reference: &Image, range: Range) -> Result<Compar
         Range::High => flip::hdr(reference.linear(), actual.linear())?,
     };
     Ok(Compared { flip: map.summary(), relative_mse: relative_mse(&actual.view(), &reference.view()), map })
+}
+
+/// How an output failed its reference, for the notes a caller adds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Failure {
+    /// No reference file.
+    Missing,
+    /// A reference that cannot be compared: unreadable, another size.
+    Unusable,
+    /// Compared, and over a threshold.
+    Mismatch,
+}
+
+/// An output judged against its reference file, as the gate and the live
+/// view both judge it.
+pub struct Judged {
+    /// The reference and the comparison, when the two compared.
+    pub compared: Option<(Image, Compared)>,
+    /// Why it fails, when it does (its diagnostic carries no notes yet).
+    pub failure: Option<(Failure, Diagnostic)>,
+}
+
+/// Reads `output`'s reference at `path` and compares `actual` with it
+/// against `threshold`; `adapter_key`: the adapter key that chose the
+/// threshold, named in a mismatch.
+pub fn judge(actual: &Image, range: Range, output: &str, path: &Path, threshold: Threshold, adapter_key: Option<&str>) -> Judged {
+    let shown = display_path(path);
+    let unusable = |d: Diagnostic| Judged { compared: None, failure: Some((Failure::Unusable, d)) };
+    let reference = match read(path, range) {
+        Ok(None) => {
+            let d = Diagnostic::error(Code::ReferenceMissing, format!("`{output}` has no reference: {shown} does not exist"));
+            return Judged { compared: None, failure: Some((Failure::Missing, d)) };
+        }
+        Err(d) => return unusable(d),
+        Ok(Some(r)) if (r.width, r.height) != (actual.width, actual.height) => {
+            return unusable(Diagnostic::error(
+                Code::Image,
+                format!(
+                    "the reference {shown} is {}x{}, but the case renders `{output}` at {}x{}",
+                    r.width, r.height, actual.width, actual.height
+                ),
+            ));
+        }
+        Ok(Some(r)) => r,
+    };
+    let compared = match compare(actual, &reference, range) {
+        Ok(c) => c,
+        Err(e) => return unusable(Diagnostic::error(Code::Image, e.to_string())),
+    };
+    let (f, t) = (compared.flip, threshold);
+    let failure = (f.mean > t.flip_mean || f.p99 > t.flip_p99).then(|| {
+        let chosen = adapter_key.map(|k| format!(" (the threshold for adapters matching \"{k}\")")).unwrap_or_default();
+        let d = Diagnostic::error(
+            Code::ImageMismatch,
+            format!(
+                "`{output}` differs from its reference: FLIP mean {:.4} (at most {}), 99th percentile {:.4} (at most {}){chosen}",
+                f.mean, t.flip_mean, f.p99, t.flip_p99
+            ),
+        );
+        (Failure::Mismatch, d)
+    });
+    Judged { compared: Some((reference, compared)), failure }
 }
 
 /// `capture` as the reference file `range` keeps: an sRGB PNG, or a

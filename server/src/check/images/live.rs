@@ -68,50 +68,21 @@ pub fn compare_case(renderer: &mut Renderer, case: &Case, references: &Path, ada
     for c in captures {
         let (output, range) = (c.key(), Range::of(&c.format));
         let path = compare::reference_path(references, &case.name, &output, range);
-        let shown = display_path(&path);
-        let actual = Image::of(&c);
-        let mut o = Output {
-            output: output.clone(),
-            reference: shown.clone(),
-            flip: None,
-            relative_mse: None,
-            actual: Arc::new(c),
-            reference_image: None,
-            map: None,
-        };
-        let problem = match compare::read(&path, range) {
-            Ok(None) => Some(Diagnostic::error(Code::ReferenceMissing, format!("`{output}` has no reference: {shown} does not exist"))),
-            Err(d) => Some(d),
-            Ok(Some(r)) if (r.width, r.height) != (actual.width, actual.height) => Some(Diagnostic::error(
-                Code::Image,
-                format!(
-                    "the reference {shown} is {}x{}, but the case renders `{output}` at {}x{}",
-                    r.width, r.height, actual.width, actual.height
-                ),
-            )),
-            Ok(Some(reference)) => match compare::compare(&actual, &reference, range) {
-                Err(e) => Some(Diagnostic::error(Code::Image, e.to_string())),
-                Ok(compared) => {
-                    let f = compared.flip;
-                    (o.flip, o.relative_mse) = (Some(f), Some(compared.relative_mse));
-                    (o.reference_image, o.map) = (Some(reference), Some(compared.map));
-                    (f.mean > threshold.flip_mean || f.p99 > threshold.flip_p99).then(|| {
-                        Diagnostic::error(
-                            Code::ImageMismatch,
-                            format!(
-                                "`{output}` differs from its reference: FLIP mean {:.4} (at most {}), 99th percentile {:.4} (at most {})",
-                                f.mean, threshold.flip_mean, f.p99, threshold.flip_p99
-                            ),
-                        )
-                    })
-                }
-            },
-        };
-        if let Some(d) = problem {
+        let judged = compare::judge(&Image::of(&c), range, &output, &path, threshold, key);
+        let (reference_image, compared) = judged.compared.unzip();
+        if let Some((_, d)) = judged.failure {
             out.diagnostics.push(at_case(&case.at, d));
             out.verdict = Verdict::Failed;
         }
-        out.outputs.push(o);
+        out.outputs.push(Output {
+            output,
+            reference: display_path(&path),
+            flip: compared.as_ref().map(|c| c.flip),
+            relative_mse: compared.as_ref().map(|c| c.relative_mse),
+            actual: Arc::new(c),
+            reference_image,
+            map: compared.map(|c| c.map),
+        });
     }
     out
 }

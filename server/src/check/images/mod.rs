@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::{Duration, Instant};
 
-use compare::{Image, Range};
+use compare::{Failure, Image, Range};
 use config::{Case, Threshold};
 use report::at_case;
 
@@ -184,51 +184,23 @@ fn check(c: &CapturedImage, case: &Case, opts: &Options, r: &mut CaseResult) -> 
     let (output, range) = (c.key(), Range::of(&c.format));
     let path = compare::reference_path(&opts.references, &case.name, &output, range);
     let shown = display_path(&path);
-    let mut out = OutputResult { output: output.clone(), reference: shown.clone(), flip: None, relative_mse: None, blessed: None };
     let actual = Image::of(c);
-    let bless_hint = format!("if the new image is intended: `loupe check --bless {}`, then review and commit {shown}", case.name);
-    let reference = match compare::read(&path, range) {
-        Ok(Some(reference)) if (reference.width, reference.height) == (actual.width, actual.height) => reference,
-        found => {
-            let d = match found {
-                Ok(None) => Diagnostic::error(Code::ReferenceMissing, format!("`{output}` has no reference: {shown} does not exist"))
-                    .with_note(format!("render it with `loupe check --bless {}`, look at it, and commit it", case.name)),
-                Ok(Some(reference)) => Diagnostic::error(
-                    Code::Image,
-                    format!(
-                        "the reference {shown} is {}x{}, but the case renders `{output}` at {}x{}",
-                        reference.width, reference.height, actual.width, actual.height
-                    ),
-                )
-                .with_note(bless_hint),
-                Err(d) => d.with_note(bless_hint),
-            };
-            fail(r, case, opts, d, (c, &actual), None);
-            return out;
-        }
-    };
-    let compared = match compare::compare(&actual, &reference, range) {
-        Ok(compared) => compared,
-        Err(e) => {
-            fail(r, case, opts, Diagnostic::error(Code::Image, e.to_string()), (c, &actual), None);
-            return out;
-        }
-    };
-    let (f, t) = (compared.flip, r.threshold);
-    out.flip = Some(f);
-    out.relative_mse = Some(compared.relative_mse);
-    if f.mean > t.flip_mean || f.p99 > t.flip_p99 {
-        let chosen = r.adapter_key.as_ref().map(|k| format!(" (the threshold for adapters matching \"{k}\")")).unwrap_or_default();
-        let d = Diagnostic::error(
-            Code::ImageMismatch,
-            format!(
-                "`{output}` differs from its reference: FLIP mean {:.4} (at most {}), 99th percentile {:.4} (at most {}){chosen}",
-                f.mean, t.flip_mean, f.p99, t.flip_p99
-            ),
-        )
-        .with_note(format!("relMSE {:.3e} against {shown}", compared.relative_mse))
-        .with_note(bless_hint);
-        fail(r, case, opts, d, (c, &actual), Some((&reference, &compared.map)));
+    let judged = compare::judge(&actual, range, &output, &path, r.threshold, r.adapter_key.as_deref());
+    let figures = judged.compared.as_ref().map(|(_, compared)| (compared.flip, compared.relative_mse));
+    let out =
+        OutputResult { output, reference: shown.clone(), flip: figures.map(|f| f.0), relative_mse: figures.map(|f| f.1), blessed: None };
+    if let Some((failure, d)) = judged.failure {
+        let bless_hint = format!("if the new image is intended: `loupe check --bless {}`, then review and commit {shown}", case.name);
+        let d = match failure {
+            Failure::Missing => d.with_note(format!("render it with `loupe check --bless {}`, look at it, and commit it", case.name)),
+            Failure::Unusable => d.with_note(bless_hint),
+            Failure::Mismatch => {
+                let mse = figures.map_or(0.0, |f| f.1);
+                d.with_note(format!("relMSE {mse:.3e} against {shown}")).with_note(bless_hint)
+            }
+        };
+        let compared = judged.compared.as_ref().map(|(reference, compared)| (reference, &compared.map));
+        fail(r, case, opts, d, (c, &actual), compared);
     }
     out
 }
