@@ -235,6 +235,11 @@ impl Daemon {
         self.session.gpu()
     }
 
+    /// Whether any client asks for quad statistics.
+    fn wants_quads(&self) -> bool {
+        self.subscriptions.values().any(|s| s.contains(QUAD_STATISTICS))
+    }
+
     /// Runs until `Shutdown` or until every sender is gone.
     pub fn run(mut self, rx: Inbox) {
         self.install_lost_callback();
@@ -328,7 +333,7 @@ impl Daemon {
                 if self.subscriptions.get(&client).is_some_and(wanted) && !wanted(&before) {
                     self.compare_references();
                 }
-                let quads = self.subscriptions.values().any(|s| s.contains(QUAD_STATISTICS));
+                let quads = self.wants_quads();
                 self.session.set_quads(quads);
                 if !quads {
                     shared::write(&self.shared.quads, None);

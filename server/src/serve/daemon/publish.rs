@@ -85,7 +85,9 @@ impl Daemon {
             shared::write(&self.shared.tensors, Arc::new(tensors));
             images = Some(FrameImages::new(result.frame, final_key, this_frame));
         }
-        if clean && !result.quads.is_empty() {
+        // A frame begun while a client still asked for statistics can end
+        // after the last one stopped: its maps would outlive the request.
+        if clean && !result.quads.is_empty() && self.wants_quads() {
             self.publish_quads(result.frame, result.quads, &result.fragment_invocations);
         }
         if let Some(Printed { pixel, lines, dropped }) = result.prints {
