@@ -1,13 +1,16 @@
 //! One draw spread over the threads by rows of the target. Each band of
 //! block rows runs every primitive, in API order, over its own rows of the
 //! depth buffer and maps, and blocks never straddle bands (they start at
-//! even rows), so the result is the sequential one, bit for bit.
+//! even rows), so the result is the sequential one, bit for bit. Bands
+//! outside the draw's rectangle (a scissor) are skipped, but for one that
+//! counts the primitives.
 
 use rayon::prelude::*;
 
 use super::depth::DepthTest;
 use super::input::{DepthState, Draw, Viewport};
 use super::primitive::{Launch, Rasterizer, Tally, Vertex};
+use super::probe::Watch;
 use super::raster::Rect;
 use super::stats::{QuadMaps, QuadStats};
 
@@ -22,12 +25,14 @@ pub(super) struct Job<'a> {
     pub depth: Option<DepthState>,
 }
 
-/// What a draw launched: rasterized and shaded, counted once.
+/// What a draw launched: rasterized and shaded, counted once; the probed
+/// pixel's fragments go to `watch`.
 pub(super) fn rasterize(
     job: &Job,
     maps: &mut QuadMaps,
     depth: Option<&mut [f32]>,
     launches: &mut Vec<Vec<Launch>>,
+    watch: Option<Watch<'_>>,
 ) -> (QuadStats, QuadStats) {
     let (width, height) = maps.size();
     // One band a thread: each band sets up every primitive again, so more
@@ -39,10 +44,24 @@ pub(super) fn rasterize(
         _ => maps.iter().map(|_| None).collect(),
     };
     launches.resize_with(maps.len(), Vec::new);
-    let tallies: Vec<(QuadStats, QuadStats)> = (maps.into_par_iter().zip(depth).zip(launches.par_iter_mut()).enumerate())
-        .map(|(band, ((maps, depth), launches))| {
+    let rows = |band: usize| {
+        let first_row = 2 * block_rows * band as u32;
+        Rect { y0: job.rect.y0.max(first_row.into()), y1: job.rect.y1.min((first_row + 2 * block_rows).into()), ..job.rect }
+    };
+    // The band that counts every primitive: the first with rows to draw.
+    let counting = (0..maps.len()).find(|&b| rows(b).y0 < rows(b).y1).unwrap_or(0);
+    let mut watches: Vec<Option<Watch>> = maps.iter().map(|_| None).collect();
+    if let Some(w) = watch {
+        let band = (w.row() / (2 * block_rows)) as usize;
+        watches[band] = Some(w);
+    }
+    let tallies: Vec<(QuadStats, QuadStats)> = (maps.into_par_iter().zip(depth).zip(launches.par_iter_mut()).zip(watches).enumerate())
+        .map(|(band, (((maps, depth), launches), watch))| {
             let first_row = 2 * block_rows * band as u32;
-            let rows = Rect { y0: job.rect.y0.max(first_row.into()), y1: job.rect.y1.min((first_row + 2 * block_rows).into()), ..job.rect };
+            let rows = rows(band);
+            if rows.y0 >= rows.y1 && band != counting {
+                return Default::default();
+            }
             let mut raster = Rasterizer {
                 rect: rows,
                 cull: job.draw.cull,
@@ -50,17 +69,19 @@ pub(super) fn rasterize(
                 depth: depth.zip(job.depth).map(|(buffer, state)| DepthTest::new(buffer, first_row, width, state, &job.viewport)),
                 tally: Tally { maps, rasterized: QuadStats::default(), shaded: QuadStats::default() },
                 launches,
+                watch,
             };
             let indices = job.draw.indices;
             let vertex = |t: usize, k: usize| &job.vertices[indices.map_or(3 * t + k, |i| i[3 * t + k] as usize)];
             for t in 0..job.triangles {
-                raster.triangle([vertex(t, 0), vertex(t, 1), vertex(t, 2)]);
+                raster.triangle(t as u32, [vertex(t, 0), vertex(t, 1), vertex(t, 2)]);
             }
             (raster.tally.rasterized, raster.tally.shaded)
         })
         .collect();
-    // Every band counted every primitive; pixels and quads are its own.
-    let first = tallies[0].0;
+    // The counting band counted every primitive; pixels and quads are each
+    // band's own.
+    let first = tallies[counting].0;
     let sum = |pick: fn(&(QuadStats, QuadStats)) -> QuadStats| QuadStats {
         triangles: first.triangles,
         culled_triangles: first.culled_triangles,

@@ -71,15 +71,10 @@ impl<'a> DepthTest<'a> {
     /// their depth when the pipeline writes depth.
     pub fn shade(&mut self, s: &Surface, bx: u32, by: u32, mask: u8) -> u8 {
         let (x, y) = (2 * bx as usize, 2 * by as usize);
-        let top_left = s.c + s.dx * x as f64 + s.dy * y as f64;
         let at = (y - self.first_row) * self.width + x;
         let mut passed = 0;
-        // Lanes in order: (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1).
-        for (lane, (z, at)) in
-            [(top_left, at), (top_left + s.dx, at + 1), (top_left + s.dy, at + self.width), (top_left + s.dx + s.dy, at + self.width + 1)]
-                .into_iter()
-                .enumerate()
-        {
+        let ats = [at, at + 1, at + self.width, at + self.width + 1];
+        for (lane, (z, at)) in lanes(s, bx, by).into_iter().zip(ats).enumerate() {
             // An uncovered lane may lie outside the target.
             if mask & 1 << lane != 0 && self.test(z, at) {
                 passed |= 1 << lane;
@@ -88,10 +83,20 @@ impl<'a> DepthTest<'a> {
         passed
     }
 
+    /// The depth `shade` tests lane `lane` (bit of its mask) of block
+    /// (bx, by) at.
+    pub fn fragment(&self, s: &Surface, bx: u32, by: u32, lane: usize) -> f32 {
+        self.stored(lanes(s, bx, by)[lane])
+    }
+
+    /// The fragment's depth is an f32, as a Depth32Float buffer stores it.
+    fn stored(&self, z: f64) -> f32 {
+        z.clamp(self.range[0], self.range[1]) as f32
+    }
+
     /// Tests (and writes) the fragment at depth `z` of buffer entry `at`.
     fn test(&mut self, z: f64, at: usize) -> bool {
-        // The fragment's depth is an f32, as a Depth32Float buffer stores it.
-        let fragment = z.clamp(self.range[0], self.range[1]) as f32;
+        let fragment = self.stored(z);
         let stored = &mut self.buffer[at];
         let d = f64::from(fragment) - f64::from(*stored);
         let tolerance = f64::from(self.state.tolerance);
@@ -103,6 +108,13 @@ impl<'a> DepthTest<'a> {
         }
         pass
     }
+}
+
+/// The surface's depth at the centres of block (bx, by)'s lanes, in order:
+/// (x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1).
+fn lanes(s: &Surface, bx: u32, by: u32) -> [f64; 4] {
+    let top_left = s.c + s.dx * f64::from(2 * bx) + s.dy * f64::from(2 * by);
+    [top_left, top_left + s.dx, top_left + s.dy, top_left + s.dx + s.dy]
 }
 
 /// The minimum resolvable difference r of a Depth32Float buffer around

@@ -133,6 +133,8 @@ pub enum QuadError {
     Viewport(Viewport, u32, u32),
     #[error("scissor {0:?} is not inside the {1}x{2} target")]
     Scissor(Scissor, u32, u32),
+    #[error("pixel ({x}, {y}) is outside the {width}x{height} target")]
+    Pixel { x: u32, y: u32, width: u32, height: u32 },
     #[error("depth state {0:?}: tolerance must be finite and at least 0, slope_scale and clamp finite")]
     DepthState(DepthState),
 }

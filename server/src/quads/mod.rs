@@ -9,23 +9,28 @@
 //! A `Pass` is one render pass's target: draws go through `Pass::draw` in
 //! submission order, each returning its `DrawStats`, while the pass keeps
 //! their sum, the quad-overdraw and helper-lane maps, and its depth buffer.
+//! A pass can also probe one pixel: record every fragment its draws make
+//! there, with the depth test's verdict (`Pass::probe`).
 
 mod bands;
 mod clip;
 mod depth;
 mod input;
 mod primitive;
+mod probe;
 mod raster;
 mod stats;
 #[cfg(test)]
 mod tests;
 
 pub use input::{Compare, DEPTH_TOLERANCE, DepthBias, DepthState, Draw, Face, FrontFace, MAX_TARGET_SIZE, QuadError, Scissor, Viewport};
+pub use probe::{Fragment, Verdict};
 pub use raster::SUBPIXEL_BITS;
 pub use stats::{DrawStats, QuadMaps, QuadStats};
 
 use bands::Job;
 use primitive::{Launch, Vertex};
+use probe::Probe;
 use raster::Rect;
 
 /// One render pass: its target size, its depth buffer if it has one, and
@@ -37,6 +42,9 @@ pub struct Pass {
     depth: Option<Vec<f32>>,
     maps: QuadMaps,
     totals: DrawStats,
+    /// `Pass::draw` calls so far: the next draw's index.
+    draws: usize,
+    probe: Option<Probe>,
     /// Kept between draws for their allocations.
     vertices: Vec<Vertex>,
     launches: Vec<Vec<Launch>>,
@@ -54,6 +62,8 @@ impl Pass {
             depth: None,
             maps: QuadMaps::new(width, height),
             totals: DrawStats::default(),
+            draws: 0,
+            probe: None,
             vertices: Vec::new(),
             launches: Vec::new(),
         })
@@ -68,9 +78,10 @@ impl Pass {
         Ok(self)
     }
 
-    /// Starts the pass over (no draws, maps zeroed) with `depth` as its
-    /// depth buffer (as `with_depth`) or none, reusing its memory: a pass
-    /// kept from frame to frame costs no fresh pages each frame.
+    /// Starts the pass over (no draws, maps zeroed, no fragments, the
+    /// probe kept) with `depth` as its depth buffer (as `with_depth`) or
+    /// none, reusing its memory: a pass kept from frame to frame costs no
+    /// fresh pages each frame.
     pub fn reset(&mut self, depth: Option<&[f32]>) -> Result<(), QuadError> {
         if let Some(values) = depth {
             self.check_depth(values)?;
@@ -81,7 +92,31 @@ impl Pass {
         }
         self.maps.clear();
         self.totals = DrawStats::default();
+        self.draws = 0;
+        if let Some(probe) = &mut self.probe {
+            probe.clear();
+        }
         Ok(())
+    }
+
+    /// Records the fragments at (x, y) of every draw from now on (those
+    /// recorded at another pixel are dropped): see `fragments`.
+    pub fn probe(&mut self, x: u32, y: u32) -> Result<(), QuadError> {
+        let (width, height) = (self.width, self.height);
+        if x >= width || y >= height {
+            return Err(QuadError::Pixel { x, y, width, height });
+        }
+        self.probe = Some(Probe::new(x, y));
+        Ok(())
+    }
+
+    /// The probed pixel's fragments, in rasterization order: draw by draw,
+    /// primitive by primitive. Each primitive that reaches the pixel
+    /// leaves one: covered (tested or not), a helper lane of a quad that
+    /// ran, or culled by its facing. Primitives of zero area, clipped away
+    /// or outside the scissor leave none. Empty without a probe.
+    pub fn fragments(&self) -> &[Fragment] {
+        self.probe.as_ref().map_or(&[], Probe::fragments)
     }
 
     fn check_depth(&self, values: &[f32]) -> Result<(), QuadError> {
@@ -103,6 +138,8 @@ impl Pass {
     /// when its pipeline writes depth). A draw with bad state or indices is
     /// refused whole, leaving the pass as it was.
     pub fn draw(&mut self, draw: &Draw<'_>) -> Result<DrawStats, QuadError> {
+        let index = self.draws;
+        self.draws += 1;
         let (width, height) = (self.width, self.height);
         let viewport = draw.viewport.unwrap_or(Viewport::whole(width, height));
         viewport.check(width, height)?;
@@ -121,7 +158,8 @@ impl Pass {
         self.vertices.clear();
         self.vertices.extend(draw.positions.iter().map(|&p| Vertex::new(&frame, p)));
         let job = Job { draw, vertices: &self.vertices, triangles, rect, viewport, depth };
-        let (rasterized, shaded) = bands::rasterize(&job, &mut self.maps, self.depth.as_deref_mut(), &mut self.launches);
+        let watch = self.probe.as_mut().map(|p| p.watch(index));
+        let (rasterized, shaded) = bands::rasterize(&job, &mut self.maps, self.depth.as_deref_mut(), &mut self.launches, watch);
         let stats = DrawStats { rasterized, shaded: depth.map(|_| shaded) };
         self.totals += stats;
         Ok(stats)

@@ -109,6 +109,14 @@ pub(super) fn reaches(v: &[[i64; 2]; 3], rect: Rect) -> bool {
     centres(v, rect).is_some()
 }
 
+/// Whether the triangle `v`, wound clockwise on screen, covers a pixel
+/// centre inside `rect`.
+pub(super) fn covers_any(v: &[[i64; 2]; 3], rect: Rect) -> bool {
+    let mut any = false;
+    cover(v, rect, |_, _, _| any = true);
+    any
+}
+
 /// Calls `launch(bx, by, mask)` for every 2×2 block (pixels 2bx, 2bx + 1 ×
 /// 2by, 2by + 1) where the triangle `v`, wound clockwise on screen, covers
 /// a pixel centre inside `rect`. Mask bit 0 is the block's top-left pixel,

@@ -622,15 +622,20 @@ fn any_number_of_threads_draws_the_same_pass() {
             let less = DepthState::new(Compare::LessEqual, true);
             let first = pass.draw(&with_depth(&tris, less)).unwrap();
             let second = pass.draw(&Draw { cull: Some(Face::Back), ..with_depth(&tris, less) }).unwrap();
-            (first, second, pass.maps().clone(), pass.depth().unwrap().to_vec())
+            // Scissored to the lower half: the bands above it skip the draw,
+            // another counts its primitives.
+            let scissor = Some(Scissor { x: 10, y: 150, width: 60, height: 50 });
+            let third = pass.draw(&Draw { scissor, ..with_depth(&tris, less) }).unwrap();
+            assert_eq!(third.rasterized.triangles, 3_001);
+            ((first, second, third), pass.maps().clone(), pass.depth().unwrap().to_vec())
         })
     };
     let (one, five) = (run(1), run(5));
-    assert_eq!((one.0, one.1), (five.0, five.1));
-    assert!(one.2 == five.2, "the maps differ");
-    assert!(one.3 == five.3, "the depth buffers differ");
+    assert_eq!(one.0, five.0);
+    assert!(one.1 == five.1, "the maps differ");
+    assert!(one.2 == five.2, "the depth buffers differ");
     // The second draw, behind or equal to the first everywhere, shades.
-    assert!(one.1.shaded.unwrap().quads > 0);
+    assert!(one.0.1.shaded.unwrap().quads > 0);
 }
 
 #[test]
@@ -677,4 +682,240 @@ fn bad_input_is_refused_with_a_reason() {
     let indices = [2, 1, 0, 0];
     let s = pass.draw(&Draw { indices: Some(&indices), ..draw(&positions) }).unwrap();
     assert_eq!(s.rasterized, stats(1, 0, 16, 4));
+}
+
+// ---- the probe: one pixel's fragments ----------------------------------
+
+fn fragment(draw: usize, primitive: u32, depth: Option<f32>, verdict: Verdict, helper: bool) -> Fragment {
+    Fragment { draw, primitive, depth, verdict, helper }
+}
+
+/// The probe's fragments of a random stack of draws against a naive
+/// derivation: each triangle's coverage of the probed block's four pixel
+/// centres by `covers` (either winding), its depth there by barycentric
+/// interpolation in f64, a plain `<` against the stored depth (no ties
+/// closer than 10^-5 occur), and the quad rule (a quad runs when one of
+/// its pixels passes; its other lanes help). Vertices lie on the sub-pixel
+/// grid and no edge passes within 1/20 pixel of a centre, so snapping and
+/// the fill rule decide nothing.
+#[test]
+fn probed_fragments_match_a_naive_derivation() {
+    let (width, height) = (24, 20);
+    let (bx, by) = (5, 4);
+    let centres: [[f64; 2]; 4] =
+        std::array::from_fn(|k| [f64::from(2 * bx + (k as u32 & 1)) + 0.5, f64::from(2 * by + (k as u32 >> 1)) + 0.5]);
+    let mut rng = Rng(0x5eed);
+    let mut random_triangle = || loop {
+        // Within 6 pixels of the block's centre (11, 9), on the sub-pixel
+        // grid: edges cross the block often.
+        let corner = |rng: &mut Rng| [11.0, 9.0].map(|c| c + ((rng.next() - 0.5) * 12.0 * 256.0).round() / 256.0);
+        let t: Tri = [corner(&mut rng), corner(&mut rng), corner(&mut rng)];
+        let z: [f32; 3] = std::array::from_fn(|_| (0.05 + 0.9 * rng.next()) as f32);
+        let clear = centres.iter().all(|&c| {
+            (0..3).all(|i| {
+                let (p, q) = (t[i], t[(i + 1) % 3]);
+                cross(p, q, c).abs() / ((q[0] - p[0]).hypot(q[1] - p[1])) > 0.05
+            })
+        });
+        if cross(t[0], t[1], t[2]).abs() > 2.0 && clear {
+            return (t, z);
+        }
+    };
+    // Four draws: depth tested and written, then culling back faces, then
+    // without a depth test, then tested again.
+    let less = Some(DepthState::new(Compare::Less, true));
+    let states = [(less, None), (less, Some(Face::Back)), (None, None), (less, None)];
+    let draws: Vec<Vec<(Tri, [f32; 3])>> = states.iter().map(|_| (0..60).map(|_| random_triangle()).collect()).collect();
+
+    let mut stored = [1.0f32; 4];
+    let mut want = Vec::new();
+    for (d, (tris, (depth, cull))) in draws.iter().zip(states).enumerate() {
+        for (p, (t, z)) in tris.iter().enumerate() {
+            let covered = centres.map(|c| covers(t, c));
+            // Clockwise in framebuffer coordinates (y down) is clockwise on
+            // screen: a back face for wgpu's default counter-clockwise front.
+            if cull == Some(Face::Back) && cross(t[0], t[1], t[2]) > 0.0 {
+                if covered[1] {
+                    want.push(fragment(d, p as u32, None, Verdict::Culled, false));
+                }
+                continue;
+            }
+            let at = centres.map(|c| {
+                let area = cross(t[0], t[1], t[2]);
+                let b = [cross(t[1], t[2], c) / area, cross(t[2], t[0], c) / area, cross(t[0], t[1], c) / area];
+                b[0] * f64::from(z[0]) + b[1] * f64::from(z[1]) + b[2] * f64::from(z[2])
+            });
+            let passed: [bool; 4] = std::array::from_fn(|k| {
+                covered[k]
+                    && depth.is_none_or(|_| {
+                        let d = at[k] - f64::from(stored[k]);
+                        assert!(d.abs() > 1e-5, "a near tie: pick another seed");
+                        d < 0.0
+                    })
+            });
+            if depth.is_some() {
+                for k in (0..4).filter(|&k| passed[k]) {
+                    stored[k] = at[k] as f32;
+                }
+            }
+            let ran = passed.contains(&true);
+            // The probed pixel is the block's top-right one, lane 1.
+            match (covered[1], depth) {
+                (true, Some(_)) => {
+                    let verdict = if passed[1] { Verdict::Passed } else { Verdict::FailedDepth };
+                    want.push(fragment(d, p as u32, Some(at[1] as f32), verdict, ran && !passed[1]));
+                }
+                (true, None) => want.push(fragment(d, p as u32, None, Verdict::NotTested, false)),
+                (false, _) if ran => want.push(fragment(d, p as u32, None, Verdict::NotTested, true)),
+                (false, _) => {}
+            }
+        }
+    }
+
+    // In bands of rows, one a thread: the probed row is in band 0 of 1,
+    // band 2 of 7.
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let mut pass = depth_pass(width, height, 1.0);
+            pass.probe(2 * bx + 1, 2 * by).unwrap();
+            for (tris, (depth, cull)) in draws.iter().zip(states) {
+                let positions: Vec<[f32; 4]> = tris.iter().flat_map(|(t, z)| [0, 1, 2].map(|k| at(width, height, t[k], z[k]))).collect();
+                pass.draw(&Draw { depth, cull, ..draw(&positions) }).unwrap();
+            }
+            pass
+        })
+    };
+    let pass = run(7);
+    assert_eq!(pass.fragments(), run(1).fragments());
+    let got = pass.fragments();
+    assert_eq!(got.len(), want.len(), "{got:?}\n{want:?}");
+    for (g, w) in got.iter().zip(&want) {
+        let close = match (g.depth, w.depth) {
+            (Some(a), Some(b)) => (a - b).abs() < 1e-6,
+            (a, b) => a == b,
+        };
+        assert!(close && (g.draw, g.primitive, g.verdict, g.helper) == (w.draw, w.primitive, w.verdict, w.helper), "{g:?} != {w:?}");
+    }
+    // Every kind of fragment is in there.
+    for (verdict, helper) in [
+        (Verdict::Passed, false),
+        (Verdict::FailedDepth, false),
+        (Verdict::FailedDepth, true),
+        (Verdict::NotTested, false),
+        (Verdict::NotTested, true),
+        (Verdict::Culled, false),
+    ] {
+        assert!(want.iter().any(|f| (f.verdict, f.helper) == (verdict, helper)), "no {verdict:?} fragment with helper {helper}");
+    }
+    assert_eq!(pass.depth().unwrap()[(2 * by * width + 2 * bx + 1) as usize], stored[1], "depth written as today");
+}
+
+#[test]
+fn two_overlapping_draws_are_listed_in_order_with_the_far_one_failing() {
+    let less = DepthState::new(Compare::Less, true);
+    let mut pass = depth_pass(8, 8, 1.0);
+    pass.probe(3, 5).unwrap();
+    pass.draw(&with_depth(&fullscreen(0.25), less)).unwrap();
+    pass.draw(&with_depth(&fullscreen(0.5), less)).unwrap();
+    assert_eq!(
+        pass.fragments(),
+        [fragment(0, 0, Some(0.25), Verdict::Passed, false), fragment(1, 0, Some(0.5), Verdict::FailedDepth, false)]
+    );
+    // Without a depth test nothing is tested. Of two triangles, the first
+    // covers the pixel's whole block (below the diagonal) and the second
+    // none of it.
+    pass.draw(&draw(&two_triangles(0.75))).unwrap();
+    assert_eq!(pass.fragments()[2..], [fragment(2, 0, None, Verdict::NotTested, false)]);
+    // Starting over forgets the fragments and counts draws from 0.
+    pass.reset(Some(&[1.0; 64])).unwrap();
+    assert_eq!(pass.fragments(), []);
+    pass.draw(&with_depth(&fullscreen(0.5), less)).unwrap();
+    assert_eq!(pass.fragments(), [fragment(0, 0, Some(0.5), Verdict::Passed, false)]);
+}
+
+#[test]
+fn a_pixel_its_primitive_misses_runs_as_a_helper_lane() {
+    // A triangle over pixel (0, 0) alone (centres (0.5, 0.5) in, the rest
+    // out): its quad runs, and (1, 1) is a helper lane there.
+    let tri = [at(8, 8, [0.0, 0.0], 0.5), at(8, 8, [1.2, 0.0], 0.5), at(8, 8, [0.0, 1.2], 0.5)];
+    let mut pass = Pass::new(8, 8).unwrap();
+    pass.probe(1, 1).unwrap();
+    pass.draw(&draw(&tri)).unwrap();
+    assert_eq!(pass.fragments(), [fragment(0, 0, None, Verdict::NotTested, true)]);
+    // Behind the stored depth, its quad does not run: no helper lane.
+    let mut pass = depth_pass(8, 8, 0.25);
+    pass.probe(1, 1).unwrap();
+    pass.draw(&with_depth(&tri, DepthState::new(Compare::Less, true))).unwrap();
+    assert_eq!(pass.fragments(), []);
+    // Outside the block: nothing at all.
+    let mut pass = Pass::new(8, 8).unwrap();
+    pass.probe(2, 0).unwrap();
+    pass.draw(&draw(&tri)).unwrap();
+    assert_eq!(pass.fragments(), []);
+}
+
+#[test]
+fn a_covered_pixel_failing_depth_in_a_quad_that_runs_is_a_helper() {
+    // Stored depth 0 at (0, 0) and 1 elsewhere: a fullscreen triangle at
+    // 0.5 passes at (1, 0) and fails at (0, 0), which still runs.
+    let mut initial = vec![1.0; 16];
+    initial[0] = 0.0;
+    let mut pass = Pass::new(4, 4).unwrap().with_depth(initial).unwrap();
+    pass.probe(0, 0).unwrap();
+    pass.draw(&with_depth(&fullscreen(0.5), DepthState::new(Compare::Less, false))).unwrap();
+    assert_eq!(pass.fragments(), [fragment(0, 0, Some(0.5), Verdict::FailedDepth, true)]);
+}
+
+#[test]
+fn a_culled_primitive_is_reported_where_it_would_cover() {
+    // Clockwise on screen: a back face. It covers the lower-left half;
+    // (1, 6) is under it, (6, 1) is not.
+    let cw = [[-1.0, -1.0, 0.5, 1.0], [-1.0, 1.0, 0.5, 1.0], [1.0, -1.0, 0.5, 1.0]];
+    let culled = |x: u32, y: u32| {
+        let mut pass = Pass::new(8, 8).unwrap();
+        pass.probe(x, y).unwrap();
+        let s = pass.draw(&Draw { cull: Some(Face::Back), ..draw(&cw) }).unwrap();
+        assert_eq!(s.rasterized.culled_triangles, 1);
+        pass.fragments().to_vec()
+    };
+    assert_eq!(culled(1, 6), [fragment(0, 0, None, Verdict::Culled, false)]);
+    assert_eq!(culled(6, 1), []);
+    // Zero area: culled, never reported.
+    let flat = [[-1.0, -1.0, 0.5, 1.0], [0.0, 0.0, 0.5, 1.0], [1.0, 1.0, 0.5, 1.0]];
+    let mut pass = Pass::new(8, 8).unwrap();
+    pass.probe(4, 3).unwrap();
+    assert_eq!(pass.draw(&draw(&flat)).unwrap().rasterized.culled_triangles, 1);
+    assert_eq!(pass.fragments(), []);
+}
+
+#[test]
+fn a_clipped_primitive_is_probed_on_the_part_the_near_plane_keeps() {
+    // z = 0.5 - 0.5·(y + 1) (w = 1) keeps the lower half of the 512×512
+    // target, in two fan pieces. At pixel (100, 400), NDC y = 1 -
+    // 400.5/256, z = 0.5 - 0.5·(2 - 400.5/256) = 0.2822265625.
+    let positions = [[-1.0, -1.0, 0.5, 1.0], [3.0, -1.0, 0.5, 1.0], [-1.0, 3.0, -1.5, 1.0]];
+    let less = DepthState::new(Compare::Less, true);
+    let probed = |x: u32, y: u32, cull: Option<Face>| {
+        let mut pass = depth_pass(512, 512, 1.0);
+        pass.probe(x, y).unwrap();
+        pass.draw(&Draw { cull, ..with_depth(&positions, less) }).unwrap();
+        pass.fragments().to_vec()
+    };
+    assert_eq!(probed(100, 400, None), [fragment(0, 0, Some(0.282_226_56), Verdict::Passed, false)]);
+    // The fan's diagonal runs from (0, 512) to (512, 256): (300, 360) lies
+    // in the second piece.
+    assert_eq!(probed(300, 360, None).len(), 1);
+    assert_eq!(probed(100, 100, None), [], "clipped away");
+    // Counter-clockwise on screen, so culling front faces removes it.
+    assert_eq!(probed(100, 400, Some(Face::Front)), [fragment(0, 0, None, Verdict::Culled, false)]);
+    assert_eq!(probed(100, 100, Some(Face::Front)), [], "culled, and clipped away there");
+}
+
+#[test]
+fn a_probe_outside_the_target_is_refused() {
+    let mut pass = Pass::new(4, 3).unwrap();
+    assert_eq!(pass.probe(4, 0).unwrap_err(), QuadError::Pixel { x: 4, y: 0, width: 4, height: 3 });
+    assert_eq!(pass.probe(0, 3).unwrap_err().to_string(), "pixel (0, 3) is outside the 4x3 target");
+    assert!(pass.probe(3, 2).is_ok());
 }

@@ -3,7 +3,8 @@
 //! positions its own vertex stage produced (read back from the GPU) and
 //! the depth its render pass started from; once the frame has landed they
 //! are replayed, in submission order, through the exact CPU model in
-//! [`crate::quads`].
+//! [`crate::quads`]. The same records answer for one pixel: every
+//! fragment each draw made there ([`trace`]).
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -13,7 +14,7 @@ use serde::Serialize;
 use super::readback::{Readback, Rows};
 use super::resource::PipelineKey;
 use super::vertex_capture::{PendingPositions, VertexCapture};
-use crate::quads::{self, Compare, DepthState, Draw, DrawStats, Face, FrontFace, QuadMaps};
+use crate::quads::{self, Compare, DepthState, Draw, DrawStats, Face, FrontFace, QuadMaps, Scissor};
 
 /// What a frame records for quad statistics while it is recorded: the
 /// vertex captures of its pipelines, and the render passes drawn so far.
@@ -282,25 +283,85 @@ fn stats_of(r: &DrawReport) -> DrawStats {
 }
 
 fn replay_target(t: &RecordedTarget) -> Result<(Vec<(String, DrawStats)>, QuadMaps), quads::QuadError> {
-    let mut pass = quads::Pass::new(t.width, t.height)?;
-    match &t.depth {
-        Some(InitialDepth::Clear(v)) => pass = pass.with_depth(vec![*v; t.width as usize * t.height as usize])?,
-        Some(InitialDepth::Loaded(d)) => pass = pass.with_depth(d.clone())?,
-        None => {}
-    }
+    let mut pass = model_pass(t)?;
     let mut draws = Vec::new();
     for d in &t.draws {
-        let faces = d.faces;
-        let stats = pass.draw(&Draw {
-            positions: &d.positions,
-            depth: d.depth,
-            cull: faces.cull,
-            front_face: faces.front_face,
-            ..Draw::default()
-        })?;
-        draws.push((d.name.clone(), stats));
+        draws.push((d.name.clone(), pass.draw(&d.model())?));
     }
     Ok((draws, pass.finish().1))
+}
+
+/// The model's pass for a recorded target, its depth buffer as the render
+/// pass started.
+fn model_pass(t: &RecordedTarget) -> Result<quads::Pass, quads::QuadError> {
+    let pass = quads::Pass::new(t.width, t.height)?;
+    match &t.depth {
+        Some(InitialDepth::Clear(v)) => pass.with_depth(vec![*v; t.width as usize * t.height as usize]),
+        Some(InitialDepth::Loaded(d)) => pass.with_depth(d.clone()),
+        None => Ok(pass),
+    }
+}
+
+impl RecordedDraw {
+    /// The draw as the model takes it (loupe sets no viewport or scissor).
+    fn model(&self) -> Draw<'_> {
+        Draw { positions: &self.positions, depth: self.depth, cull: self.faces.cull, front_face: self.faces.front_face, ..Draw::default() }
+    }
+}
+
+/// One render target's fragments at a traced pixel.
+#[derive(Debug, Clone, Serialize)]
+pub struct PassTrace {
+    pub pass: String,
+    /// Which of the pass's render targets, in the order it drew them (a
+    /// shadow map's layer); 0 for a pass with one.
+    pub layer: usize,
+    /// The draws with a fragment at the pixel, in order.
+    pub draws: Vec<DrawTrace>,
+}
+
+/// One draw's fragments at a traced pixel, in primitive order.
+#[derive(Debug, Clone, Serialize)]
+pub struct DrawTrace {
+    pub name: String,
+    pub fragments: Vec<quads::Fragment>,
+}
+
+/// Every fragment the recorded draws made at `pixel`: one entry per render
+/// target of `size` (others, such as shadow maps, are left out), in frame
+/// order, even one no draw reached. A pixel outside `size` gives none, and
+/// a target the model refuses is left out with a warning.
+///
+/// Each draw is replayed scissored to the pixel's 2×2 block: the depth at
+/// the pixel and whether its quad runs depend on nothing outside it, so
+/// the fragments are the whole replay's, for a fraction of its work.
+pub fn trace(targets: &[RecordedTarget], pixel: [u32; 2], size: (u32, u32)) -> Vec<PassTrace> {
+    let mut out = Vec::new();
+    for (i, t) in targets.iter().enumerate() {
+        if (t.width, t.height) != size {
+            continue;
+        }
+        let layer = targets[..i].iter().rev().take_while(|earlier| earlier.pass == t.pass).count();
+        match trace_target(t, pixel) {
+            Ok(draws) => out.push(PassTrace { pass: t.pass.clone(), layer, draws }),
+            Err(quads::QuadError::Pixel { .. }) => return Vec::new(),
+            Err(e) => log::warn!("pixel history of `{}`: {e}", t.pass),
+        }
+    }
+    out
+}
+
+fn trace_target(t: &RecordedTarget, [x, y]: [u32; 2]) -> Result<Vec<DrawTrace>, quads::QuadError> {
+    let mut pass = model_pass(t)?;
+    pass.probe(x, y)?;
+    let (x0, y0) = (x & !1, y & !1);
+    let block = Scissor { x: x0, y: y0, width: (t.width - x0).min(2), height: (t.height - y0).min(2) };
+    for d in &t.draws {
+        pass.draw(&Draw { scissor: Some(block), ..d.model() })?;
+    }
+    // Fragments come draw by draw.
+    let draws = pass.fragments().chunk_by(|a, b| a.draw == b.draw);
+    Ok(draws.map(|run| DrawTrace { name: t.draws[run[0].draw].name.clone(), fragments: run.to_vec() }).collect())
 }
 
 /// The clip-space corners `shaders/lib/fullscreen.wgsl` draws: one
@@ -348,6 +409,85 @@ mod tests {
         let draw = RecordedDraw { name: "tri".into(), positions, depth: None, faces };
         let target = RecordedTarget { pass: "p".into(), width: 4, height: 4, depth: None, draws: vec![draw], fullscreen: None };
         replay(&[target]).remove(0).draws.remove(0)
+    }
+
+    /// `n` random triangles over the target, at random depths, as clip
+    /// positions (a small xorshift generator, seeded).
+    fn random_draw(seed: u64, n: usize, depth: Option<DepthState>, cull: Option<Face>) -> RecordedDraw {
+        let mut state = seed;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f32 / (1u64 << 53) as f32
+        };
+        let positions = (0..3 * n).map(|_| [next() * 2.4 - 1.2, next() * 2.4 - 1.2, next(), 1.0]).collect();
+        RecordedDraw { name: format!("draw {seed}"), positions, depth, faces: Faces { cull, front_face: FrontFace::Ccw } }
+    }
+
+    fn target(pass: &str, (width, height): (u32, u32), depth: Option<InitialDepth>, draws: Vec<RecordedDraw>) -> RecordedTarget {
+        RecordedTarget { pass: pass.into(), width, height, depth, draws, fullscreen: None }
+    }
+
+    /// The scissored replay of `trace` finds, at every pixel of an odd-sized
+    /// target (blocks cut by its edges), what a whole replay probing that
+    /// pixel finds.
+    #[test]
+    fn a_trace_finds_the_fragments_of_a_whole_replay() {
+        let size = (13, 9);
+        let less = Some(DepthState::new(Compare::Less, true));
+        let equal = Some(depth_state(crate::gpu::pipeline::Depth::Equal));
+        let loaded: Vec<f32> = (0..13 * 9).map(|i| 0.3 + (i % 7) as f32 * 0.1).collect();
+        let targets = [
+            target("shadows", (16, 16), Some(InitialDepth::Clear(1.0)), vec![random_draw(1, 40, less, None)]),
+            target(
+                "prepass",
+                size,
+                Some(InitialDepth::Clear(1.0)),
+                vec![random_draw(2, 40, less, None), random_draw(3, 40, less, Some(Face::Back))],
+            ),
+            target(
+                "gbuffer",
+                size,
+                Some(InitialDepth::Loaded(loaded)),
+                vec![random_draw(2, 40, equal, None), random_draw(4, 40, less, None)],
+            ),
+            target("overlay", size, None, vec![random_draw(5, 10, None, None)]),
+            target("empty", size, None, vec![]),
+        ];
+        let mut seen = [0; 4];
+        for y in 0..size.1 {
+            for x in 0..size.0 {
+                let traced = trace(&targets, [x, y], size);
+                let names: Vec<&str> = traced.iter().map(|p| p.pass.as_str()).collect();
+                assert_eq!(names, ["prepass", "gbuffer", "overlay", "empty"], "the shadow map's size differs");
+                for (p, t) in traced.iter().zip(&targets[1..]) {
+                    let mut whole = model_pass(t).unwrap();
+                    whole.probe(x, y).unwrap();
+                    for d in &t.draws {
+                        whole.draw(&d.model()).unwrap();
+                    }
+                    let flat: Vec<quads::Fragment> = p.draws.iter().flat_map(|d| d.fragments.clone()).collect();
+                    assert_eq!(flat, whole.fragments(), "{} at ({x}, {y})", t.pass);
+                    assert!(p.draws.iter().all(|d| !d.fragments.is_empty() && d.fragments.iter().all(|f| t.draws[f.draw].name == d.name)));
+                    for f in &flat {
+                        seen[f.verdict as usize] += 1;
+                    }
+                }
+            }
+        }
+        assert!(seen.iter().all(|&n| n > 0), "every verdict occurs: {seen:?}");
+        assert!(trace(&targets, [13, 0], size).is_empty(), "a pixel outside the target");
+    }
+
+    #[test]
+    fn a_trace_numbers_the_layers_of_a_pass() {
+        let less = Some(DepthState::new(Compare::Less, true));
+        let layer = || target("shadows", (8, 8), Some(InitialDepth::Clear(1.0)), vec![random_draw(6, 20, less, None)]);
+        let targets = [layer(), layer(), target("tonemap", (8, 8), None, vec![]), layer()];
+        let traced: Vec<(String, usize)> = trace(&targets, [3, 4], (8, 8)).into_iter().map(|p| (p.pass, p.layer)).collect();
+        let want = [("shadows", 0), ("shadows", 1), ("tonemap", 0), ("shadows", 0)].map(|(p, l)| (p.to_owned(), l));
+        assert_eq!(traced, want);
     }
 
     #[test]
