@@ -43,6 +43,7 @@ import { ControlsPanel } from './controls.js';
 import { MaterialsPanel } from './materials.js';
 import { QuadView } from './quads.js';
 import { PrintsPanel } from './prints.js';
+import { HistoryPanel } from './pixel_history.js';
 import { PathView, TRACED } from './path.js';
 import { TradeoffsView } from './tradeoffs.js';
 import { awaitListed } from './capture_wait.js';
@@ -534,6 +535,9 @@ function onEvent(ev) {
     case 'prints':
       prints.set(ev);
       break;
+    case 'pixel_history':
+      pixelHistory.set(ev);
+      break;
     default:
       // A newer server may send events this page does not know: ignore.
       break;
@@ -659,11 +663,13 @@ const controls = new ControlsPanel($('scene-panel'), (message) => conn.send(mess
 // ---- materials: tree, report, parameters; the pinned pixel's material -----
 
 const materials = new MaterialsPanel({ send: (message) => conn.send(message), want: (wanted) => conn?.want('materials', wanted) });
+const pixelHistory = new HistoryPanel($('history-panel'));
 const prints = new PrintsPanel($('pixel-prints'), { send: (message) => conn.send(message), source: api.source });
 inspector.onPin = (p, a) => {
   const size = a && { width: a.width, height: a.height };
   materials.pin(p, size);
   prints.pin(p, size);
+  pixelHistory.select(prints.selected);
 };
 
 // ---- renderer switch, samples, path − raster -----------------------------

@@ -344,6 +344,9 @@ pub enum ServerEvent {
         lines: Vec<crate::render::debug_print::PrintLine>,
         dropped: u32,
     },
+    /// The selected pixel's history through a frame (`debug_pixel`), for
+    /// every frame while one is selected.
+    PixelHistory(crate::render::pixel_history::PixelHistory),
 }
 
 /// `GET /api/materials`: the scene's material instances, one per

@@ -10,6 +10,7 @@ mod images;
 mod materials;
 mod materials_api;
 mod no_adapter;
+mod pixel_history;
 mod printf;
 mod protocol;
 mod recipe;

@@ -107,9 +107,12 @@ pub fn run(args: Args) -> ExitCode {
         );
         if let (Some(on), Some(off)) = (r.frame_ms_debug_pixel, r.frame_ms_debug_pixel_off) {
             println!(
-                "  a pixel selected for debugPrintf: frame {on:.2} ms, {off:.2} ms without, interleaved ({:+.1} %)",
+                "  a pixel selected (prints and history): frame {on:.2} ms, {off:.2} ms without, interleaved ({:+.1} %)",
                 (on / off - 1.0) * 100.0
             );
+        }
+        if let Some(ms) = r.first_history_ms {
+            println!("  from selecting the pixel to its first history: {ms:.0} ms");
         }
         if let Some((_, ms)) = r.passes.iter().find(|(n, _)| n == "path_trace") {
             let paths = f64::from(r.width) * f64::from(r.height);

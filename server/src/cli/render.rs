@@ -50,8 +50,9 @@ pub struct Args {
     /// Samples per pixel for the path tracer, as `--set quality.path_spp=N`.
     #[arg(long)]
     spp: Option<i64>,
-    /// Collect the `debugPrintf`s of pixel X,Y (from the top left) into
-    /// report.json's `prints` (docs/printf.md).
+    /// Collect the `debugPrintf`s and the history of pixel X,Y (from the
+    /// top left) into report.json's `prints` and `history`
+    /// (docs/printf.md, docs/pixel-history.md).
     #[arg(long, value_name = "X,Y", value_parser = parse_pixel)]
     debug_pixel: Option<[u32; 2]>,
 }

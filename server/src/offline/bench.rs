@@ -35,11 +35,14 @@ pub struct BenchReport {
     /// on the conversion thread.
     pub frame_ms_quads: f64,
     pub convert_ms_quads: f64,
-    /// With `--debug-pixel`: the frame (no capture) with that pixel
-    /// selected for `debugPrintf`, and with the plain pipelines, timed
+    /// With `--debug-pixel`: the frame (no capture, converted) with that
+    /// pixel selected (its prints and history), and with none, timed
     /// interleaved after the others; `null` without.
     pub frame_ms_debug_pixel: Option<f64>,
     pub frame_ms_debug_pixel_off: Option<f64>,
+    /// With `--debug-pixel`: from selecting the pixel to the first frame's
+    /// history converted (the instrumented pipelines built on the way).
+    pub first_history_ms: Option<f64>,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -96,12 +99,15 @@ pub fn run(job: &Job, frames: u32, serial: bool, debug_pixel: Option<[u32; 2]>) 
             }
         }
     }
-    let (frame_ms_debug_pixel, frame_ms_debug_pixel_off) = match debug_pixel {
+    let (frame_ms_debug_pixel, frame_ms_debug_pixel_off, first_history_ms) = match debug_pixel {
         Some(pixel) => {
             session.set_quads(false);
+            let start = Instant::now();
             session.set_debug_pixel(Some(pixel));
             // The first frames build the instrumented pipelines.
-            for _ in 0..3 {
+            let first = frame(&mut session, Some(&none));
+            let first_ms = first.history.is_some().then(|| start.elapsed().as_secs_f64() * 1e3);
+            for _ in 0..2 {
                 frame(&mut session, Some(&none));
             }
             let (mut on, mut off) = (Vec::new(), Vec::new());
@@ -110,14 +116,15 @@ pub fn run(job: &Job, frames: u32, serial: bool, debug_pixel: Option<[u32; 2]>) 
                     session.pause_prints(paused);
                     let start = Instant::now();
                     let pending = session.submit(Some(&none), FRAME_DT);
-                    session.land(&pending);
+                    // Converted too: the history's replay runs there.
+                    let _ = session.wait(pending);
                     times.push(start.elapsed().as_secs_f64() * 1e3);
                 }
             }
             session.pause_prints(false);
-            (Some(median(on)), Some(median(off)))
+            (Some(median(on)), Some(median(off)), first_ms)
         }
-        None => (None, None),
+        None => (None, None, None),
     };
     let order: Vec<String> = session.graph().passes.iter().map(|x| x.name.clone()).collect();
     Ok(BenchReport {
@@ -137,5 +144,6 @@ pub fn run(job: &Job, frames: u32, serial: bool, debug_pixel: Option<[u32; 2]>) 
         convert_ms_quads: median(c_quads),
         frame_ms_debug_pixel,
         frame_ms_debug_pixel_off,
+        first_history_ms,
     })
 }

@@ -38,6 +38,10 @@ pub struct FrameReport {
     /// With `--debug-pixel`: what the frame's `debugPrintf`s printed there.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub prints: Option<PrintsReport>,
+    /// With `--debug-pixel`: the pixel's history through the frame
+    /// (docs/pixel-history.md).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub history: Option<crate::render::pixel_history::PixelHistory>,
 }
 
 /// The prints at the selected pixel (docs/printf.md).
@@ -178,5 +182,6 @@ pub fn run(job: &Job, out: &Path, debug_pixel: Option<[u32; 2]>) -> Result<Frame
         tiles: Statistics::of_frame(&result.tensors),
         gpu_errors: session.take_uncaptured(),
         prints,
+        history: result.history.clone(),
     })
 }

@@ -310,15 +310,21 @@ impl TensorStats {
     }
 }
 
+/// Tightly packed little-endian elements as f32 (u32 and f16 converted).
+pub fn decode_elements(element: Element, bytes: &[u8]) -> Vec<f32> {
+    match element {
+        Element::F32 => bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect(),
+        Element::U32 => bytes.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32).collect(),
+        Element::F16 => bytes.chunks_exact(2).map(|b| half::f16::from_le_bytes([b[0], b[1]]).to_f32()).collect(),
+    }
+}
+
 impl CapturedTensor {
     /// Reads `bytes` (tightly packed, little-endian) as `layout` says.
     pub fn new(pass: &str, output: &str, frame: u64, layout: TensorLayout, bytes: &[u8]) -> Self {
         let n = layout.len() as usize;
-        let data: Vec<f32> = match layout.element {
-            Element::F32 => bytes.chunks_exact(4).take(n).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect(),
-            Element::U32 => bytes.chunks_exact(4).take(n).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32).collect(),
-            Element::F16 => bytes.chunks_exact(2).take(n).map(|b| half::f16::from_le_bytes([b[0], b[1]]).to_f32()).collect(),
-        };
+        let bytes = &bytes[..(n * layout.element.bytes() as usize).min(bytes.len())];
+        let data = decode_elements(layout.element, bytes);
         let stats = TensorStats::of(&data, layout.channels());
         CapturedTensor { pass: pass.to_owned(), output: output.to_owned(), frame, layout, data, stats }
     }

@@ -4,6 +4,7 @@
 //! asynchronously.
 
 use super::debug_print::{PendingPrints, Printed};
+use super::pixel_history::{AtPass, HistoryRecorder, PendingHistory, PixelHistory};
 use std::collections::{BTreeMap, BTreeSet};
 use std::time::Instant;
 
@@ -31,9 +32,13 @@ pub struct FrameInputs<'a> {
     /// Count each raster pass's fragment-shader invocations (pipeline
     /// statistics), where the adapter can.
     pub statistics: bool,
-    /// Record every draw for quad statistics, capturing positions with
-    /// these (one per raster pipeline); `None`: do not.
+    /// Record every draw, capturing positions with these (one per raster
+    /// pipeline), for quad statistics or a pixel's history; `None`: do not.
     pub vertex_captures: Option<&'a BTreeMap<PipelineKey, VertexCapture>>,
+    /// Replay the recorded draws through the quad model for statistics.
+    pub quad_statistics: bool,
+    /// The selected pixel and the frame's size: its history is recorded.
+    pub pixel: Option<([u32; 2], (u32, u32))>,
     pub frame: u64,
     /// Samples per pixel the path tracer holds after this frame (frames
     /// since its history was last forgotten).
@@ -69,6 +74,8 @@ pub struct PendingFrame {
     io: Vec<(Vec<String>, Vec<String>)>,
     /// The selected pixel's prints, when one is selected.
     prints: Option<PendingPrints>,
+    quad_statistics: bool,
+    history: Option<PendingHistory>,
 }
 
 /// What a capture copied.
@@ -109,6 +116,8 @@ pub struct FrameResult {
     /// What the selected pixel printed; `None` without a selection (or
     /// when its readback failed).
     pub prints: Option<Printed>,
+    /// The selected pixel's history; `None` without a selection.
+    pub history: Option<PixelHistory>,
     /// Where a NaN or Inf first appeared, when any output holds one.
     pub nan: Option<NanOrigin>,
 }
@@ -212,11 +221,16 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
     if let Some(p) = f.prints {
         p.buffer.clear(&mut encoder);
     }
+    let mut history = f.pixel.map(|(pixel, size)| HistoryRecorder::new(f.device, graph, pixel, size));
     let mut captures = Vec::new();
     let mut skipped = Vec::new();
     let mut serial = f.serial.then(Vec::new);
     for (i, pass) in graph.passes.iter().enumerate() {
         let started = Instant::now();
+        let at = AtPass { device: f.device, graph, physical: &physical, pass: i };
+        if let Some(h) = history.as_mut() {
+            h.before(&mut encoder, &at);
+        }
         let mut ctx = PassContext {
             device: f.device,
             encoder: &mut encoder,
@@ -255,6 +269,9 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
         if let Some(rec) = ctx.quads.take() {
             quad_targets.extend(rec.targets);
         }
+        if let Some(h) = history.as_mut() {
+            h.after(&mut encoder, &at);
+        }
         for h in pass.writes() {
             let r = graph.resource(h);
             if f.capture.is_some_and(|c| !c.contains(&r.name)) {
@@ -286,6 +303,10 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
     if let Some(p) = &prints {
         p.map();
     }
+    let history = history.map(HistoryRecorder::finish);
+    if let Some(h) = &history {
+        h.map();
+    }
     for c in &captures {
         c.readback.map();
     }
@@ -300,6 +321,8 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
     }
     PendingFrame {
         prints,
+        quad_statistics: f.quad_statistics,
+        history,
         frame: f.frame,
         submitted: Instant::now(),
         cpu_record_ms: start.elapsed().as_secs_f64() * 1e3,
@@ -378,6 +401,7 @@ impl PendingFrame {
             && self.statistics.as_ref().is_none_or(|t| t.0.landed())
             && self.quad_targets.iter().all(PendingTarget::landed)
             && self.prints.as_ref().is_none_or(PendingPrints::landed)
+            && self.history.as_ref().is_none_or(PendingHistory::landed)
     }
 
     /// Converts the mapped readbacks and takes their statistics: the
@@ -432,7 +456,8 @@ impl PendingFrame {
             })
             .unwrap_or_default();
         let recorded: Vec<_> = self.quad_targets.into_iter().filter_map(PendingTarget::read).collect();
-        let quads = super::quads::replay(&recorded);
+        let quads = if self.quad_statistics { super::quads::replay(&recorded) } else { Vec::new() };
+        let history = self.history.map(|h| h.read(self.frame, &recorded));
         let nan = nan_origin(&self.passes, &self.io, &captures, &tensors);
         let prints = self.prints.as_ref().and_then(PendingPrints::read);
         FrameResult {
@@ -447,6 +472,7 @@ impl PendingFrame {
             quads,
             nan,
             prints,
+            history,
         }
     }
 }

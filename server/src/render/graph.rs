@@ -53,6 +53,9 @@ pub struct PassNode {
     pub kind: PassKind,
     pub pipelines: Vec<PipelineKey>,
     pub accesses: Vec<(Handle, Access)>,
+    /// A compute pass whose invocation with global id (x, y, 0) writes
+    /// pixel (x, y) of its outputs: pixel history names that invocation.
+    pub per_pixel: bool,
     pub execute: Execute,
 }
 
@@ -121,6 +124,12 @@ impl PassBuilder<'_> {
         self.access(h, access)
     }
 
+    /// Declares that the pass dispatches one invocation per pixel of its
+    /// outputs, its global id the pixel.
+    pub fn one_invocation_per_pixel(&mut self) {
+        self.node.per_pixel = true;
+    }
+
     /// Finishes the declaration with what the pass records when it runs.
     pub fn execute(self, f: impl Fn(&mut PassContext<'_>) + Send + Sync + 'static) {
         let PassBuilder { graph, mut node } = self;
@@ -136,7 +145,14 @@ impl GraphBuilder {
 
     /// Starts declaring pass `name`.
     pub fn pass(&mut self, name: &str, kind: PassKind) -> PassBuilder<'_> {
-        let node = PassNode { name: name.to_owned(), kind, pipelines: Vec::new(), accesses: Vec::new(), execute: Box::new(|_| {}) };
+        let node = PassNode {
+            name: name.to_owned(),
+            kind,
+            pipelines: Vec::new(),
+            accesses: Vec::new(),
+            per_pixel: false,
+            execute: Box::new(|_| {}),
+        };
         PassBuilder { graph: self, node }
     }
 

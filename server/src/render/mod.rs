@@ -14,6 +14,7 @@ pub mod material_textures;
 pub mod passes;
 pub mod path_geometry;
 pub mod pipelines;
+pub mod pixel_history;
 pub mod pool;
 pub mod preview;
 pub mod print_selection;

@@ -111,6 +111,27 @@ pub fn copy_texel(
     copy_box(device, encoder, label, texture, wgpu::Origin3d { x, y, z: layer }, extent, bytes_per_texel).0
 }
 
+/// Copies the texel at `[x, y, layer]` to `offset` (a multiple of 256) in
+/// `buffer`: one of many texels sharing a readback.
+pub fn copy_texel_into(
+    encoder: &mut wgpu::CommandEncoder,
+    texture: &wgpu::Texture,
+    [x, y, layer]: [u32; 3],
+    buffer: &wgpu::Buffer,
+    offset: u64,
+) {
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo { texture, mip_level: 0, origin: wgpu::Origin3d { x, y, z: layer }, aspect: aspect(texture) },
+        wgpu::TexelCopyBufferInfo { buffer, layout: wgpu::TexelCopyBufferLayout { offset, bytes_per_row: None, rows_per_image: None } },
+        wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+    );
+}
+
+/// A depth texture copies its depth alone.
+fn aspect(texture: &wgpu::Texture) -> wgpu::TextureAspect {
+    if texture.format().has_depth_aspect() { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All }
+}
+
 fn copy_box(
     device: &wgpu::Device,
     encoder: &mut wgpu::CommandEncoder,
@@ -124,9 +145,8 @@ fn copy_box(
     let row = width * bytes_per_texel;
     let padded = padded_row(row);
     let readback = Readback::new(device, label, u64::from(padded) * u64::from(height) * u64::from(layers));
-    let aspect = if texture.format().has_depth_aspect() { wgpu::TextureAspect::DepthOnly } else { wgpu::TextureAspect::All };
     encoder.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo { texture, mip_level: 0, origin, aspect },
+        wgpu::TexelCopyTextureInfo { texture, mip_level: 0, origin, aspect: aspect(texture) },
         wgpu::TexelCopyBufferInfo {
             buffer: readback.buffer(),
             layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(height) },

@@ -407,7 +407,9 @@ impl Session {
     pub fn submit(&mut self, capture: Option<&BTreeSet<String>>, dt: f32) -> PendingFrame {
         self.frame += 1;
         self.accumulated = self.accumulated.saturating_add(1);
-        if self.quads {
+        let pixel = self.prints.as_ref().filter(|_| !self.prints_paused).map(PrintSelection::pixel);
+        let record_draws = self.quads || pixel.is_some();
+        if record_draws {
             self.refresh_vertex_captures();
         }
         let mut live = self.cache.live();
@@ -428,7 +430,9 @@ impl Session {
             pipelines: &live,
             capture,
             statistics: self.quads,
-            vertex_captures: self.quads.then_some(&self.vertex_captures),
+            vertex_captures: record_draws.then_some(&self.vertex_captures),
+            quad_statistics: self.quads,
+            pixel: pixel.map(|p| (p, (self.scene.width, self.scene.height))),
             frame: self.frame,
             samples: self.accumulated,
             dt,
@@ -438,8 +442,8 @@ impl Session {
         frame::submit(inputs, &mut self.pool)
     }
 
-    /// Selects the pixel whose prints the next frames collect (`None`:
-    /// none, and the plain pipelines run again).
+    /// Selects the pixel whose prints and history the next frames collect
+    /// (`None`: none, and the plain pipelines run again).
     pub fn set_debug_pixel(&mut self, pixel: Option<[u32; 2]>) {
         if self.prints.as_ref().map(PrintSelection::pixel) != pixel {
             self.prints = pixel.map(|p| PrintSelection::new(&self.gpu.device, p));

@@ -219,6 +219,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
 
     let mut tensors: Vec<Option<Handle>> = vec![None; net.tensors.len()];
     let mut p = g.pass("denoise_input", PassKind::Compute);
+    p.one_invocation_per_pixel();
     let key = p.pipeline(PipelineKey::new(&INPUT, &defs));
     let (color, albedo, normal) = (p.sample(traced.color), p.sample(traced.albedo), p.sample(traced.normal));
     if let Some(s) = scale {
@@ -348,6 +349,7 @@ pub fn denoise(g: &mut GraphBuilder, scene: &Scene, network: Option<&Network>, t
         return traced.color;
     };
     let mut p = g.pass("denoise", PassKind::Compute);
+    p.one_invocation_per_pixel();
     let key = p.pipeline(PipelineKey::new(&OUTPUT, &defs));
     p.access(result, Access::StorageRead);
     if let Some(s) = scale {

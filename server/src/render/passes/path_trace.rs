@@ -68,6 +68,7 @@ pub fn path_trace(g: &mut GraphBuilder, scene: &Scene) -> Option<Traced> {
     }
     let (w, h) = (scene.width, scene.height);
     let mut p = g.pass("path_trace", PassKind::Compute);
+    p.one_invocation_per_pixel();
     let key = p.pipeline(PipelineKey::new(&PATH_TRACE, &[(MEDIA_DEF, !scene.media.is_empty())]));
     let accumulated = p.history("accumulated", Meaning::Data, TensorLayout::new(&[("pixel", w * h), ("channel", ACCUMULATED)], Element::F32), Access::StorageWrite);
     let color = p.create("color", Meaning::Color, TextureDesc::d2(COLOR, w, h), Access::StorageWrite);

@@ -93,6 +93,9 @@ impl Daemon {
         if let Some(Printed { pixel, lines, dropped }) = result.prints {
             self.shared.publish(ServerEvent::Prints { frame: result.frame, pixel, lines, dropped });
         }
+        if let Some(history) = result.history {
+            self.shared.publish(ServerEvent::PixelHistory(history));
+        }
         self.last_times = times;
         for r in &reloads {
             let timings = ReloadTimings { render_ms, ..r.timings };
