@@ -1,7 +1,7 @@
 //! `debugPrintf` through `loupe serve`: a pixel selected over the
 //! WebSocket gets a `prints` event each frame, from the pass's own
-//! shader; an edit to the print shows in the next ones, and the selection
-//! outlives a lost device.
+//! shader, and a `pixel_history` event; an edit to the print shows in the
+//! next ones, and the selection outlives a lost device and a reload.
 
 use std::time::Duration;
 
@@ -56,6 +56,21 @@ fn a_selected_pixel_streams_its_prints_and_follows_edits() {
         matches!(m, Msg::Event(v) if v["type"] == "device_lost" && v["recovered"] == true).then_some(())
     });
     assert_eq!(prints(&mut ws, "now ")["pixel"], json!([7, 4]));
+    let history = ws.until("the pixel's history after the loss", LIMIT, |m| match m {
+        Msg::Event(v) if v["type"] == "pixel_history" => Some(v.clone()),
+        _ => None,
+    });
+    assert_eq!(history["pixel"], json!([7, 4]));
+    assert!(history["passes"].as_array().unwrap().iter().any(|p| p["pass"] == "tonemap"), "{history}");
+
+    // A pixel selected while a reload is under way: its history comes
+    // once the frame does.
+    p.write(TONEMAP, with_print(&good, "debugPrintf(\"then %.1v2f\", in.position.xy);"));
+    ws.send(json!({ "type": "debug_pixel", "x": 5, "y": 6 }));
+    assert_eq!(prints(&mut ws, "then ")["lines"][0]["text"], "then 5.5, 6.5");
+    ws.until("the history of (5, 6)", LIMIT, |m| {
+        matches!(m, Msg::Event(v) if v["type"] == "pixel_history" && v["pixel"] == json!([5, 6])).then_some(())
+    });
 
     // Another pixel; one outside the frame is refused and changes nothing.
     ws.send(json!({ "type": "debug_pixel", "x": 1000, "y": 0 }));
