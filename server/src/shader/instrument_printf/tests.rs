@@ -89,7 +89,7 @@ fn every_shader_with_a_print_validates_instrumented() {
         }
     }
     let checked: Vec<&str> = checked.into_keys().collect();
-    assert_eq!(checked, ["debug.test_pattern", "lighting.deferred"], "the pipelines instrumented");
+    assert_eq!(checked, ["debug.test_pattern", "lighting.deferred", "path_trace"], "the pipelines instrumented");
 }
 
 fn parse(source: &str) -> Module {
