@@ -14,6 +14,14 @@
 // Russian roulette after three bounces. Media use the volume pass's
 // density function: free flights by delta tracking against a majorant,
 // shadow rays by ratio tracking.
+//
+// With a pixel selected (docs/printf.md), its sample of the frame prints
+// a `path vertex` line at every vertex and a `path end` line where the
+// path ends: the same path the frame accumulates, from the same random
+// numbers. The sample's radiance is the sum over its lines of `emitted`,
+// plus `throughput × nee` over the vertex lines.
+enable wgpu_debug_printf;
+
 #import loupe::view::{view, world_position}
 #import loupe::lights::{Light, lights, incident, light_type, rect_area, rect_cosine, LIGHT_RECT}
 #import loupe::brdf::{basis, cosine_direction, PI}
@@ -65,6 +73,23 @@ const ROULETTE_AFTER: u32 = 3u;
 // Steps a free flight or a shadow ray may take through a medium.
 const MAX_MEDIUM_STEPS: u32 = 1024u;
 const ISOTROPIC: f32 = 0.07957747; // 1 / (4π)
+
+// Why a path ended: `path end`'s reason.
+// It left the scene (its `emitted` holds the environment's light).
+const END_ESCAPED: u32 = 0u;
+// A medium absorbed it.
+const END_ABSORBED: u32 = 1u;
+// It reached a vertex past the last bounce.
+const END_MAX_DEPTH: u32 = 2u;
+// The BSDF drew no direction (pdf 0), or one between the geometric and
+// the shading normal.
+const END_NO_SAMPLE: u32 = 3u;
+// Russian roulette.
+const END_ROULETTE: u32 = 4u;
+// Its throughput went to zero or stopped being finite.
+const END_THROUGHPUT: u32 = 5u;
+// `path vertex`'s material at a vertex in a medium.
+const MEDIUM_MATERIAL: u32 = 0xffffffffu;
 
 // The random numbers of this sample, drawn in order: deterministic per
 // (pixel, sample) whatever the path does.
@@ -405,6 +430,16 @@ fn from_inside(tri: u32, dir: vec3<f32>) -> bool {
 }
 #endif
 
+// The selected pixel's `path end` line: at which depth and why the path
+// ended, what the segment it ended on still added (throughput applied:
+// an escape's environment and the emission met on the way), and the pdfs
+// of that segment's direction by the last vertex's BSDF (or phase)
+// sampling and by its environment sampling, whose power heuristic weighs
+// an escape's environment (0 and 0 where the path ended at a vertex).
+fn path_end(depth: u32, reason: u32, emitted: vec3<f32>, bsdf_pdf: f32, light_pdf: f32) {
+    debugPrintf("path end %u: reason %u emitted %v3f bsdf_pdf %f light_pdf %f", depth, reason, emitted, bsdf_pdf, light_pdf);
+}
+
 fn path(pixel: vec2<u32>) -> Sample {
     let jitter = vec2(rand(), rand());
     var origin = view.position.xyz;
@@ -419,26 +454,36 @@ fn path(pixel: vec2<u32>) -> Sample {
     for (var depth = 0u; depth <= bounces + 1u; depth++) {
         let hit = trace(origin, dir, 0.0, 1e30);
         let flight = fly(origin, dir, hit.t);
-        out.radiance += throughput * flight.emitted;
         let t_end = select(hit.t, flight.t, flight.scattered);
-        let emitted = rect_emission(origin, dir, t_end, last_pdf);
-        out.radiance += throughput * flight.weight * emitted;
-        if depth == 0u && max3(emitted) > 0.0 {
+        let lights_met = rect_emission(origin, dir, t_end, last_pdf);
+        if depth == 0u && max3(lights_met) > 0.0 {
             out.emitter = 1.0;
         }
+        // What the segment and the point it reaches emit toward the
+        // camera, throughput applied: the prints' `emitted`.
+        var emitted = throughput * flight.emitted + throughput * flight.weight * lights_met;
         throughput *= flight.weight;
         if flight.absorbed {
+            out.radiance += emitted;
+            path_end(depth, END_ABSORBED, emitted, last_pdf, 0.0);
             break;
         }
         var x: Vertex;
+        var material = MEDIUM_MATERIAL;
         if flight.scattered {
             x = medium_vertex(origin + dir * flight.t, dir);
         } else if hit.triangle == NO_HIT {
-            let w = select(power_heuristic(last_pdf, environment_pdf(last, dir)), 1.0, last_pdf <= 0.0);
-            out.radiance += throughput * environment_radiance(dir) * w;
+            // From the camera or through a transmission the environment
+            // counts at full weight: no light sampling competes.
+            let light_pdf = select(environment_pdf(last, dir), 0.0, last_pdf <= 0.0);
+            let w = select(power_heuristic(last_pdf, light_pdf), 1.0, last_pdf <= 0.0);
+            emitted += throughput * environment_radiance(dir) * w;
+            out.radiance += emitted;
+            path_end(depth, END_ESCAPED, emitted, last_pdf, light_pdf);
             break;
         } else {
             x = shade_hit(hit.triangle, hit.u, hit.v, origin + dir * hit.t, dir);
+            material = u32(shading[hit.triangle].na.w);
 #ifdef MATERIAL_TRANSMISSION
             // The segment just travelled lay inside the solid: Beer–Lambert
             // over its length; and the interface is crossed outward.
@@ -449,18 +494,25 @@ fn path(pixel: vec2<u32>) -> Sample {
 #endif
             // Emissive surfaces are not sampled by next-event estimation:
             // a path finds them by its own direction, at full weight.
-            out.radiance += throughput * material_emission(x.surface);
+            emitted += throughput * material_emission(x.surface);
             if depth == 0u {
                 out.albedo = material_base_color(x.surface);
                 out.normal = x.n;
             }
         }
-        // A vertex beyond the last bounce adds nothing: its light would be
-        // one bounce more than asked for.
+        out.radiance += emitted;
+        // A vertex beyond the last bounce adds no light it reflects: that
+        // light would be one bounce more than asked for.
+        var nee = vec3(0.0);
+        if depth <= bounces {
+            nee = direct(x);
+            out.radiance += throughput * nee;
+        }
+        debugPrintf("path vertex %u: p %v3f material %u throughput %v3f emitted %v3f nee %v3f bsdf_pdf %f", depth, x.p, material, throughput, emitted, nee, last_pdf);
         if depth > bounces {
+            path_end(depth, END_MAX_DEPTH, vec3(0.0), 0.0, 0.0);
             break;
         }
-        out.radiance += throughput * direct(x);
         // Continue with a BRDF (or phase) sample.
         var l: vec3<f32>;
         var pdf: f32;
@@ -472,6 +524,7 @@ fn path(pixel: vec2<u32>) -> Sample {
             // Reflected above both normals or transmitted below both; a
             // direction between them (shading normals) ends the path.
             if s.pdf <= 0.0 || (dot(s.l, x.ng) > 0.0) != (dot(s.l, x.n) > 0.0) {
+                path_end(depth, END_NO_SAMPLE, vec3(0.0), 0.0, 0.0);
                 break;
             }
             l = s.l;
@@ -481,11 +534,13 @@ fn path(pixel: vec2<u32>) -> Sample {
         if depth >= ROULETTE_AFTER {
             let keep = min(max3(throughput), 0.95);
             if rand() >= keep {
+                path_end(depth, END_ROULETTE, vec3(0.0), 0.0, 0.0);
                 break;
             }
             throughput /= keep;
         }
         if !finite(throughput) || max3(throughput) <= 0.0 {
+            path_end(depth, END_THROUGHPUT, vec3(0.0), 0.0, 0.0);
             break;
         }
         origin = select(offset(x.p, x.ng, l), x.p, x.in_medium);

@@ -14,6 +14,7 @@ mod furnace;
 mod half;
 mod inputs;
 mod library;
+mod path_vertices;
 mod sampling;
 mod scenes;
 mod thin_film;

@@ -791,6 +791,64 @@ mod tests {
         assert!(s.debug_prints().is_none());
     }
 
+    /// A print added to the tiled lighting's `shade(texel)` (a compute
+    /// stage whose workgroups follow tile lists, not its global id) and
+    /// reloaded as the daemon reloads a save prints in the next frame for
+    /// the selected pixel only: one line, at three pixels of the knot, its
+    /// texel the pixel and its depth the one the frame's capture holds
+    /// there.
+    #[test]
+    fn a_print_in_the_tiled_lighting_prints_for_the_selected_pixel_only() {
+        const DEPTH: &str = "depth_prepass/depth";
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/minimal.toml");
+        let mut loaded = crate::loaded::load_with(&scenes, &Overrides::new()).unwrap();
+        (loaded.scene.width, loaded.scene.height) = (96, 54);
+        let gpu = crate::gpu::open().unwrap_or_else(|e| panic!("a GPU device (lavapipe will do): {e}"));
+        let mut s = Session::new(gpu, &root, library::read_tree(&root).unwrap(), &loaded);
+        assert_eq!(s.install_missing(), vec![]);
+        let frame = |s: &mut Session| {
+            let pending = s.submit(Some(&BTreeSet::from([DEPTH.to_owned()])), 0.0);
+            s.wait(pending)
+        };
+        let first = frame(&mut s);
+        let depth = first.captures.iter().find(|c| c.key() == DEPTH).expect("the depth is captured");
+        let depth_at = |[x, y]: [u32; 2]| depth.data[4 * (y * depth.width + x) as usize];
+        let knot: Vec<[u32; 2]> =
+            (0..depth.height).flat_map(|y| (0..depth.width).map(move |x| [x, y])).filter(|&p| depth_at(p) < 1.0).collect();
+        assert!(knot.len() > 100, "the knot covers {} pixels", knot.len());
+        let pixels = [knot[0], knot[knot.len() / 2], knot[knot.len() - 1]];
+        s.set_debug_pixel(Some(pixels[0]));
+        assert_eq!(frame(&mut s).prints.map(|p| p.lines), Some(vec![]), "nothing prints yet");
+
+        // The save, reloaded as the daemon does.
+        let display = s.shader_display(&super::super::passes::lighting::DEFERRED);
+        let mut lib = (**s.library()).clone();
+        let file = lib.get(&display).unwrap().clone();
+        let at = "    let z = textureLoad(depth, pixel, 0);\n";
+        let print = "    debugPrintf(\"texel %v2u depth %f sum %u\", texel, z, texel.x * 1000u + texel.y);\n";
+        assert!(file.text.contains(at), "the premise: `shade` reads the depth so");
+        let text = format!("enable wgpu_debug_printf;\n{}", file.text.replacen(at, &format!("{at}{print}"), 1));
+        lib.upsert(SourceFile::from_text(display.clone(), file.path.clone(), text.into()));
+        s.apply_sources(lib);
+        let rebuilt = s.built_from(&BTreeSet::from([display.clone()]));
+        assert_eq!(s.install_now(rebuilt), vec![]);
+
+        for pixel in pixels {
+            s.set_debug_pixel(Some(pixel));
+            let r = frame(&mut s);
+            let lines = r.prints.expect("a pixel is selected").lines;
+            assert_eq!(lines.len(), 1, "{pixel:?}: the first of them {:?}", lines.first());
+            let line = &lines[0];
+            assert!(line.pass.starts_with("lighting_"), "a tile class's pass: {}", line.pass);
+            assert_eq!((line.file.as_str(), line.line), (display.as_str(), 128), "{pixel:?}");
+            let depth = r.captures.iter().find(|c| c.key() == DEPTH).unwrap();
+            let z = depth.data[4 * (pixel[1] * depth.width + pixel[0]) as usize];
+            let values = [serde_json::json!(pixel), serde_json::json!(z), serde_json::json!(pixel[0] * 1000 + pixel[1])];
+            assert_eq!(line.values, values, "{pixel:?}: {}", line.text);
+        }
+    }
+
     /// Pipeline statistics count each raster pass's fragment-shader
     /// invocations where the adapter can (lavapipe can), only while asked.
     #[test]

@@ -6,12 +6,16 @@
 //! says whether this invocation is the selected one (fragment: the floor of
 //! `@builtin(position).xy` is the pixel, the builtin added when the entry
 //! point lacks it; compute: `global_invocation_id.xy` is the pixel; other
-//! stages: never; a compute stage that does not read its global id maps
-//! invocations to pixels its own way, so every invocation prints, into the
-//! same bounded buffer). Each site's marker store becomes
+//! stages: never). A compute stage that does not read its global id maps
+//! invocations to pixels its own way (the lighting's tile lists): its
+//! invocations all print, and a second private flag says so, which a
+//! function taking its pixel (an argument `pixel` or `texel` of type
+//! `vec2<u32>` or `vec2<i32>`) narrows: at that function's start a local
+//! flag says whether this call's argument is the pixel, so each of the
+//! calls a loop makes answers for itself. Each site's marker store becomes
 //!
 //! ```wgsl
-//! if loupe_printf_on {
+//! if loupe_printf_on {                            // or the function's flag
 //!     let at = atomicAdd(&buf.used, n);           // n = 1 + argument words
 //!     if at <= arrayLength(&buf.words) && n <= arrayLength(&buf.words) - at {
 //!         buf.words[at] = site; buf.words[at + 1] = bitcast<u32>(arg0.x); …
@@ -60,11 +64,11 @@ pub enum PrintInstrumentError {
 
 /// Whether `module` holds any print site.
 pub fn has_prints(module: &Module) -> bool {
-    functions(module).any(|f| f.local_variables.iter().any(|(_, v)| v.name.as_deref().and_then(printf::parse_var).is_some()))
+    module.functions.iter().map(|(_, f)| f).chain(module.entry_points.iter().map(|e| &e.function)).any(holds_prints)
 }
 
-fn functions(module: &Module) -> impl Iterator<Item = &Function> {
-    module.functions.iter().map(|(_, f)| f).chain(module.entry_points.iter().map(|e| &e.function))
+fn holds_prints(f: &Function) -> bool {
+    f.local_variables.iter().any(|(_, v)| v.name.as_deref().and_then(printf::parse_var).is_some())
 }
 
 /// Instruments every print of `module` for the invocation at `pixel`. The
@@ -86,22 +90,32 @@ pub fn instrument(module: &Module, pixel: [u32; 2], min_group: u32, first_site: 
         },
         Span::UNDEFINED,
     );
-    let on = m.global_variables.append(
-        GlobalVariable {
-            name: Some("loupe_printf_on".into()),
-            space: naga::AddressSpace::Private,
-            binding: None,
-            ty: ty.bool,
-            init: None,
-            memory_decorations: Default::default(),
-        },
-        Span::UNDEFINED,
-    );
-    let globals = Globals { buffer, on, ty };
+    let mut private = |name: &str| {
+        m.global_variables.append(
+            GlobalVariable {
+                name: Some(name.into()),
+                space: naga::AddressSpace::Private,
+                binding: None,
+                ty: ty.bool,
+                init: None,
+                memory_decorations: Default::default(),
+            },
+            Span::UNDEFINED,
+        )
+    };
+    let (on, by_argument) = (private("loupe_printf_on"), private("loupe_printf_by_argument"));
+    let globals = Globals { buffer, on, by_argument, ty };
     let mut sites = Sites { first: first_site, ..Sites::default() };
     let Module { types, functions, entry_points, .. } = &mut m;
-    for f in functions.iter_mut().map(|(_, f)| f).chain(entry_points.iter_mut().map(|e| &mut e.function)) {
-        rewrite_sites(types, f, &globals, &mut sites);
+    for (_, f) in functions.iter_mut() {
+        let gate = match pixel_argument(types, f) {
+            Some(arg) if holds_prints(f) => Expression::LocalVariable(pixel_gate(f, &globals, arg, pixel)),
+            _ => Expression::GlobalVariable(on),
+        };
+        rewrite_sites(types, f, &globals, &mut sites, &gate);
+    }
+    for ep in entry_points.iter_mut() {
+        rewrite_sites(types, &mut ep.function, &globals, &mut sites, &Expression::GlobalVariable(on));
     }
     for ep in entry_points {
         select(types, ep.stage, &mut ep.function, &globals, pixel);
@@ -140,7 +154,11 @@ impl Types {
 
 struct Globals {
     buffer: Handle<GlobalVariable>,
+    /// Whether this invocation prints.
     on: Handle<GlobalVariable>,
+    /// Whether the stage prints from every invocation, for functions that
+    /// take their pixel to narrow.
+    by_argument: Handle<GlobalVariable>,
     ty: Types,
 }
 
@@ -199,8 +217,9 @@ impl Exprs<'_> {
     }
 }
 
-/// Replaces each marker store of `f` with the write of its record.
-fn rewrite_sites(types: &naga::UniqueArena<Type>, f: &mut Function, g: &Globals, sites: &mut Sites) {
+/// Replaces each marker store of `f` with the write of its record, made
+/// when the bool `gate` points at (a variable) holds.
+fn rewrite_sites(types: &naga::UniqueArena<Type>, f: &mut Function, g: &Globals, sites: &mut Sites, gate: &Expression) {
     let mut args: BTreeMap<SiteId, SiteArgs> = BTreeMap::new();
     let mut markers: BTreeMap<Handle<LocalVariable>, SiteId> = BTreeMap::new();
     for (h, v) in f.local_variables.iter() {
@@ -229,7 +248,7 @@ fn rewrite_sites(types: &naga::UniqueArena<Type>, f: &mut Function, g: &Globals,
             let mut site_args = args.get(&site).cloned().unwrap_or_default();
             site_args.sort_unstable();
             let number = sites.number(site);
-            *stmt = Statement::Block(naga::Block::from_vec(record(exprs, types, g, number, &site_args)));
+            *stmt = Statement::Block(naga::Block::from_vec(record(exprs, types, g, gate, number, &site_args)));
         },
         &mut exprs,
     );
@@ -260,12 +279,13 @@ fn record(
     x: &mut Exprs<'_>,
     types: &naga::UniqueArena<Type>,
     g: &Globals,
+    gate: &Expression,
     site: u32,
     args: &[(usize, Handle<LocalVariable>)],
 ) -> Vec<Statement> {
     let mut out = Vec::new();
-    let on = x.plain(Expression::GlobalVariable(g.on));
-    let selected = x.emit(&mut out, Expression::Load { pointer: on });
+    let gate = x.plain(gate.clone());
+    let selected = x.emit(&mut out, Expression::Load { pointer: gate });
     let mut accept = Vec::new();
     // The words: the site, then each argument's components as u32.
     let mut words = vec![x.u32(site)];
@@ -341,14 +361,13 @@ fn select(types: &mut naga::UniqueArena<Type>, stage: ShaderStage, f: &mut Funct
     }
     // A compute stage that does not read its global id maps invocations
     // to pixels some other way (the lighting's tile lists): every
-    // invocation prints, into the same bounded buffer.
+    // invocation prints, into the same bounded buffer, but for what the
+    // functions that take their pixel narrow (`pixel_gate`).
     if found.is_none() && stage == ShaderStage::Compute {
         let mut x = Exprs { f };
-        let on = x.plain(Expression::GlobalVariable(g.on));
         let yes = x.plain(Expression::Literal(Literal::Bool(true)));
-        let mut body = naga::Block::from_vec(vec![Statement::Store { pointer: on, value: yes }]);
-        body.append(&mut x.f.body);
-        x.f.body = body;
+        let stores = [g.on, g.by_argument].map(|v| Statement::Store { pointer: x.plain(Expression::GlobalVariable(v)), value: yes });
+        prepend(x.f, stores.into());
         return;
     }
     let (arg, member) = found.unwrap_or_else(|| {
@@ -376,9 +395,61 @@ fn select(types: &mut naga::UniqueArena<Type>, stage: ShaderStage, f: &mut Funct
     let ey = x.binary(&mut out, BinaryOperator::Equal, cy, py);
     let both = x.binary(&mut out, BinaryOperator::LogicalAnd, ex, ey);
     out.push(Statement::Store { pointer: on, value: both });
-    let mut body = naga::Block::from_vec(out);
-    body.append(&mut x.f.body);
-    x.f.body = body;
+    prepend(x.f, out);
+}
+
+/// Names an argument may have that says which pixel its function works
+/// on (the lighting's `shade_at(pixel, …)` and `shade(texel)`).
+const PIXEL_ARGUMENTS: [&str; 2] = ["pixel", "texel"];
+
+/// The index of `f`'s argument that is its pixel: named as
+/// [`PIXEL_ARGUMENTS`] say, of type `vec2<u32>` or `vec2<i32>`.
+fn pixel_argument(types: &naga::UniqueArena<Type>, f: &Function) -> Option<u32> {
+    let is_pixel = |a: &naga::FunctionArgument| {
+        a.name.as_deref().is_some_and(|n| PIXEL_ARGUMENTS.contains(&n))
+            && matches!(types[a.ty].inner, TypeInner::Vector { size: VectorSize::Bi, scalar: Scalar::U32 | Scalar::I32 })
+    };
+    f.arguments.iter().position(is_pixel).map(|i| i as u32)
+}
+
+/// A local flag set at the start of `f`: whether this call prints, which
+/// is the stage's flag, narrowed to calls whose argument `arg` is `pixel`
+/// where the stage prints from every invocation:
+/// `on && (!by_argument || all(bitcast<vec2<u32>>(arg) == pixel))`.
+fn pixel_gate(f: &mut Function, g: &Globals, arg: u32, pixel: [u32; 2]) -> Handle<LocalVariable> {
+    let here =
+        f.local_variables.append(LocalVariable { name: Some("loupe_printf_here".into()), ty: g.ty.bool, init: None }, Span::UNDEFINED);
+    let mut x = Exprs { f };
+    let mut out = Vec::new();
+    let value = x.plain(Expression::FunctionArgument(arg));
+    let mut same = Vec::new();
+    for (c, want) in pixel.into_iter().enumerate() {
+        let component = x.emit(&mut out, Expression::AccessIndex { base: value, index: c as u32 });
+        // An `i32` argument compares by its bits: a negative one is past
+        // any pixel.
+        let component = x.emit(&mut out, Expression::As { expr: component, kind: ScalarKind::Uint, convert: None });
+        let want = x.u32(want);
+        same.push(x.binary(&mut out, BinaryOperator::Equal, component, want));
+    }
+    let is_pixel = x.binary(&mut out, BinaryOperator::LogicalAnd, same[0], same[1]);
+    let [on, by_argument] = [g.on, g.by_argument].map(|v| {
+        let pointer = x.plain(Expression::GlobalVariable(v));
+        x.emit(&mut out, Expression::Load { pointer })
+    });
+    let by_invocation = x.emit(&mut out, Expression::Unary { op: naga::UnaryOperator::LogicalNot, expr: by_argument });
+    let narrowed = x.binary(&mut out, BinaryOperator::LogicalOr, by_invocation, is_pixel);
+    let prints = x.binary(&mut out, BinaryOperator::LogicalAnd, on, narrowed);
+    let pointer = x.plain(Expression::LocalVariable(here));
+    out.push(Statement::Store { pointer, value: prints });
+    prepend(x.f, out);
+    here
+}
+
+/// Puts `statements` before the rest of `f`'s body.
+fn prepend(f: &mut Function, statements: Vec<Statement>) {
+    let mut body = naga::Block::from_vec(statements);
+    body.append(&mut f.body);
+    f.body = body;
 }
 
 #[cfg(test)]

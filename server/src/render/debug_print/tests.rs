@@ -1,5 +1,7 @@
 //! Prints on a real device (lavapipe): a fragment and a compute stage
-//! print their position, a uniform and an expression at three pixels.
+//! print their position, a uniform and an expression at three pixels; a
+//! compute stage that maps invocations to pixels its own way prints from
+//! the function that takes the pixel for the pixel only.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -41,6 +43,29 @@ fn loops(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var i = 0u; i < 100u; i++) {
         debugPrintf(\"i %u\", i);
     }
+}
+
+fn shade(texel: vec2<u32>, k: u32) {
+    debugPrintf(\"texel %v2u k %u\", texel, k);
+}
+
+// Like the tiled lighting: each invocation of the first row of
+// workgroups shades a column of four pixels, one per call.
+@compute @workgroup_size(4, 4)
+fn tiled(@builtin(workgroup_id) w: vec3<u32>, @builtin(local_invocation_id) l: vec3<u32>) {
+    if w.y == 0u {
+        for (var k = 0u; k < 4u; k++) {
+            shade(vec2(l.x + 4u * w.x, l.y + 4u * k), k);
+        }
+    }
+    debugPrintf(\"everyone\");
+}
+
+// A stage that selects by its global id follows the invocation, whatever
+// the argument says.
+@compute @workgroup_size(4, 4)
+fn by_id(@builtin(global_invocation_id) id: vec3<u32>) {
+    shade(id.yx, 9u);
 }
 ";
 
@@ -229,4 +254,22 @@ fn prints_in_a_loop_overflow_with_the_right_count() {
     assert_eq!(printed.dropped, 75);
     let all = compute(&gpu, "loops", [0, 0], DEFAULT_WORDS);
     assert_eq!((all.lines.len(), all.dropped), (100, 0));
+}
+
+/// A compute stage without a global id: the calls of the function that
+/// takes its pixel print for the selected pixel only, each call of the
+/// loop answering for itself; a print elsewhere prints from every
+/// invocation. A stage with a global id selects by it, not by the
+/// argument.
+#[test]
+fn a_function_taking_its_pixel_prints_for_that_pixel_only() {
+    let gpu = testing::device();
+    for (pixel, k) in [([0, 0], 0), ([5, 9], 2), ([15, 14], 3)] {
+        let printed = compute(&gpu, "tiled", pixel, DEFAULT_WORDS);
+        let shaded: Vec<&str> = printed.lines.iter().map(|l| l.text.as_str()).filter(|t| t.starts_with("texel")).collect();
+        assert_eq!(shaded, [format!("texel {}, {} k {k}", pixel[0], pixel[1])], "{pixel:?}");
+        assert_eq!(printed.lines.iter().filter(|l| l.text == "everyone").count(), 256, "{pixel:?}");
+    }
+    let by_id: Vec<String> = compute(&gpu, "by_id", [5, 9], DEFAULT_WORDS).lines.into_iter().map(|l| l.text).collect();
+    assert_eq!(by_id, ["texel 9, 5 k 9"]);
 }
