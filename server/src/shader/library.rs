@@ -183,6 +183,10 @@ struct Directives {
 /// `#ifndef`, `#if`, `#else`, `#else ifdef`, `#endif`), so a pipeline is
 /// built only from the imports its defs can reach.
 fn scan_directives(text: &str) -> Directives {
+    // Every directive starts with `#`; most WGSL files have none.
+    if !text.contains('#') {
+        return Directives { import_path: None, imports: Vec::new(), has_directives: false };
+    }
     let mut import_path = None;
     let mut imports = Vec::new();
     let mut open: Vec<Branch> = Vec::new();
