@@ -51,6 +51,11 @@ export function verdictText(f) {
   return (words[f.verdict] ?? f.verdict) + (f.helper ? ' (helper lane)' : '');
 }
 
+/** Whether fragment row `f` is the pass's survivor (its output is `after`). */
+export function isSurvivor(survivor, f) {
+  return !!survivor && !f.helper && survivor.draw === f.draw && survivor.primitive === f.primitive;
+}
+
 export class HistoryPanel {
   /** `panel`: the section; its `.history-body` receives the passes. */
   constructor(panel) {
@@ -119,6 +124,7 @@ export class HistoryPanel {
                 el(
                   'tr',
                   {
+                    class: isSurvivor(p.survivor, f) ? 'survivor' : '',
                     'data-fragment': '',
                     'data-draw': f.draw,
                     'data-primitive': String(f.primitive),
@@ -128,7 +134,7 @@ export class HistoryPanel {
                   el('td', { text: f.draw }),
                   el('td', { class: 'num', text: String(f.primitive) }),
                   el('td', { class: 'num', text: f.depth === null ? '—' : formatF32(f.depth) }),
-                  el('td', { class: `verdict ${f.verdict}`, text: verdictText(f) }),
+                  el('td', { class: `verdict ${f.verdict}`, text: verdictText(f) + (isSurvivor(p.survivor, f) ? ' → wrote the pixel' : '') }),
                 ),
               ),
             )

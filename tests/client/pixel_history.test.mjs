@@ -1,6 +1,6 @@
 import test from 'node:test';
 import assert from 'node:assert/strict';
-import { formatBefore, formatValue, fragmentRows, verdictText } from '../../client/pixel_history.js';
+import { formatBefore, formatValue, fragmentRows, isSurvivor, verdictText } from '../../client/pixel_history.js';
 
 test('the fragments of a pass list draw by draw, in submission order', () => {
   const draws = [
@@ -33,4 +33,12 @@ test('verdicts, values and what came before read as words or exact numbers', () 
   assert.equal(formatBefore({ origin: 'undefined', before: null }), 'undefined (first write)');
   assert.equal(formatBefore({ origin: 'read', before: [0.5, 0.25, 0, 1] }), '0.5, 0.25, 0, 1');
   assert.equal(formatBefore({ origin: 'unread', before: null }), 'not read');
+});
+
+test('the survivor is the fragment the pass kept, never a helper lane', () => {
+  const survivor = { draw: 'knot', primitive: 7 };
+  assert.equal(isSurvivor(survivor, { draw: 'knot', primitive: 7, helper: false }), true);
+  assert.equal(isSurvivor(survivor, { draw: 'knot', primitive: 7, helper: true }), false);
+  assert.equal(isSurvivor(survivor, { draw: 'floor', primitive: 7, helper: false }), false);
+  assert.equal(isSurvivor(null, { draw: 'knot', primitive: 7, helper: false }), false);
 });

@@ -78,8 +78,13 @@ fn a_pixel_of_the_knot_lists_the_floor_failing_depth_and_the_knot_passing() {
     assert_eq!(prepass["outputs"][0]["output"], "depth_prepass/depth");
     assert!((model - gpu).abs() < 1e-6, "the model's depth {model} is the GPU's {gpu}");
 
+    // The G-buffer kept the knot's passing fragment.
+    let kept = knot.iter().rfind(|f| f.2 == "passed" && !f.3).expect("passed");
+    assert_eq!(pass(&h, "gbuffer")["survivor"], serde_json::json!({ "draw": "knot", "primitive": kept.1 }));
+
     let tonemap = fragments(pass(&h, "tonemap"));
     assert_eq!(tonemap.len(), 1, "one triangle covers the screen: {tonemap:?}");
+    assert_eq!(pass(&h, "tonemap")["survivor"], serde_json::json!({ "draw": "fullscreen triangle", "primitive": 0 }));
     assert_eq!((tonemap[0].1, tonemap[0].2.as_str(), tonemap[0].3), (0, "not_tested", false));
 }
 

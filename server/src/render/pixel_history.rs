@@ -15,6 +15,7 @@ use super::graph::{Graph, PassKind, Resource};
 use super::quads::{DrawTrace, RecordedTarget};
 use super::readback::{Readback, Rows, copy_texture};
 use super::resource::{Access, Lifetime, Meaning, Physical, Projection, ResourceDesc, TensorLayout, TextureKind};
+use crate::quads::Verdict;
 
 /// Copies into the readback start at multiples of this: a texture copy's
 /// row pitch.
@@ -44,9 +45,20 @@ pub struct PassHistory {
     /// submission order; `null` for other passes, and for a raster pass
     /// whose draws could not be replayed.
     pub draws: Option<Vec<DrawTrace>>,
+    /// Raster passes: the fragment whose output the pass's images hold at
+    /// the pixel (loupe's pipelines do not blend: the last one that passed
+    /// its depth test, or ran without one); `null` when none did.
+    pub survivor: Option<Survivor>,
     /// A compute pass that runs one invocation per pixel of its output:
     /// the global id of the invocation at this pixel.
     pub invocation: Option<[u32; 3]>,
+}
+
+/// A fragment named by its draw and primitive.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Survivor {
+    pub draw: String,
+    pub primitive: u32,
 }
 
 /// An output at the pixel, before and after the pass.
@@ -385,6 +397,11 @@ impl PendingHistory {
             let mine = || traces.iter().filter(|t| t.pass == plan.pass);
             let draws = (plan.kind == PassKind::Raster && mine().next().is_some())
                 .then(|| mine().flat_map(|t| t.draws.iter().cloned()).collect::<Vec<_>>());
+            let survivor = draws.as_ref().and_then(|draws| {
+                let mut fragments = draws.iter().flat_map(|d| d.fragments.iter().map(move |f| (d, f)));
+                fragments.rfind(|(_, f)| !f.helper && matches!(f.verdict, Verdict::Passed | Verdict::NotTested))
+            });
+            let survivor = survivor.map(|(d, f)| Survivor { draw: d.name.clone(), primitive: f.primitive });
             let touched =
                 !outputs.is_empty() || !tensors.is_empty() || !plan.inputs.is_empty() || draws.as_ref().is_some_and(|d| !d.is_empty());
             if touched {
@@ -395,6 +412,7 @@ impl PendingHistory {
                     inputs: plan.inputs,
                     tensors,
                     draws,
+                    survivor,
                     invocation: plan.invocation,
                 });
             }
