@@ -14,6 +14,7 @@ pub mod frame_times;
 pub mod link;
 pub mod model;
 mod panels;
+pub mod pixel;
 pub mod presets;
 pub mod viewer;
 pub mod window;

@@ -184,6 +184,13 @@ pub trait Link {
     fn quad_statistics(&self, on: bool) -> Result<(), String>;
     /// The newest quad maps of a raster pass, while quad statistics are on.
     fn quad_map(&self, pass: &str) -> Option<QuadMap>;
+    /// Selects the frame's pixel (from the top left) whose history and
+    /// `debugPrintf` lines every frame reports (`pixel_history` and
+    /// `prints` events), as the WebSocket `debug_pixel` does; `None`
+    /// clears it. The selection is the daemon's, shared with its
+    /// browsers. The error says why it was refused (a pixel outside the
+    /// frame, a busy daemon).
+    fn debug_pixel(&self, pixel: Option<[u32; 2]>) -> Result<(), String>;
     /// The daemon stopped (Ctrl-C, or it died): the window closes.
     fn closed(&self) -> bool;
     /// Calls `wake` from any thread whenever something new arrives (an

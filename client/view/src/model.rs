@@ -8,6 +8,7 @@ use std::collections::BTreeMap;
 use serde::Deserialize;
 
 use crate::frame_times::FrameTimes;
+use crate::pixel::{PixelHistory, Prints};
 
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 pub struct Pass {
@@ -242,6 +243,10 @@ enum Event {
     Files {
         files: Vec<FileDiff>,
     },
+    Prints(Prints),
+    PixelHistory(PixelHistory),
+    ReloadSucceeded {},
+    ReloadFailed {},
 }
 
 #[derive(Debug, Default)]
@@ -271,6 +276,15 @@ pub struct Model {
     /// Each source file that broke a pass, with its diff against its last
     /// good version.
     pub files: Vec<FileDiff>,
+    /// How many reloads finished: a source text read before one may be
+    /// stale.
+    pub reloads: u64,
+    /// The frame's pixel pinned in the Inspector (the daemon's debug
+    /// pixel), and the newest history and prints of it; events for any
+    /// other pixel are ignored.
+    pub pixel: Option<[u32; 2]>,
+    pub history: Option<PixelHistory>,
+    pub prints: Option<Prints>,
 }
 
 impl Model {
@@ -302,6 +316,17 @@ impl Model {
                 self.controls_seen += 1;
             }
             Event::Files { files } => self.files = files,
+            Event::Prints(prints) => {
+                if Some(prints.pixel) == self.pixel {
+                    self.prints = Some(prints);
+                }
+            }
+            Event::PixelHistory(history) => {
+                if Some(history.pixel) == self.pixel {
+                    self.history = Some(history);
+                }
+            }
+            Event::ReloadSucceeded {} | Event::ReloadFailed {} => self.reloads += 1,
             Event::Quads { frame, passes } => {
                 self.quads_frame = Some(frame);
                 for p in &mut self.passes {
@@ -314,6 +339,13 @@ impl Model {
                     Some(e) => format!("could not save {file}: {e}"),
                 });
             }
+        }
+    }
+
+    /// Pins `pixel` (`None`: unpins); what was shown of another pixel goes.
+    pub fn pin(&mut self, pixel: Option<[u32; 2]>) {
+        if self.pixel != pixel {
+            (self.pixel, self.history, self.prints) = (pixel, None, None);
         }
     }
 
@@ -430,6 +462,77 @@ mod tests {
             {"name": "tonemap", "status": "ok", "writes": [{"name": "color", "kind": "texture", "format": "Rgba8UnormSrgb", "width": 64, "height": 48, "shape": null}]},
         ]}));
         assert_eq!(m.image_tensors().collect::<Vec<_>>(), [("denoise.enc_conv0/tensor".to_owned(), [48, 64, 32])]);
+    }
+
+    #[test]
+    fn the_pinned_pixels_history_and_prints_are_kept_and_other_pixels_ignored() {
+        use crate::pixel::{DrawTrace, Fragment, PrintLine, TensorAtPixel, TexelChange};
+        let history = |pixel: [u32; 2], frame: u64| {
+            json!({"type": "pixel_history", "frame": frame, "pixel": pixel, "passes": [
+                {"pass": "gbuffer", "kind": "raster", "inputs": [], "tensors": [], "invocation": null,
+                 "outputs": [{"output": "gbuffer/normal", "texel": [70, 20, 0], "origin": "cleared", "before": null, "after": [0.1, 0.9, null, 1.0]}],
+                 "draws": [{"name": "floor", "fragments": [{"draw": 0, "primitive": 1, "depth": 0.93, "verdict": "failed_depth", "helper": true}]}]},
+                {"pass": "denoise.enc_conv0", "kind": "compute", "inputs": ["path_trace/color"], "outputs": [], "draws": null,
+                 "invocation": [70, 20, 0], "tensors": [{"output": "denoise.enc_conv0/tensor", "at": [70, 20], "channels": [0.5, null]}]}]})
+        };
+        let prints = |pixel: [u32; 2], text: &str| {
+            json!({"type": "prints", "frame": 40, "pixel": pixel, "dropped": 2, "lines": [
+                {"pass": "tonemap", "file": "shaders/post/tonemap.wgsl", "line": 18, "column": 5, "text": text, "values": [[70.5, 20.5]]}]})
+        };
+        let mut m = Model::default();
+        m.apply(history([70, 20], 39));
+        assert_eq!(m.history, None, "nothing pinned: ignored");
+
+        m.pin(Some([70, 20]));
+        m.apply(history([70, 20], 40));
+        m.apply(prints([70, 20], "at 70.5"));
+        m.apply(history([1, 1], 41));
+        m.apply(prints([1, 1], "another pixel's"));
+        let h = m.history.as_ref().expect("the pinned pixel's history");
+        assert_eq!((h.frame, h.pixel), (40, [70, 20]), "another pixel's history is ignored");
+        let gbuffer = &h.passes[0];
+        assert_eq!(
+            gbuffer.outputs,
+            [TexelChange {
+                output: "gbuffer/normal".into(),
+                texel: [70, 20, 0],
+                origin: "cleared".into(),
+                before: None,
+                after: Some([Some(0.1), Some(0.9), None, Some(1.0)]),
+            }],
+            "a channel that is not finite arrives as null"
+        );
+        let fragment = Fragment { primitive: 1, depth: Some(0.93), verdict: "failed_depth".into(), helper: true };
+        assert_eq!(gbuffer.draws, Some(vec![DrawTrace { name: "floor".into(), fragments: vec![fragment] }]));
+        let denoise = &h.passes[1];
+        assert_eq!((denoise.kind.as_str(), &denoise.inputs[..]), ("compute", &["path_trace/color".to_owned()][..]));
+        assert_eq!((denoise.draws.as_ref(), denoise.invocation), (None, Some([70, 20, 0])));
+        assert_eq!(
+            denoise.tensors,
+            [TensorAtPixel { output: "denoise.enc_conv0/tensor".into(), at: [70, 20], channels: vec![Some(0.5), None] }]
+        );
+        let p = m.prints.as_ref().expect("the pinned pixel's prints");
+        let line =
+            PrintLine { pass: "tonemap".into(), file: "shaders/post/tonemap.wgsl".into(), line: 18, column: 5, text: "at 70.5".into() };
+        assert_eq!((p.frame, p.dropped, &p.lines), (40, 2, &vec![line]));
+
+        // Another pixel pinned: what was shown of the first goes.
+        m.pin(Some([1, 1]));
+        assert_eq!((&m.history, &m.prints), (&None, &None));
+        m.apply(prints([1, 1], "now this one's"));
+        assert_eq!(m.prints.as_ref().map(|p| p.lines[0].text.as_str()), Some("now this one's"));
+        m.pin(None);
+        m.apply(history([1, 1], 42));
+        assert_eq!((m.pixel, &m.history, &m.prints), (None, &None, &None), "unpinned, nothing is kept");
+    }
+
+    #[test]
+    fn finished_reloads_are_counted() {
+        let mut m = Model::default();
+        m.apply(json!({"type": "reload_started", "id": 1, "files": ["a.wgsl"], "pipelines": []}));
+        m.apply(json!({"type": "reload_succeeded", "id": 1, "files": ["a.wgsl"], "pipelines": [], "timings": {}}));
+        m.apply(json!({"type": "reload_failed", "id": 2, "files": ["a.wgsl"], "pipelines": [], "diagnostics": []}));
+        assert_eq!(m.reloads, 2);
     }
 
     #[test]

@@ -29,6 +29,8 @@ enum RightTab {
     Passes,
     Scene,
     Timings,
+    /// The pixel pinned in the Inspector.
+    Pixel,
 }
 
 pub struct Viewer {
@@ -46,10 +48,10 @@ pub struct Viewer {
     quad_map: Option<QuadMap>,
     tab: RightTab,
     scene: panels::scene::Edits,
-    /// Source texts for excerpts, read once per file while the problems
-    /// stay the same.
+    /// Source texts for excerpts and prints, read once per file while the
+    /// problems stay the same and no reload finishes.
     sources: HashMap<String, Option<String>>,
-    sources_for: Vec<Problem>,
+    sources_for: (Vec<Problem>, u64),
     editor: Option<String>,
     /// A revert asked for, waiting for its confirmation.
     confirm_revert: Option<String>,
@@ -71,7 +73,7 @@ impl Viewer {
             tab: RightTab::default(),
             scene: panels::scene::Edits::default(),
             sources: HashMap::new(),
-            sources_for: Vec::new(),
+            sources_for: (Vec::new(), 0),
             editor,
             confirm_revert: None,
         }
@@ -127,9 +129,9 @@ impl Viewer {
         for event in self.link.poll() {
             self.model.apply(event);
         }
-        if self.sources_for != self.model.problems {
+        if (&self.sources_for.0, self.sources_for.1) != (&self.model.problems, self.model.reloads) {
             self.sources.clear();
-            self.sources_for = self.model.problems.clone();
+            self.sources_for = (self.model.problems.clone(), self.model.reloads);
         }
         let image = self.link.display();
         if let (Some(image), Some(render)) = (&image, render) {
@@ -151,31 +153,45 @@ impl Viewer {
                 panels::problems::show(ui, &self.model.problems, &self.model.files, |loc| excerpt(link.as_ref(), sources, loc))
             })
             .inner;
-        let (asked, picked) = egui::Panel::right("passes")
+        let (asked, picked, unpin) = egui::Panel::right("passes")
             .default_size(width * 0.35)
             .max_size(width * 0.6)
             .resizable(true)
             .show(ui, |ui| {
                 ui.horizontal(|ui| {
-                    for (tab, name) in [(RightTab::Passes, "Passes"), (RightTab::Scene, "Scene"), (RightTab::Timings, "Timings")] {
+                    let tabs = [
+                        (RightTab::Passes, "Passes"),
+                        (RightTab::Scene, "Scene"),
+                        (RightTab::Timings, "Timings"),
+                        (RightTab::Pixel, "Pixel"),
+                    ];
+                    for (tab, name) in tabs {
                         ui.selectable_value(&mut self.tab, tab, name);
                     }
                 });
                 ui.separator();
                 match self.tab {
                     RightTab::Passes => {
-                        (Vec::new(), panels::passes::show(ui, &self.model.passes, self.inspector.selected(), &mut self.quads))
+                        (Vec::new(), panels::passes::show(ui, &self.model.passes, self.inspector.selected(), &mut self.quads), false)
                     }
-                    RightTab::Scene => (panels::scene::show(ui, &self.model, &mut self.scene), None),
+                    RightTab::Scene => (panels::scene::show(ui, &self.model, &mut self.scene), None, false),
                     RightTab::Timings => {
                         panels::timings::show(ui, &self.model.times);
-                        (Vec::new(), None)
+                        (Vec::new(), None, false)
+                    }
+                    RightTab::Pixel => {
+                        let (link, sources) = (&self.link, &mut self.sources);
+                        let unpin = panels::pixel::show(ui, &self.model, |file, line| source_line(link.as_ref(), sources, file, line));
+                        (Vec::new(), None, unpin)
                     }
                 }
             })
             .inner;
         for command in asked {
             self.send(command);
+        }
+        if unpin {
+            self.pin(None);
         }
         self.want_quads(self.quads);
         if let Some(pass) = picked
@@ -201,7 +217,8 @@ impl Viewer {
                 Centre::Inspector => {
                     self.link.set_shown(false);
                     self.refresh_quad_map();
-                    let asks = self.inspector.show(ui, &self.model, inspected.as_ref(), self.quad_map.as_ref());
+                    let frame = image.as_ref().map(|i| i.size);
+                    let asks = self.inspector.show(ui, &self.model, inspected.as_ref(), self.quad_map.as_ref(), frame);
                     self.ask(asks);
                     BTreeSet::new()
                 }
@@ -250,6 +267,23 @@ impl Viewer {
         self.link.probe(asks.probe);
         if let Some(measure) = asks.measure {
             self.link.measure(measure);
+        }
+        if let Some(pixel) = asks.pin {
+            self.pin(pixel);
+        }
+    }
+
+    /// Selects `pixel` on the daemon (`None`: clears it) and shows it in
+    /// the Pixel panel; a refusal leaves the pin as it was and says why.
+    fn pin(&mut self, pixel: Option<[u32; 2]>) {
+        match self.link.debug_pixel(pixel) {
+            Ok(()) => {
+                self.model.pin(pixel);
+                if pixel.is_some() {
+                    self.tab = RightTab::Pixel;
+                }
+            }
+            Err(e) => self.model.notice = Some(e),
         }
     }
 
@@ -332,6 +366,15 @@ impl Viewer {
 }
 
 fn excerpt(link: &dyn Link, sources: &mut HashMap<String, Option<String>>, loc: &Location) -> Option<String> {
-    let text = sources.entry(loc.file.clone()).or_insert_with(|| link.source(&loc.file)).as_deref()?;
-    crate::excerpt::excerpt(text, loc.line, loc.column)
+    crate::excerpt::excerpt(source(link, sources, &loc.file)?, loc.line, loc.column)
+}
+
+/// Line `line` (1-based) of `file`, as it is now.
+fn source_line(link: &dyn Link, sources: &mut HashMap<String, Option<String>>, file: &str, line: u32) -> Option<String> {
+    let index = usize::try_from(line).ok()?.checked_sub(1)?;
+    source(link, sources, file)?.lines().nth(index).map(str::to_owned)
+}
+
+fn source<'a>(link: &dyn Link, sources: &'a mut HashMap<String, Option<String>>, file: &str) -> Option<&'a str> {
+    sources.entry(file.to_owned()).or_insert_with(|| link.source(file)).as_deref()
 }

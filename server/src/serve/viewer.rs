@@ -193,6 +193,14 @@ impl InProcess {
         snapshot.extend(shared.state_events());
         InProcess { shared, events, snapshot, display, stopped, subscribed: Mutex::default(), alive: Arc::new(()) }
     }
+
+    /// The newest frame's size: its final output's.
+    fn frame_size(&self) -> Option<[u32; 2]> {
+        let frames = self.shared.frames.borrow();
+        let images = frames.as_ref()?;
+        let image = images.captures.get(images.final_key.as_ref()?)?;
+        Some([image.width, image.height])
+    }
 }
 
 impl Link for InProcess {
@@ -285,6 +293,17 @@ impl Link for InProcess {
         let p = report.passes.iter().find(|p| p.quads.pass == pass)?;
         let (width, height, overdraw, helpers) = p.quads.first_maps()?;
         Some(QuadMap { pass: pass.to_owned(), frame: report.frame, width, height, overdraw, helpers })
+    }
+
+    fn debug_pixel(&self, pixel: Option<[u32; 2]>) -> Result<(), String> {
+        // The daemon refuses such a pixel too, but only in an event: the
+        // window learns it here, before it shows the pixel as pinned.
+        if let (Some([x, y]), Some([width, height])) = (pixel, self.frame_size())
+            && (x >= width || y >= height)
+        {
+            return Err(format!("pixel ({x}, {y}) refused: it is outside the {width}x{height} frame"));
+        }
+        self.shared.clients.command(inbox::Command::DebugPixel(pixel)).map_err(|e| format!("pixel selection refused: {e}"))
     }
 
     fn tensor(&self, name: &str) -> Option<Tensor> {

@@ -3,6 +3,7 @@
 //! project, rendering on the daemon's own device (lavapipe here).
 
 mod inspector;
+mod pixel;
 mod snapshots;
 mod tensors;
 

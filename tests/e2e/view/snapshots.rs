@@ -1,6 +1,7 @@
 //! Snapshot tests of the window's main panels: the default view (Frame,
-//! Passes, Problems), the Scene and Timings tabs, and the Inspector with a
-//! texel hovered, bare and under the quad overdraw map, each compared with its PNG in `snapshots/`
+//! Passes, Problems), the Scene and Timings tabs, the Inspector with a
+//! texel hovered, bare and under the quad overdraw map, and the Pixel
+//! panel of a pinned pixel, each compared with its PNG in `snapshots/`
 //! (`UPDATE_SNAPSHOTS=1` rewrites them: README, "Tests").
 //!
 //! A live daemon's pixels vary (frame numbers, times, lavapipe's pace), so
@@ -27,6 +28,26 @@ use loupe_view::{Command, DisplayImage, Inspect, Inspected, Link, Probe, Probed,
 /// file, so the excerpt shows its line 16), the pass list with `tonemap`
 /// stale, and four more frames. One event a line.
 const EVENTS: &str = include_str!("snapshot_events.json");
+
+/// `loupe render --scene scenes/minimal.toml --debug-pixel 320,200` on a
+/// copy of the repository whose tonemap shader prints (as [`printing`]
+/// makes it): the report's `history` and `prints` as the `pixel_history`
+/// and `prints` events a daemon sends (the same serialisation, with their
+/// `type` and the frame after the recorded ones). A pixel of the knot, in
+/// front of itself.
+const PIXEL_EVENTS: &str = include_str!("snapshot_pixel.json");
+
+/// The tonemap shader [`PIXEL_EVENTS`] were recorded with: the directive
+/// on its blank line 5 and the print after its `c` (line 17), so that the
+/// lines the recorded error's excerpt shows (15 and 16) are the
+/// repository's.
+fn printing(tonemap: &str) -> String {
+    let mut lines: Vec<&str> = tonemap.split('\n').collect();
+    assert_eq!((lines[4], lines[15]), ("", "    let c = max(texel.rgb, vec3(0.0));"), "the premise: tonemap.wgsl's lines 5 and 16");
+    lines[4] = "enable wgpu_debug_printf;";
+    lines.insert(16, "    debugPrintf(\"at %v2f\", in.position.xy);");
+    lines.join("\n")
+}
 
 /// The recorded frame's size (the minimal scene's output): the fixed image
 /// is the frame and the inspected `tonemap/color` alike.
@@ -98,10 +119,13 @@ fn fixed_image(render: &egui_wgpu::RenderState) -> DisplayImage {
 /// image's value at any texel probed and its range when measured, and,
 /// while quad statistics are asked for, fixed ones for `tonemap` (a
 /// `quads` event and [`quad_counts`] as its maps), all "after" the last
-/// recorded frame. Commands are recorded, not carried out.
+/// recorded frame, and while the pixel of [`PIXEL_EVENTS`] is selected,
+/// those events. Commands are recorded, not carried out.
 struct Replay {
     events: Vec<serde_json::Value>,
     frame: u64,
+    /// The pixel selected (`debug_pixel`).
+    pixel: Mutex<Option<[u32; 2]>>,
     image: DisplayImage,
     sent: Arc<Mutex<Vec<Command>>>,
     inspect: Mutex<Option<Inspect>>,
@@ -116,7 +140,7 @@ impl Replay {
         let frame = events.iter().filter(|e| e["type"] == "frame").filter_map(|e| e["frame"].as_u64()).next_back();
         let frame = frame.expect("the recording has frames");
         let (inspect, probe, measure) = (Mutex::default(), Mutex::default(), Mutex::default());
-        Replay { events, frame, image, sent, inspect, probe, measure, quads: AtomicBool::new(false) }
+        Replay { events, frame, pixel: Mutex::default(), image, sent, inspect, probe, measure, quads: AtomicBool::new(false) }
     }
 }
 
@@ -129,7 +153,15 @@ impl Link for Replay {
             events.push(serde_json::json!({"type": "quads", "frame": self.frame, "adapter": "llvmpipe",
                 "passes": [{"pass": "tonemap", "draws": [], "quads": totals, "what_if": null, "fragment_invocations": null}]}));
         }
+        let recorded: Vec<serde_json::Value> = serde_json::from_str(PIXEL_EVENTS).expect("the recorded pixel events are JSON");
+        let pixel = *self.pixel.lock().expect("pixel");
+        events.extend(recorded.into_iter().filter(|e| pixel.is_some_and(|p| e["pixel"] == serde_json::json!(p))));
         events
+    }
+
+    fn debug_pixel(&self, pixel: Option<[u32; 2]>) -> Result<(), String> {
+        *self.pixel.lock().expect("pixel") = pixel;
+        Ok(())
     }
 
     fn send(&self, command: Command) -> Result<(), String> {
@@ -138,7 +170,8 @@ impl Link for Replay {
     }
 
     fn source(&self, file: &str) -> Option<String> {
-        std::fs::read_to_string(loupe_tests::repo().join(file)).ok()
+        let text = std::fs::read_to_string(loupe_tests::repo().join(file)).ok()?;
+        Some(if file == loupe_tests::reload::TONEMAP { printing(&text) } else { text })
     }
 
     fn display(&self) -> Option<DisplayImage> {
@@ -300,4 +333,26 @@ fn snapshots_the_inspector_under_the_quad_overdraw_map() {
     settle(&mut harness);
     assert!(harness.query_by_label_contains("quads launched over this pixel's 2×2 block").is_some(), "the count under the cursor");
     snapshot(&mut harness, &sent, "inspector_quads");
+}
+
+/// The pixel [`PIXEL_EVENTS`] are of, and where the Inspector shows its
+/// texel of `tonemap/color` in the window.
+const PINNED: [u32; 2] = [320, 200];
+const PINNED_AT: egui::Pos2 = egui::pos2(336.0, 347.8);
+
+#[test]
+fn snapshots_the_pixel_panel_of_a_pinned_pixel() {
+    let (mut harness, sent) = open();
+    harness.get_by_label("tonemap").click();
+    settle(&mut harness);
+    harness.hover_at(PINNED_AT);
+    harness.step();
+    harness.drag_at(PINNED_AT);
+    harness.step();
+    harness.drop_at(PINNED_AT);
+    settle(&mut harness);
+    assert_eq!(harness.state().model().pixel, Some(PINNED), "the click pins the recorded pixel");
+    assert!(harness.query_by_label_contains("through frame").is_some(), "the panel shows the recorded history");
+    assert!(harness.query_all_by_label("failed depth").next().is_some(), "and its fragments");
+    snapshot(&mut harness, &sent, "pixel");
 }

@@ -4,13 +4,15 @@
 //! pan and the exact value of the texel under the cursor (the one texel
 //! read back). An output opens with its preset (`presets`), as in the
 //! browser. Over a raster pass's output, a quad statistics map
-//! (`quad_overlay`).
+//! (`quad_overlay`). A click pins the frame's pixel under the texel for
+//! the Pixel panel, and marks it.
 
 use crate::link::{Inspect, Inspected, Probe, Probed, QuadMap, Range};
 use crate::model::{Model, Output};
 use crate::panels::frame::FrameTexture;
 use crate::panels::quad_overlay::Overlay;
 use crate::panels::zoom::View;
+use crate::pixel;
 use crate::presets::{self, Channel, DisplayOptions, Planes};
 
 /// What the panel asks of the daemon this frame.
@@ -20,6 +22,8 @@ pub struct Asks {
     pub probe: Option<Probe>,
     /// Measure this output's range (fit to the values).
     pub measure: Option<Inspect>,
+    /// Pin this pixel of the frame (`Some(None)`: unpin).
+    pub pin: Option<Option<[u32; 2]>>,
 }
 
 pub struct Inspector {
@@ -81,7 +85,7 @@ impl Inspector {
         self.readout = None;
         self.view = None;
         let inspect = self.request();
-        Asks { measure: if preset.fit { inspect.clone() } else { None }, inspect, probe: None }
+        Asks { measure: if preset.fit { inspect.clone() } else { None }, inspect, ..Asks::default() }
     }
 
     /// Shows the first texture output of `pass`; false when it has none.
@@ -122,8 +126,17 @@ impl Inspector {
     }
 
     /// Draws the panel; returns what to ask of the daemon. `quads`: the
-    /// selected pass's quad maps, while quad statistics are on.
-    pub fn show(&mut self, ui: &mut egui::Ui, model: &Model, inspected: Option<&Inspected>, quads: Option<&QuadMap>) -> Asks {
+    /// selected pass's quad maps, while quad statistics are on; `frame`:
+    /// the frame's size, which a pinned pixel is of (without it, the
+    /// output is taken to be at the frame's size).
+    pub fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        model: &Model,
+        inspected: Option<&Inspected>,
+        quads: Option<&QuadMap>,
+        frame: Option<[u32; 2]>,
+    ) -> Asks {
         let mut asks = Asks::default();
         ui.horizontal_wrapped(|ui| {
             // The output chosen, and where to look in it.
@@ -173,7 +186,16 @@ impl Inspector {
         // An image with no room (a window resized to nothing) is not
         // drawn, so the display pass is not asked to draw it either.
         let visible = room.x >= 1.0 && room.y >= 1.0;
-        let probe = self.image(ui, room, current, &info, quads);
+        let size = [info.width, info.height];
+        let frame = frame.unwrap_or(size);
+        let pinned = model.pixel.map(|p| pixel::texel_of(p, frame, size));
+        let (probe, clicked) = self.image(ui, room, current, &info, quads, pinned);
+        if let Some(t) = clicked {
+            // The pinned texel clicked again unpins, as Escape does.
+            asks.pin = Some((Some(t) != pinned).then(|| pixel::frame_pixel(t, size, frame)));
+        } else if pinned.is_some() && ui.input(|i| i.key_pressed(egui::Key::Escape)) {
+            asks.pin = Some(None);
+        }
         ui.label(egui::RichText::new(self.readout_text(&info)).monospace());
         if count_line {
             let count = self.hovered.and_then(|t| self.quads.readout(quads, t));
@@ -230,8 +252,8 @@ impl Inspector {
         fit
     }
 
-    /// The image with zoom (scroll) and pan (drag); returns the texel to
-    /// read back.
+    /// The image with zoom (scroll) and pan (drag), and `pinned`'s marker;
+    /// returns the texel to read back and the texel clicked.
     fn image(
         &mut self,
         ui: &mut egui::Ui,
@@ -239,7 +261,8 @@ impl Inspector {
         current: Option<&Inspected>,
         info: &Output,
         quads: Option<&QuadMap>,
-    ) -> Option<Probe> {
+        pinned: Option<[u32; 2]>,
+    ) -> (Option<Probe>, Option<[u32; 2]>) {
         let (rect, response) = ui.allocate_exact_size(room.max(egui::Vec2::ZERO), egui::Sense::click_and_drag());
         let size = [info.width, info.height];
         let view = self.view.get_or_insert_with(|| View::fit(rect.size(), size));
@@ -263,6 +286,9 @@ impl Inspector {
                 let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
                 painter.image(id, view.image_rect(rect, size), uv, egui::Color32::WHITE);
                 self.quads.paint(ui.ctx(), &painter, view.image_rect(rect, size), quads, size);
+                if let Some(t) = pinned {
+                    marker(&painter, view.image_rect(rect, size), view.zoom, t);
+                }
             }
             _ => {
                 painter.text(
@@ -275,8 +301,12 @@ impl Inspector {
             }
         }
         self.hovered = response.hover_pos().and_then(|at| view.texel_at(rect, size, at));
-        let [x, y] = self.hovered?;
-        Some(Probe { output: self.selected.clone()?, x, y })
+        // A double click fits the view; its first click already pinned.
+        let clicked = (response.clicked() && !response.double_clicked())
+            .then(|| response.interact_pointer_pos().and_then(|at| view.texel_at(rect, size, at)))
+            .flatten();
+        let probe = self.hovered.zip(self.selected.clone()).map(|([x, y], output)| Probe { output, x, y });
+        (probe, clicked)
     }
 
     fn readout_text(&self, info: &Output) -> String {
@@ -287,6 +317,19 @@ impl Inspector {
         }
     }
 }
+
+/// A square around texel `t` of an image drawn over `image_rect` at `zoom`
+/// points per texel, never smaller than a few points, dark under light so
+/// it shows over any value.
+fn marker(painter: &egui::Painter, image_rect: egui::Rect, zoom: f32, [x, y]: [u32; 2]) {
+    let texel = egui::Rect::from_min_size(image_rect.min + egui::vec2(x as f32, y as f32) * zoom, egui::Vec2::splat(zoom));
+    let square = texel.expand(((MARKER - zoom) / 2.0).max(0.0));
+    painter.rect_stroke(square, 0.0, (3.0, egui::Color32::BLACK), egui::StrokeKind::Outside);
+    painter.rect_stroke(square, 0.0, (1.5, egui::Color32::from_rgb(255, 220, 0)), egui::StrokeKind::Outside);
+}
+
+/// The least side of the pinned texel's marker, in points.
+const MARKER: f32 = 7.0;
 
 /// `(x, y)` and each of the format's channels by name, exactly (Rust's
 /// shortest round-trip form), and the view distance of a depth.

@@ -4,6 +4,7 @@
 pub mod frame;
 pub mod inspector;
 pub mod passes;
+pub mod pixel;
 pub mod problems;
 pub mod quad_overlay;
 pub mod scene;
