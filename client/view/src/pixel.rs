@@ -26,8 +26,24 @@ pub struct PassHistory {
     /// submission order; `None` for other passes (and raster passes the
     /// model could not replay).
     pub draws: Option<Vec<DrawTrace>>,
+    /// A raster pass's fragment whose output its images hold there.
+    pub survivor: Option<Survivor>,
     /// The global id of a per-pixel compute pass's invocation there.
     pub invocation: Option<[u32; 3]>,
+}
+
+/// A fragment named by its draw and primitive.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub struct Survivor {
+    pub draw: String,
+    pub primitive: u32,
+}
+
+impl Survivor {
+    /// Whether `f` of draw `draw` is this fragment (a helper lane never is).
+    pub fn is(&self, draw: &str, f: &Fragment) -> bool {
+        !f.helper && self.draw == draw && self.primitive == f.primitive
+    }
 }
 
 /// RGBA as the protocol sends it: JSON has no NaN or infinity, so a
@@ -141,6 +157,16 @@ pub fn texel_of(p: [u32; 2], frame: [u32; 2], size: [u32; 2]) -> [u32; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_survivor_is_its_draws_fragment_and_never_a_helper_lane() {
+        let s = Survivor { draw: "knot".into(), primitive: 7 };
+        let f = |primitive, helper| Fragment { primitive, depth: None, verdict: "passed".into(), helper };
+        assert!(s.is("knot", &f(7, false)));
+        assert!(!s.is("knot", &f(7, true)), "a helper lane writes nothing");
+        assert!(!s.is("floor", &f(7, false)));
+        assert!(!s.is("knot", &f(8, false)));
+    }
 
     #[test]
     fn a_texel_of_a_smaller_image_maps_to_the_frame_pixel_under_its_centre_and_back() {

@@ -124,7 +124,12 @@ fn expected(history: &Value) -> Vec<String> {
                 out.push(f["primitive"].to_string());
                 out.push(f["depth"].as_f64().map_or("—".to_owned(), |d| (d as f32).to_string()));
                 let verdict = f["verdict"].as_str().expect("verdict").replace('_', " ");
-                out.push(if f["helper"] == true { format!("{verdict} (helper lane)") } else { verdict });
+                let kept = f["helper"] == false && p["survivor"]["draw"] == d["name"] && p["survivor"]["primitive"] == f["primitive"];
+                out.push(match (f["helper"] == true, kept) {
+                    (true, _) => format!("{verdict} (helper lane)"),
+                    (false, true) => format!("{verdict}, wrote the pixel"),
+                    (false, false) => verdict,
+                });
             }
         }
     }

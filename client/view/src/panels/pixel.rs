@@ -123,7 +123,9 @@ fn pass(ui: &mut egui::Ui, i: usize, p: &PassHistory) {
                         ui.label(&d.name);
                         ui.monospace(f.primitive.to_string());
                         ui.monospace(f.depth.map_or("—".to_owned(), |d| d.to_string()));
-                        ui.colored_label(verdict_colour(&f.verdict), verdict(f));
+                        let kept = p.survivor.as_ref().is_some_and(|s| s.is(&d.name, f));
+                        let text = if kept { format!("{}, wrote the pixel", verdict(f)) } else { verdict(f) };
+                        ui.colored_label(verdict_colour(&f.verdict), text);
                         ui.end_row();
                     }
                 }
