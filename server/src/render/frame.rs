@@ -11,7 +11,7 @@ use super::capture::{CapturedImage, CapturedTensor, Layout};
 use super::context::{MAX_STATISTICS, PassContext, Statistics};
 use super::graph::{Graph, PassKind, Resource};
 use super::pool::ResourcePool;
-use super::quads::{PendingTarget, QuadRecorder};
+use super::quads::{PendingTarget, QuadRecorder, ReplayCache};
 use super::readback::{Readback, Rows, copy_texture};
 use super::resource::{Physical, PipelineKey, ResourceDesc, TensorLayout, TextureDesc};
 use super::scene_gpu::SceneGpu;
@@ -34,6 +34,9 @@ pub struct FrameInputs<'a> {
     /// Record every draw for quad statistics, capturing positions with
     /// these (one per raster pipeline); `None`: do not.
     pub vertex_captures: Option<&'a BTreeMap<PipelineKey, VertexCapture>>,
+    /// Where the recorded draws are replayed, kept across frames; given
+    /// with `vertex_captures`.
+    pub quad_replays: Option<ReplayCache>,
     pub frame: u64,
     /// Samples per pixel the path tracer holds after this frame (frames
     /// since its history was last forgotten).
@@ -61,8 +64,9 @@ pub struct PendingFrame {
     /// Per pass, the wall-clock milliseconds of its own submission (serial
     /// frames only).
     serial: Option<Vec<(String, f64)>>,
-    /// Render passes recorded for quad statistics.
+    /// Render passes recorded for quad statistics, and where to replay them.
     quad_targets: Vec<PendingTarget>,
+    quad_replays: Option<ReplayCache>,
     pub skipped: Vec<String>,
     passes: Vec<String>,
     /// Per pass: the capture names it read and wrote, for the NaN report.
@@ -308,6 +312,7 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
         statistics,
         serial,
         quad_targets,
+        quad_replays: f.quad_replays,
         skipped,
         passes: graph.passes.iter().map(|p| p.name.clone()).collect(),
         io: graph
@@ -432,7 +437,7 @@ impl PendingFrame {
             })
             .unwrap_or_default();
         let recorded: Vec<_> = self.quad_targets.into_iter().filter_map(PendingTarget::read).collect();
-        let quads = super::quads::replay(&recorded);
+        let quads = self.quad_replays.map(|r| r.replay(&recorded)).unwrap_or_default();
         let nan = nan_origin(&self.passes, &self.io, &captures, &tensors);
         let prints = self.prints.as_ref().and_then(PendingPrints::read);
         FrameResult {
