@@ -90,13 +90,32 @@ impl Pass {
             (Some(values), Some(buffer)) => buffer.copy_from_slice(values),
             (values, buffer) => *buffer = values.map(<[f32]>::to_vec),
         }
+        self.start_over();
+        Ok(())
+    }
+
+    /// `reset` with the depth buffer cleared to `value`, as a render pass
+    /// that clears its depth attachment starts: no buffer to copy from.
+    pub fn reset_cleared(&mut self, value: f32) -> Result<(), QuadError> {
+        if !value.is_finite() {
+            return Err(QuadError::DepthValue { x: 0, y: 0, value });
+        }
+        let pixels = self.width as usize * self.height as usize;
+        match &mut self.depth {
+            Some(buffer) => buffer.fill(value),
+            None => self.depth = Some(vec![value; pixels]),
+        }
+        self.start_over();
+        Ok(())
+    }
+
+    fn start_over(&mut self) {
         self.maps.clear();
         self.totals = DrawStats::default();
         self.draws = 0;
         if let Some(probe) = &mut self.probe {
             probe.clear();
         }
-        Ok(())
     }
 
     /// Records the fragments at (x, y) of every draw from now on (those

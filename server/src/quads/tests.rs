@@ -596,6 +596,13 @@ fn a_reset_pass_starts_over_with_the_depth_it_is_given() {
     assert_eq!(pass.reset(Some(&half[1..])).unwrap_err(), QuadError::DepthSize { got: 4_095, width: 64, height: 64 });
     pass.reset(None).unwrap();
     assert_eq!(pass.draw(&with_depth(&fullscreen(0.75), less)).unwrap_err(), QuadError::NoDepthBuffer);
+    // Cleared, with or without a buffer before.
+    pass.reset_cleared(0.5).unwrap();
+    assert_eq!(pass.depth(), Some(&half[..]));
+    pass.draw(&with_depth(&fullscreen(0.25), less)).unwrap();
+    pass.reset_cleared(0.5).unwrap();
+    assert_eq!((pass.depth(), pass.totals()), (Some(&half[..]), DrawStats::default()));
+    assert!(matches!(pass.reset_cleared(f32::NAN), Err(QuadError::DepthValue { .. })));
 }
 
 #[test]

@@ -12,7 +12,7 @@ use super::capture::{CapturedImage, CapturedTensor, Layout};
 use super::context::{MAX_STATISTICS, PassContext, Statistics};
 use super::graph::{Graph, PassKind, Resource};
 use super::pool::ResourcePool;
-use super::quads::{PendingTarget, QuadRecorder};
+use super::quads::{PendingTarget, QuadRecorder, ReplayCache};
 use super::readback::{Readback, Rows, copy_texture};
 use super::resource::{Physical, PipelineKey, ResourceDesc, TensorLayout, TextureDesc};
 use super::scene_gpu::SceneGpu;
@@ -35,8 +35,9 @@ pub struct FrameInputs<'a> {
     /// Record every draw, capturing positions with these (one per raster
     /// pipeline), for quad statistics or a pixel's history; `None`: do not.
     pub vertex_captures: Option<&'a BTreeMap<PipelineKey, VertexCapture>>,
-    /// Replay the recorded draws through the quad model for statistics.
-    pub quad_statistics: bool,
+    /// Where the recorded draws are replayed for quad statistics, kept
+    /// across frames; `None`: no statistics.
+    pub quad_replays: Option<ReplayCache>,
     /// The selected pixel and the frame's size: its history is recorded.
     pub pixel: Option<([u32; 2], (u32, u32))>,
     pub frame: u64,
@@ -66,15 +67,15 @@ pub struct PendingFrame {
     /// Per pass, the wall-clock milliseconds of its own submission (serial
     /// frames only).
     serial: Option<Vec<(String, f64)>>,
-    /// Render passes recorded for quad statistics.
+    /// Render passes recorded for quad statistics, and where to replay them.
     quad_targets: Vec<PendingTarget>,
+    quad_replays: Option<ReplayCache>,
     pub skipped: Vec<String>,
     passes: Vec<String>,
     /// Per pass: the capture names it read and wrote, for the NaN report.
     io: Vec<(Vec<String>, Vec<String>)>,
     /// The selected pixel's prints, when one is selected.
     prints: Option<PendingPrints>,
-    quad_statistics: bool,
     history: Option<PendingHistory>,
 }
 
@@ -321,7 +322,6 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
     }
     PendingFrame {
         prints,
-        quad_statistics: f.quad_statistics,
         history,
         frame: f.frame,
         submitted: Instant::now(),
@@ -331,6 +331,7 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
         statistics,
         serial,
         quad_targets,
+        quad_replays: f.quad_replays,
         skipped,
         passes: graph.passes.iter().map(|p| p.name.clone()).collect(),
         io: graph
@@ -456,7 +457,7 @@ impl PendingFrame {
             })
             .unwrap_or_default();
         let recorded: Vec<_> = self.quad_targets.into_iter().filter_map(PendingTarget::read).collect();
-        let quads = if self.quad_statistics { super::quads::replay(&recorded) } else { Vec::new() };
+        let quads = self.quad_replays.map(|r| r.replay(&recorded)).unwrap_or_default();
         let history = self.history.map(|h| h.read(self.frame, &recorded));
         let nan = nan_origin(&self.passes, &self.io, &captures, &tensors);
         let prints = self.prints.as_ref().and_then(PendingPrints::read);

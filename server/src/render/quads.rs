@@ -3,11 +3,12 @@
 //! positions its own vertex stage produced (read back from the GPU) and
 //! the depth its render pass started from; once the frame has landed they
 //! are replayed, in submission order, through the exact CPU model in
-//! [`crate::quads`]. The same records answer for one pixel: every
-//! fragment each draw made there ([`trace`]).
+//! [`crate::quads`], a render target only when its inputs differ from the
+//! last frame's ([`ReplayCache`]). The same records answer for one pixel:
+//! every fragment each draw made there ([`trace`]).
 
 use std::collections::BTreeMap;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use serde::Serialize;
 
@@ -51,7 +52,7 @@ pub struct PendingDraw {
 
 /// The face culling of a draw's pipeline, as the model takes it: wgpu's
 /// `PrimitiveState::cull_mode` and `front_face`.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Faces {
     pub cull: Option<Face>,
     pub front_face: FrontFace,
@@ -129,6 +130,7 @@ fn warn_none<T>(pass: &str, what: &str) -> Option<T> {
 
 /// One render pass recorded for replay (a shadow pass records one per
 /// layer).
+#[derive(Clone)]
 pub struct RecordedTarget {
     pub pass: String,
     pub width: u32,
@@ -141,6 +143,7 @@ pub struct RecordedTarget {
 }
 
 /// What a render pass's depth buffer held before its first draw.
+#[derive(Clone)]
 pub enum InitialDepth {
     /// Cleared to this value.
     Clear(f32),
@@ -151,6 +154,7 @@ pub enum InitialDepth {
 /// One draw: its name in the report, its positions (one per vertex
 /// invocation, in index order: every three make a triangle), its depth
 /// state and its pipeline's face culling.
+#[derive(Clone)]
 pub struct RecordedDraw {
     pub name: String,
     pub positions: Vec<[f32; 4]>,
@@ -205,9 +209,9 @@ pub struct PassQuads {
     pub what_if: Option<WhatIf>,
     /// The maps of each render target of the pass, in order (a shadow
     /// map's layers one under another); shared, as reports are cloned for
-    /// every client.
+    /// every client and a target not replayed again keeps its maps.
     #[serde(skip)]
-    pub maps: Arc<Vec<QuadMaps>>,
+    pub maps: Vec<Arc<QuadMaps>>,
 }
 
 impl PassQuads {
@@ -242,22 +246,98 @@ fn per_pixel(m: &QuadMaps) -> (u32, u32, Vec<f32>, Vec<f32>) {
     (w, h, quads, helpers)
 }
 
-/// Replays the recorded render passes of a frame: one entry per raster pass
-/// that drew, in frame order. A target the model refuses (a size over its
-/// limit, a non-finite depth) is left out with a warning.
-pub fn replay(targets: &[RecordedTarget]) -> Vec<PassQuads> {
-    let mut out: Vec<PassQuads> = Vec::new();
-    for t in targets {
-        let Some((draws, maps)) = replay_target(t).map_err(|e| log::warn!("quad statistics of `{}`: {e}", t.pass)).ok() else { continue };
+/// The model's replays kept from frame to frame, render target by render
+/// target in frame order: each one's inputs, its `quads::Pass` (started
+/// over, not allocated again) and its figures. A target recorded exactly as
+/// the last frame recorded it (the same pass, size and initial depth, the
+/// same draws with their positions bit for bit, depth state and culling)
+/// is not replayed: its figures and maps are the last frame's. Cloning
+/// shares it: the session keeps it, each frame replays through it on the
+/// thread that converts the frame.
+#[derive(Clone, Default)]
+pub struct ReplayCache(Arc<Mutex<Replays>>);
+
+#[derive(Default)]
+struct Replays {
+    targets: Vec<Option<Replayed>>,
+    /// Targets replayed so far, not counting those reused.
+    replayed: u64,
+}
+
+struct Replayed {
+    inputs: RecordedTarget,
+    pass: quads::Pass,
+    draws: Vec<DrawStats>,
+    maps: Arc<QuadMaps>,
+    what_if: Option<WhatIf>,
+}
+
+impl ReplayCache {
+    /// The quad statistics of a frame's recorded render passes: one entry
+    /// per raster pass that drew, in frame order. A target the model
+    /// refuses (a size over its limit, a non-finite depth) is left out
+    /// with a warning.
+    pub fn replay(&self, targets: &[RecordedTarget]) -> Vec<PassQuads> {
+        self.lock().replay(targets)
+    }
+
+    /// How many render targets were replayed so far (those reused from the
+    /// frame before not counted).
+    pub fn replayed(&self) -> u64 {
+        self.lock().replayed
+    }
+
+    fn lock(&self) -> MutexGuard<'_, Replays> {
+        // A replay that panicked left its target empty (see `replay`).
+        self.0.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+}
+
+impl Replays {
+    fn replay(&mut self, targets: &[RecordedTarget]) -> Vec<PassQuads> {
+        self.targets.resize_with(targets.len(), || None);
+        let mut out: Vec<PassQuads> = Vec::new();
+        for (t, slot) in targets.iter().zip(&mut self.targets) {
+            if !slot.as_ref().is_some_and(|r| r.inputs.same_as(t)) {
+                // Taken before replaying: a replay that fails leaves no
+                // figures of other inputs behind.
+                let kept = slot.take().map(|r| r.pass);
+                *slot = Replayed::new(t, kept).map_err(|e| log::warn!("quad statistics of `{}`: {e}", t.pass)).ok();
+                self.replayed += 1;
+            }
+            if let Some(r) = slot {
+                r.report(t, &mut out);
+            }
+        }
+        out
+    }
+}
+
+impl Replayed {
+    /// Replays `t` into `kept` when it is the target's size, else into a
+    /// new pass.
+    fn new(t: &RecordedTarget, kept: Option<quads::Pass>) -> Result<Replayed, quads::QuadError> {
+        let mut pass = match kept {
+            Some(pass) if pass.size() == (t.width, t.height) => pass,
+            _ => quads::Pass::new(t.width, t.height)?,
+        };
+        start(&mut pass, &t.depth)?;
+        let draws = t.draws.iter().map(|d| pass.draw(&d.model())).collect::<Result<Vec<_>, _>>()?;
         let what_if = t.fullscreen.and_then(|two| fullscreen_what_if(t.width, t.height, !two).ok());
-        let total: DrawStats = draws.iter().map(|(_, s)| *s).sum();
-        let reports = draws.iter().zip(&t.draws).map(|((n, s), d)| DrawReport::new(n, Some(d.faces.cull_mode()), s));
+        Ok(Replayed { inputs: t.clone(), maps: Arc::new(pass.maps().clone()), pass, draws, what_if })
+    }
+
+    /// Adds the target's figures to `out`: a pass of its own, or the last
+    /// one when it is another render target (layer) of that pass.
+    fn report(&self, t: &RecordedTarget, out: &mut Vec<PassQuads>) {
+        let total: DrawStats = self.draws.iter().copied().sum();
+        let reports = self.draws.iter().zip(&t.draws).map(|(s, d)| DrawReport::new(&d.name, Some(d.faces.cull_mode()), s));
         match out.last_mut().filter(|p| p.pass == t.pass) {
             Some(p) => {
                 p.draws.extend(reports);
                 let sum = total + stats_of(&p.quads);
                 p.quads = DrawReport::total(&p.draws, &sum);
-                Arc::make_mut(&mut p.maps).push(maps);
+                p.maps.push(self.maps.clone());
             }
             None => {
                 let draws: Vec<DrawReport> = reports.collect();
@@ -265,13 +345,37 @@ pub fn replay(targets: &[RecordedTarget]) -> Vec<PassQuads> {
                     pass: t.pass.clone(),
                     quads: DrawReport::total(&draws, &total),
                     draws,
-                    what_if,
-                    maps: Arc::new(vec![maps]),
+                    what_if: self.what_if.clone(),
+                    maps: vec![self.maps.clone()],
                 });
             }
         }
     }
-    out
+}
+
+impl RecordedTarget {
+    /// Whether the model replays `other` exactly as this.
+    fn same_as(&self, other: &RecordedTarget) -> bool {
+        let depth = match (&self.depth, &other.depth) {
+            (None, None) => true,
+            (Some(InitialDepth::Clear(a)), Some(InitialDepth::Clear(b))) => a.to_bits() == b.to_bits(),
+            (Some(InitialDepth::Loaded(a)), Some(InitialDepth::Loaded(b))) => bytes(a) == bytes(b),
+            _ => false,
+        };
+        let same_draw = |(a, b): (&RecordedDraw, &RecordedDraw)| {
+            a.name == b.name && a.depth == b.depth && a.faces == b.faces && bytes(&a.positions) == bytes(&b.positions)
+        };
+        self.pass == other.pass
+            && (self.width, self.height, self.fullscreen) == (other.width, other.height, other.fullscreen)
+            && depth
+            && self.draws.len() == other.draws.len()
+            && self.draws.iter().zip(&other.draws).all(same_draw)
+    }
+}
+
+/// Floats compared bit for bit: a NaN equals itself, -0 differs from 0.
+fn bytes<T: bytemuck::Pod>(values: &[T]) -> &[u8] {
+    bytemuck::cast_slice(values)
 }
 
 /// A report's figures back as the model's, for summing across targets.
@@ -282,24 +386,21 @@ fn stats_of(r: &DrawReport) -> DrawStats {
     }
 }
 
-fn replay_target(t: &RecordedTarget) -> Result<(Vec<(String, DrawStats)>, QuadMaps), quads::QuadError> {
-    let mut pass = model_pass(t)?;
-    let mut draws = Vec::new();
-    for d in &t.draws {
-        draws.push((d.name.clone(), pass.draw(&d.model())?));
+/// Starts `pass` over with the depth buffer a render pass started from.
+fn start(pass: &mut quads::Pass, depth: &Option<InitialDepth>) -> Result<(), quads::QuadError> {
+    match depth {
+        Some(InitialDepth::Clear(v)) => pass.reset_cleared(*v),
+        Some(InitialDepth::Loaded(d)) => pass.reset(Some(d)),
+        None => pass.reset(None),
     }
-    Ok((draws, pass.finish().1))
 }
 
 /// The model's pass for a recorded target, its depth buffer as the render
 /// pass started.
 fn model_pass(t: &RecordedTarget) -> Result<quads::Pass, quads::QuadError> {
-    let pass = quads::Pass::new(t.width, t.height)?;
-    match &t.depth {
-        Some(InitialDepth::Clear(v)) => pass.with_depth(vec![*v; t.width as usize * t.height as usize]),
-        Some(InitialDepth::Loaded(d)) => pass.with_depth(d.clone()),
-        None => Ok(pass),
-    }
+    let mut pass = quads::Pass::new(t.width, t.height)?;
+    start(&mut pass, &t.depth)?;
+    Ok(pass)
 }
 
 impl RecordedDraw {
@@ -408,7 +509,7 @@ mod tests {
         let positions = vec![[-1.0, -1.0, 0.5, 1.0], [-1.0, 1.0, 0.5, 1.0], [1.0, -1.0, 0.5, 1.0]];
         let draw = RecordedDraw { name: "tri".into(), positions, depth: None, faces };
         let target = RecordedTarget { pass: "p".into(), width: 4, height: 4, depth: None, draws: vec![draw], fullscreen: None };
-        replay(&[target]).remove(0).draws.remove(0)
+        ReplayCache::default().replay(&[target]).remove(0).draws.remove(0)
     }
 
     /// `n` random triangles over the target, at random depths, as clip
@@ -488,6 +589,64 @@ mod tests {
         let traced: Vec<(String, usize)> = trace(&targets, [3, 4], (8, 8)).into_iter().map(|p| (p.pass, p.layer)).collect();
         let want = [("shadows", 0), ("shadows", 1), ("tonemap", 0), ("shadows", 0)].map(|(p, l)| (p.to_owned(), l));
         assert_eq!(traced, want);
+    }
+
+    /// Reports as they compare: figures and maps.
+    fn figures(quads: &[PassQuads]) -> Vec<String> {
+        quads.iter().map(|p| format!("{} {:?}", serde_json::to_value(p).unwrap(), p.stacked_maps())).collect()
+    }
+
+    /// An edit of a frame's target `.0`.
+    type Edit = (usize, fn(&mut RecordedTarget));
+
+    /// A target recorded as the frame before is not replayed, and any
+    /// input of a target that changes makes it replay alone, giving what a
+    /// fresh cache gives.
+    #[test]
+    fn the_replay_cache_replays_a_target_only_when_an_input_changed() {
+        let less = Some(DepthState::new(Compare::Less, true));
+        let loaded: Vec<f32> = (0..16 * 12).map(|i| 0.5 + (i % 5) as f32 * 0.1).collect();
+        let frame = vec![
+            target("shadows", (16, 16), Some(InitialDepth::Clear(1.0)), vec![random_draw(1, 30, less, None)]),
+            target("shadows", (16, 16), Some(InitialDepth::Clear(1.0)), vec![random_draw(2, 30, less, None)]),
+            target(
+                "gbuffer",
+                (16, 12),
+                Some(InitialDepth::Loaded(loaded)),
+                vec![random_draw(3, 30, less, None), random_draw(4, 30, None, None)],
+            ),
+        ];
+        let cache = ReplayCache::default();
+        let first = cache.replay(&frame);
+        assert_eq!(cache.replayed(), 3);
+        assert!(figures(&cache.replay(&frame)) == figures(&first));
+        assert_eq!(cache.replayed(), 3, "nothing changed");
+
+        let edits: [Edit; 6] = [
+            (2, |t| t.draws[1].positions[7][2] = 0.01),
+            (1, |t| t.draws[0].positions[0][0] = -0.0),
+            (2, |t| {
+                let Some(InitialDepth::Loaded(d)) = &mut t.depth else { unreachable!() };
+                d[20] = 0.0;
+            }),
+            (0, |t| t.depth = Some(InitialDepth::Clear(0.5))),
+            (2, |t| t.draws[0].faces.cull = Some(Face::Back)),
+            (1, |t| t.draws[0].depth = Some(DepthState::new(Compare::Greater, true))),
+        ];
+        for (n, (at, edit)) in edits.into_iter().enumerate() {
+            let mut edited = frame.clone();
+            edit(&mut edited[at]);
+            let replayed = cache.replayed();
+            let got = cache.replay(&edited);
+            assert_eq!(cache.replayed(), replayed + 1, "edit {n}: that target alone");
+            assert!(figures(&got) == figures(&ReplayCache::default().replay(&edited)), "edit {n}: a fresh replay's figures");
+            cache.replay(&frame);
+        }
+        // A frame with fewer targets, then the whole frame again.
+        cache.replay(&frame[..1]);
+        let replayed = cache.replayed();
+        assert!(figures(&cache.replay(&frame)) == figures(&first));
+        assert_eq!(cache.replayed(), replayed + 2);
     }
 
     #[test]

@@ -22,6 +22,7 @@ use super::graph::{Graph, PassKind};
 use super::pipelines::{self, Compiled, Installed, PipelineCache, PipelineSummary, Status};
 use super::pool::ResourcePool;
 use super::print_selection::PrintSelection;
+use super::quads::ReplayCache;
 use super::resource::{Lifetime, Meaning, PipelineKey, Projection, ResourceDesc, TensorLayout};
 use super::scene_gpu::SceneGpu;
 use super::vertex_capture::VertexCapture;
@@ -140,6 +141,9 @@ pub struct Session {
     /// generation each was instrumented from; built while `quads` is on.
     vertex_captures: BTreeMap<PipelineKey, VertexCapture>,
     capture_generations: BTreeMap<PipelineKey, u64>,
+    /// The quad model's replays, kept while the session lives so that a
+    /// render target recorded as the frame before is not replayed again.
+    quad_replays: ReplayCache,
     /// The selected pixel's prints (`None`: no pixel selected).
     prints: Option<PrintSelection>,
     /// Frames run the plain pipelines though a pixel is selected (`loupe
@@ -170,6 +174,7 @@ impl Session {
             serial: false,
             vertex_captures: BTreeMap::new(),
             capture_generations: BTreeMap::new(),
+            quad_replays: ReplayCache::default(),
             prints: None,
             prints_paused: false,
             accumulated: 0,
@@ -199,6 +204,12 @@ impl Session {
     /// Turns quad statistics on or off for the frames that follow.
     pub fn set_quads(&mut self, on: bool) {
         self.quads = on;
+    }
+
+    /// How many render targets the quad model has replayed, not counting
+    /// those reused because they were recorded as the frame before.
+    pub fn quad_replays(&self) -> u64 {
+        self.quad_replays.replayed()
     }
 
     /// Times each pass of the frames that follow by the wall clock,
@@ -431,7 +442,7 @@ impl Session {
             capture,
             statistics: self.quads,
             vertex_captures: record_draws.then_some(&self.vertex_captures),
-            quad_statistics: self.quads,
+            quad_replays: self.quads.then(|| self.quad_replays.clone()),
             pixel: pixel.map(|p| (p, (self.scene.width, self.scene.height))),
             frame: self.frame,
             samples: self.accumulated,
@@ -872,6 +883,51 @@ mod tests {
         // lanes at most a quad's worth per pixel.
         for (name, n) in &counts {
             assert!((pixels..=4 * pixels).contains(n), "{name}: {n} invocations for {pixels} pixels");
+        }
+    }
+
+    /// Quad statistics replay a render target only when what it was
+    /// recorded with changed: the second frame of a static scene reuses
+    /// every replay, figures and maps alike; a moved camera replays the
+    /// camera's passes, not the light's shadow map, and their figures
+    /// follow it.
+    #[test]
+    fn quad_statistics_replay_only_the_render_targets_that_changed() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+        let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/minimal.toml");
+        let small_shadows = Overrides::from([("quality.shadow_map_size".to_owned(), Value::Int(64))]);
+        let mut loaded = crate::loaded::load_with(&scenes, &small_shadows).unwrap();
+        (loaded.scene.width, loaded.scene.height) = (96, 64);
+        let gpu = crate::gpu::open().unwrap_or_else(|e| panic!("a GPU device (lavapipe will do): {e}"));
+        let mut s = Session::new(gpu, &root, library::read_tree(&root).unwrap(), &loaded);
+        assert_eq!(s.install_missing(), vec![]);
+        s.set_quads(true);
+        let frame = |s: &mut Session| {
+            let pending = s.submit(Some(&BTreeSet::new()), 0.0);
+            let quads = s.wait(pending).quads;
+            quads.iter().map(|p| (p.pass.clone(), serde_json::to_value(p).unwrap(), p.stacked_maps())).collect::<Vec<_>>()
+        };
+        let pass = |frame: &[(String, serde_json::Value, _)], name: &str| frame.iter().position(|p| p.0 == name).unwrap();
+
+        let first = frame(&mut s);
+        let targets = s.quad_replays();
+        let layers = first[pass(&first, "shadows")].1["draws"].as_array().unwrap().len() as u64;
+        assert_eq!(layers, 6, "a point light's cube");
+        assert!(targets > layers, "the camera's passes too: {targets}");
+        let second = frame(&mut s);
+        assert_eq!(s.quad_replays(), targets, "a static scene replays nothing again");
+        assert!(second == first, "the figures and maps are the first frame's");
+
+        loaded.scene.camera.position = [0.6, 1.3, 2.7];
+        assert_eq!(s.set_scene_now(&loaded), vec![]);
+        let moved = frame(&mut s);
+        let names: Vec<&str> = first.iter().map(|p| p.0.as_str()).collect();
+        assert_eq!(names, ["shadows", "depth_prepass", "gbuffer", "tonemap"]);
+        assert_eq!(targets, layers + 3);
+        assert_eq!(s.quad_replays(), targets + 2, "the prepass and G-buffer again, not the light's nor the fullscreen passes");
+        for (name, same) in [("shadows", true), ("depth_prepass", false), ("gbuffer", false), ("tonemap", true)] {
+            let (a, b) = (&first[pass(&first, name)], &moved[pass(&moved, name)]);
+            assert_eq!(a == b, same, "{name}: {} then {}", a.1["quads"], b.1["quads"]);
         }
     }
 
