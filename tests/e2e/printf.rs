@@ -67,7 +67,18 @@ fn a_selected_pixel_streams_its_prints_and_follows_edits() {
     // once the frame does.
     p.write(TONEMAP, with_print(&good, "debugPrintf(\"then %.1v2f\", in.position.xy);"));
     ws.send(json!({ "type": "debug_pixel", "x": 5, "y": 6 }));
-    assert_eq!(prints(&mut ws, "then ")["lines"][0]["text"], "then 5.5, 6.5");
+    // The edit and the selection land in either order: wait for both.
+    let then = ws.until("the edited print at (5, 6)", LIMIT, |m| match m {
+        Msg::Event(v)
+            if v["type"] == "prints"
+                && v["pixel"] == json!([5, 6])
+                && v["lines"][0]["text"].as_str().is_some_and(|t| t.starts_with("then ")) =>
+        {
+            Some(v.clone())
+        }
+        _ => None,
+    });
+    assert_eq!(then["lines"][0]["text"], "then 5.5, 6.5");
     ws.until("the history of (5, 6)", LIMIT, |m| {
         matches!(m, Msg::Event(v) if v["type"] == "pixel_history" && v["pixel"] == json!([5, 6])).then_some(())
     });

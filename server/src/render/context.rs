@@ -264,13 +264,19 @@ impl<'a> PassContext<'a> {
         let vertices = if two { 6 } else { 3 };
         rp.draw(0..vertices, 0..1);
         Self::end_render(counted, rp);
-        if self.quads.is_some() {
-            let size = self.texture(targets[0]).size();
+        let size = self.texture(targets[0]).size();
+        if self.records(size) {
             let draw = vertex_capture::Draw { buffer: None, vertices: Vertices::Direct { first: 0 }, count: vertices, instance: 0 };
             let name = if two { "two triangles" } else { "fullscreen triangle" };
             let draws = self.capture_positions(key, bindings, &[(name.to_owned(), draw)], None);
             self.record_target(size, None, draws, Some(two));
         }
+    }
+
+    /// Whether the frame records the draws of a render pass into targets
+    /// of `size`.
+    fn records(&self, size: wgpu::Extent3d) -> bool {
+        self.quads.as_ref().is_some_and(|r| r.wants(size))
     }
 
     /// Records the positions of `draws` (named) for quad statistics; `None`
@@ -335,11 +341,15 @@ impl<'a> PassContext<'a> {
         let views: Vec<&wgpu::TextureView> = colors.iter().map(|h| self.view(*h)).collect();
         let attachments = color_attachments(&views);
         let depth_target = depth;
+        let size = match (depth_target, colors.first()) {
+            (_, Some(c)) => Some(self.texture(*c).size()),
+            (Some(d), None) => Some(self.texture(d.texture).size()),
+            (None, None) => None,
+        };
+        let record = size.is_some_and(|s| self.records(s));
         // What the depth buffer holds before the pass, for quad statistics.
         let initial = match depth {
-            Some(d) if self.quads.is_some() => {
-                Some(if d.clear { PendingDepth::Clear(DEPTH_CLEAR) } else { self.copy_depth(d.texture, d.layer) })
-            }
+            Some(d) if record => Some(if d.clear { PendingDepth::Clear(DEPTH_CLEAR) } else { self.copy_depth(d.texture, d.layer) }),
             _ => None,
         };
         let depth_view = depth.map(|d| self.layer(d.texture, d.layer));
@@ -364,12 +374,7 @@ impl<'a> PassContext<'a> {
             rp.draw_indexed(0..m.index_count, 0, object as u32..object as u32 + 1);
         }
         Self::end_render(counted, rp);
-        if self.quads.is_some() {
-            let size = match (depth_target, colors.first()) {
-                (_, Some(c)) => self.texture(*c).size(),
-                (Some(d), None) => self.texture(d.texture).size(),
-                (None, None) => return,
-            };
+        if let Some(size) = size.filter(|_| record) {
             let draws: Vec<(String, vertex_capture::Draw<'_>)> = scene
                 .draws
                 .iter()

@@ -246,7 +246,12 @@ pub fn submit(f: FrameInputs<'_>, pool: &mut ResourcePool) -> PendingFrame {
             recorded: 0,
             skipped: false,
             statistics: statistics_set.as_ref().map(|set| Statistics { set, next: next_query, used: Vec::new() }),
-            quads: f.vertex_captures.map(|captures| QuadRecorder { captures, targets: Vec::new() }),
+            quads: f.vertex_captures.map(|captures| QuadRecorder {
+                captures,
+                targets: Vec::new(),
+                // Without statistics, the draws serve the pixel's history.
+                only: f.quad_replays.is_none().then(|| f.pixel.map(|(_, size)| size)).flatten(),
+            }),
             prints: f.prints,
         };
         // A copy pass records no render or compute pass of its own: empty

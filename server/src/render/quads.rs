@@ -22,6 +22,16 @@ use crate::quads::{self, Compare, DepthState, Draw, DrawStats, Face, FrontFace, 
 pub struct QuadRecorder<'a> {
     pub captures: &'a BTreeMap<PipelineKey, VertexCapture>,
     pub targets: Vec<PendingTarget>,
+    /// Record only render passes whose targets are this size (`None`:
+    /// all): a pixel's history alone needs no shadow map.
+    pub only: Option<(u32, u32)>,
+}
+
+impl QuadRecorder<'_> {
+    /// Whether a render pass into targets of `size` is recorded.
+    pub fn wants(&self, size: wgpu::Extent3d) -> bool {
+        self.only.is_none_or(|only| only == (size.width, size.height))
+    }
 }
 
 /// A render pass recorded, its readbacks on their way.
