@@ -297,6 +297,11 @@ impl ReplayCache {
         self.lock().replayed
     }
 
+    /// Lets every kept target go: the next frame replays them all.
+    pub fn clear(&self) {
+        self.lock().targets = Vec::new();
+    }
+
     fn lock(&self) -> MutexGuard<'_, Replays> {
         // A replay that panicked left its target empty (see `replay`).
         self.0.lock().unwrap_or_else(PoisonError::into_inner)

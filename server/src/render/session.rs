@@ -112,6 +112,13 @@ impl DepthProjection {
 /// switches back.
 const KEPT_UNUSED: usize = 32;
 
+/// Frames in a row without quad statistics after which their replays
+/// (each render target's positions, depth and maps) are let go: long
+/// enough for `loupe bench`, which interleaves three frames without them
+/// between frames with them, short enough to give the memory back soon
+/// after the last page stops asking.
+const QUAD_REPLAYS_KEPT_IDLE: u32 = 16;
+
 pub struct Session {
     gpu: Gpu,
     shader_root: PathBuf,
@@ -144,6 +151,8 @@ pub struct Session {
     /// The quad model's replays, kept while the session lives so that a
     /// render target recorded as the frame before is not replayed again.
     quad_replays: ReplayCache,
+    /// Frames submitted without quad statistics since they were last on.
+    frames_without_quads: u32,
     /// The selected pixel's prints (`None`: no pixel selected).
     prints: Option<PrintSelection>,
     /// Frames run the plain pipelines though a pixel is selected (`loupe
@@ -175,6 +184,7 @@ impl Session {
             vertex_captures: BTreeMap::new(),
             capture_generations: BTreeMap::new(),
             quad_replays: ReplayCache::default(),
+            frames_without_quads: 0,
             prints: None,
             prints_paused: false,
             accumulated: 0,
@@ -422,6 +432,12 @@ impl Session {
         let record_draws = self.quads || pixel.is_some();
         if record_draws {
             self.refresh_vertex_captures();
+            self.frames_without_quads = 0;
+        } else {
+            self.frames_without_quads = self.frames_without_quads.saturating_add(1);
+            if self.frames_without_quads == QUAD_REPLAYS_KEPT_IDLE {
+                self.quad_replays.clear();
+            }
         }
         let mut live = self.cache.live();
         let prints = self.prints.as_mut().filter(|_| !self.prints_paused);
@@ -928,6 +944,21 @@ mod tests {
         for (name, same) in [("shadows", true), ("depth_prepass", false), ("gbuffer", false), ("tonemap", true)] {
             let (a, b) = (&first[pass(&first, name)], &moved[pass(&moved, name)]);
             assert_eq!(a == b, same, "{name}: {} then {}", a.1["quads"], b.1["quads"]);
+        }
+
+        // Kept through frames without quad statistics, let go after
+        // QUAD_REPLAYS_KEPT_IDLE of them in a row.
+        for idle in [QUAD_REPLAYS_KEPT_IDLE - 1, QUAD_REPLAYS_KEPT_IDLE] {
+            s.set_quads(false);
+            for _ in 0..idle {
+                let pending = s.submit(Some(&BTreeSet::new()), 0.0);
+                s.wait(pending);
+            }
+            s.set_quads(true);
+            let replayed = s.quad_replays();
+            assert!(frame(&mut s) == moved);
+            let again = if idle < QUAD_REPLAYS_KEPT_IDLE { 0 } else { targets };
+            assert_eq!(s.quad_replays(), replayed + again, "after {idle} frames without quad statistics");
         }
     }
 
