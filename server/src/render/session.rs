@@ -432,6 +432,10 @@ impl Session {
         let record_draws = self.quads || pixel.is_some();
         if record_draws {
             self.refresh_vertex_captures();
+        }
+        // A pixel's history records draws too, but never replays whole
+        // targets: only quad statistics keep the replays alive.
+        if self.quads {
             self.frames_without_quads = 0;
         } else {
             self.frames_without_quads = self.frames_without_quads.saturating_add(1);
