@@ -107,8 +107,9 @@ pub fn copy_texel(
     [x, y, layer]: [u32; 3],
     bytes_per_texel: u32,
 ) -> Readback {
-    let extent = wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 };
-    copy_box(device, encoder, label, texture, wgpu::Origin3d { x, y, z: layer }, extent, bytes_per_texel).0
+    let readback = Readback::new(device, label, u64::from(bytes_per_texel.max(4)));
+    copy_texel_into(encoder, texture, [x, y, layer], readback.buffer(), 0);
+    readback
 }
 
 /// Copies the texel at `[x, y, layer]` to `offset` (a multiple of 256) in
